@@ -1,0 +1,189 @@
+"""The coverage path: ordered 3D samples with heading, sensor direction and segment label.
+
+A `Path` is what every planner returns and what the vehicle diagrams consume. It is pure numpy;
+the conversion to a Drake trajectory imports pydrake lazily so planning never needs Drake.
+Frames: world, z up, metres; heading is the yaw of the body x axis about world z, radians.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, field
+from pathlib import Path as FilePath
+
+import numpy as np
+
+_CSV_FIELDS = ("x", "y", "z", "heading", "sensor_x", "sensor_y", "sensor_z", "label")
+
+
+@dataclass(frozen=True)
+class Path:
+    """Ordered samples of a path in the world frame.
+
+    Attributes:
+        points: (N, 3) positions, m.
+        heading: (N,) yaw of the body x axis, rad. Independent of the direction of motion:
+            a hovering vehicle can look one way and move another.
+        sensor_dir: (N, 3) unit vectors, the payload sensor axis in the world frame.
+        labels: (N,) segment labels such as "planar", "slice", "transit".
+    """
+
+    points: np.ndarray
+    heading: np.ndarray
+    sensor_dir: np.ndarray
+    labels: np.ndarray = field(default=None)
+
+    def __post_init__(self):
+        points = np.asarray(self.points, dtype=float)
+        if points.ndim != 2 or points.shape[1] != 3:
+            raise ValueError(f"Path.points must have shape (N, 3), got {points.shape}")
+        n = len(points)
+        if n < 1:
+            raise ValueError("Path.points is empty: a path needs at least one sample")
+        heading = np.broadcast_to(np.asarray(self.heading, dtype=float), (n,)).copy()
+        sensor_dir = np.broadcast_to(np.asarray(self.sensor_dir, dtype=float), (n, 3)).copy()
+        labels = self.labels if self.labels is not None else "path"
+        labels = np.broadcast_to(np.asarray(labels, dtype=object), (n,)).copy()
+        if not (np.all(np.isfinite(points)) and np.all(np.isfinite(heading))):
+            raise ValueError("Path.points and Path.heading must be finite (no NaN or inf)")
+        norms = np.linalg.norm(sensor_dir, axis=1)
+        if np.any(~np.isfinite(norms)) or np.any(norms < 1e-9):
+            raise ValueError("Path.sensor_dir must hold finite non-zero vectors")
+        for name, value in (("points", points), ("heading", heading),
+                            ("sensor_dir", sensor_dir / norms[:, None]), ("labels", labels)):
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    @classmethod
+    def concatenate(cls, paths: list["Path"]) -> "Path":
+        """Joins paths end to start, in order."""
+        paths = [p for p in paths if p is not None and len(p) > 0]
+        if not paths:
+            raise ValueError("Path.concatenate needs at least one non-empty path")
+        return cls(np.vstack([p.points for p in paths]),
+                   np.concatenate([p.heading for p in paths]),
+                   np.vstack([p.sensor_dir for p in paths]),
+                   np.concatenate([p.labels for p in paths]))
+
+    def segment_lengths(self) -> np.ndarray:
+        """(N - 1,) Euclidean distances between consecutive samples, m."""
+        return np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+
+    def arc_length(self) -> np.ndarray:
+        """(N,) cumulative distance along the path from its first sample, m."""
+        return np.concatenate([[0.0], np.cumsum(self.segment_lengths())])
+
+    @property
+    def length(self) -> float:
+        """Total length, m."""
+        return float(self.segment_lengths().sum())
+
+    def length_by_label(self) -> dict[str, float]:
+        """Length of the segments per label, m; a segment takes the label of its end sample."""
+        seg = self.segment_lengths()
+        return {str(lab): float(seg[self.labels[1:] == lab].sum())
+                for lab in dict.fromkeys(self.labels.tolist())}
+
+    def select(self, mask) -> "Path":
+        """The samples where `mask` is true, in order."""
+        mask = np.asarray(mask)
+        return Path(self.points[mask], self.heading[mask], self.sensor_dir[mask], self.labels[mask])
+
+    def resample(self, spacing: float) -> "Path":
+        """Samples every `spacing` metres along the path, keeping every original vertex.
+
+        Headings are interpolated on the unit circle, sensor directions linearly then
+        normalised; a new sample takes the label of the segment's end vertex.
+        """
+        if not spacing > 0:
+            raise ValueError(f"resample spacing must be > 0 m, got {spacing}")
+        if len(self) < 2:
+            return self
+        seg = self.segment_lengths()
+        counts = np.maximum(np.ceil(seg / spacing).astype(int), 1)
+        starts = np.repeat(np.arange(len(seg)), counts)
+        offsets = np.concatenate([np.arange(c) / c for c in counts])
+        idx0, idx1, t = starts, starts + 1, offsets
+        points = self.points[idx0] + t[:, None] * (self.points[idx1] - self.points[idx0])
+        dh = np.angle(np.exp(1j * (self.heading[idx1] - self.heading[idx0])))
+        heading = self.heading[idx0] + t * dh
+        sensor = self.sensor_dir[idx0] + t[:, None] * (self.sensor_dir[idx1] - self.sensor_dir[idx0])
+        degenerate = np.linalg.norm(sensor, axis=1) < 1e-9
+        sensor[degenerate] = self.sensor_dir[idx1][degenerate]
+        labels = np.where(t == 0, self.labels[idx0], self.labels[idx1])
+        return Path(np.vstack([points, self.points[-1]]), np.append(heading, self.heading[-1]),
+                    np.vstack([sensor, self.sensor_dir[-1]]), np.append(labels, self.labels[-1]))
+
+    def times(self, speed: float, yaw_rate: float = np.radians(15.0)) -> np.ndarray:
+        """(N,) arrival time at each sample, s, at constant `speed` (m/s).
+
+        A segment takes the longer of its travel time and the time to turn the heading at
+        `yaw_rate` (rad/s), so a turn in place is not commanded instantaneously.
+        """
+        if not speed > 0:
+            raise ValueError(f"speed must be > 0 m/s, got {speed}")
+        if not yaw_rate > 0:
+            raise ValueError(f"yaw_rate must be > 0 rad/s, got {yaw_rate}")
+        dh = np.abs(np.angle(np.exp(1j * np.diff(self.heading))))
+        dt = np.maximum(self.segment_lengths() / speed, dh / yaw_rate)
+        dt = np.maximum(dt, 1e-3)  # coincident samples still need increasing times
+        return np.concatenate([[0.0], np.cumsum(dt)])
+
+    def unwrapped_heading(self) -> np.ndarray:
+        """(N,) heading without 2 pi jumps, for interpolation."""
+        return np.unwrap(self.heading)
+
+    def to_trajectory(self, speed: float, start_time: float = 0.0,
+                      yaw_rate: float = np.radians(15.0)):
+        """A Drake `PiecewisePolynomial` of [x, y, z, yaw] through the samples (first-order hold).
+
+        Feed it to `TrajectorySource(traj, output_derivative_order=1)` to get the 8-vector
+        reference [x, y, z, yaw, vx, vy, vz, yaw_rate] the tracker takes.
+        """
+        from pydrake.trajectories import PiecewisePolynomial
+
+        t = start_time + self.times(speed, yaw_rate)
+        samples = np.vstack([self.points.T, self.unwrapped_heading()])
+        if len(t) == 1:
+            t = np.array([t[0], t[0] + 1.0])
+            samples = np.hstack([samples, samples])
+        return PiecewisePolynomial.FirstOrderHold(t, samples)
+
+    def to_csv(self, filename) -> None:
+        """Writes one row per sample with the columns x, y, z, heading, sensor_x/y/z, label."""
+        with open(filename, "w", newline="") as f:
+            writer = csv.writer(f)
+            writer.writerow(_CSV_FIELDS)
+            for p, h, s, lab in zip(self.points, self.heading, self.sensor_dir, self.labels):
+                writer.writerow([*(f"{v:.6f}" for v in (*p, h, *s)), lab])
+
+    @classmethod
+    def from_csv(cls, filename) -> "Path":
+        """Reads a file written by `to_csv`; names the file and row of any malformed entry."""
+        filename = FilePath(filename)
+        if not filename.is_file():
+            raise FileNotFoundError(f"path CSV not found: {filename}")
+        with open(filename, newline="") as f:
+            reader = csv.reader(f)
+            header = next(reader, None)
+            if header is None or tuple(header) != _CSV_FIELDS:
+                raise ValueError(f"{filename}: header must be {','.join(_CSV_FIELDS)}, "
+                                 f"got {header}")
+            rows = list(reader)
+        values, labels = [], []
+        for i, row in enumerate(rows, start=2):
+            if len(row) != len(_CSV_FIELDS):
+                raise ValueError(f"{filename}:{i}: expected {len(_CSV_FIELDS)} columns, "
+                                 f"got {len(row)}")
+            try:
+                values.append([float(v) for v in row[:7]])
+            except ValueError as err:
+                raise ValueError(f"{filename}:{i}: {err}") from None
+            labels.append(row[7])
+        if not values:
+            raise ValueError(f"{filename}: no samples")
+        values = np.array(values)
+        return cls(values[:, :3], values[:, 3], values[:, 4:7], np.array(labels, dtype=object))
