@@ -1,0 +1,55 @@
+"""Bathymetric grid -> triangle mesh (trimesh), the surface the simulated sensors see.
+
+Vertices sit at the cell centres of the grid (world frame, z up). Each square between four
+neighbouring samples becomes two triangles, wound counter-clockwise seen from above so the face
+normals point up (out of the seabed, into the water); a square with a no-data (NaN) corner gets
+no triangles, so holes in the survey stay holes in the mesh.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from drake_auv.terrain.bathymetry import Bathymetry
+
+
+def bathymetry_to_mesh(bathy: Bathymetry, stride: int = 1) -> trimesh.Trimesh:
+    """The seabed surface of `bathy` as a triangle mesh.
+
+    Args:
+        bathy: the elevation grid (m, NaN for no-data).
+        stride: keep every `stride`-th sample along each axis (1 = full resolution, >= 1).
+    Returns:
+        A `trimesh.Trimesh` with two triangles per valid grid square; unused vertices removed.
+    """
+    if not isinstance(bathy, Bathymetry):
+        raise ValueError(f"bathymetry_to_mesh needs a Bathymetry, got {type(bathy).__name__}")
+    if int(stride) != stride or stride < 1:
+        raise ValueError(f"bathymetry_to_mesh: stride must be an integer >= 1, got {stride}")
+    stride = int(stride)
+    z = bathy.z[::stride, ::stride]
+    xs = bathy.x[::stride]
+    ys = bathy.y[::stride]
+    ny, nx = z.shape
+    if ny < 2 or nx < 2:
+        raise ValueError(f"bathymetry_to_mesh: stride {stride} leaves fewer than 2 x 2 samples")
+    gx, gy = np.meshgrid(xs, ys)
+    vertices = np.column_stack([gx.ravel(), gy.ravel(), z.ravel()])
+    idx = np.arange(ny * nx).reshape(ny, nx)
+    v00 = idx[:-1, :-1].ravel()  # (i, j)
+    v01 = idx[:-1, 1:].ravel()   # (i, j + 1): +x
+    v10 = idx[1:, :-1].ravel()   # (i + 1, j): +y
+    v11 = idx[1:, 1:].ravel()
+    valid = np.isfinite(z)
+    quad_ok = (valid[:-1, :-1] & valid[:-1, 1:] & valid[1:, :-1] & valid[1:, 1:]).ravel()
+    if not quad_ok.any():
+        raise ValueError("bathymetry_to_mesh: no grid square has four valid corners")
+    v00, v01, v10, v11 = (v[quad_ok] for v in (v00, v01, v10, v11))
+    # Counter-clockwise from above (+x then +y): normals point up.
+    faces = np.vstack([np.column_stack([v00, v01, v11]), np.column_stack([v00, v11, v10])])
+    # Interleave so the two triangles of a square are neighbours in the face list.
+    faces = faces.reshape(2, -1, 3).transpose(1, 0, 2).reshape(-1, 3)
+    mesh = trimesh.Trimesh(vertices=np.nan_to_num(vertices), faces=faces, process=False)
+    mesh.remove_unreferenced_vertices()
+    return mesh

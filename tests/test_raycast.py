@@ -1,0 +1,109 @@
+"""Ray casting against trimesh meshes with embree, and grid -> mesh conversion."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from drake_auv.geometry import RayCaster
+from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.mesh import bathymetry_to_mesh
+
+
+def _plane_bathy(nx=21, ny=11, spacing=(1.0, 2.0), origin=(5.0, -3.0), slope=(0.1, -0.05),
+                 z0=-20.0):
+    """A tilted plane z = z0 + slope . (xy - origin)."""
+    gx, gy = np.meshgrid(spacing[0] * np.arange(nx), spacing[1] * np.arange(ny))
+    return Bathymetry(z0 + slope[0] * gx + slope[1] * gy, spacing, origin)
+
+
+def test_grid_mesh_has_two_triangles_per_cell_and_upward_normals():
+    bathy = _plane_bathy()
+    mesh = bathymetry_to_mesh(bathy)
+    assert len(mesh.faces) == 2 * 20 * 10
+    expected_n = np.array([-0.1, 0.05, 1.0]) / np.linalg.norm([-0.1, 0.05, 1.0])
+    np.testing.assert_allclose(mesh.face_normals, np.tile(expected_n, (len(mesh.faces), 1)), atol=1e-9)
+    np.testing.assert_allclose(mesh.area, 20 * 20 * np.linalg.norm([-0.1, 0.05, 1.0]), rtol=1e-9)
+
+
+def test_grid_mesh_skips_cells_with_nodata_corner():
+    bathy = _plane_bathy()
+    z = bathy.z.copy()
+    z[4, 7] = np.nan  # an interior sample touches 4 cells
+    z[0, 0] = np.nan  # a corner sample touches 1 cell
+    mesh = bathymetry_to_mesh(bathy.with_z(z))
+    assert len(mesh.faces) == 2 * (200 - 4 - 1)
+    assert np.all(np.isfinite(mesh.vertices))
+    assert len(mesh.vertices) == 21 * 11 - 2  # no unused vertices kept
+
+
+def test_grid_mesh_stride_and_bad_input():
+    bathy = _plane_bathy()
+    assert len(bathymetry_to_mesh(bathy, stride=2).faces) == 2 * 10 * 5
+    with pytest.raises(ValueError, match="stride"):
+        bathymetry_to_mesh(bathy, stride=0)
+    with pytest.raises(ValueError, match="Bathymetry"):
+        bathymetry_to_mesh(np.zeros((5, 5)))
+
+
+def test_vertical_rays_hit_grid_surface_at_its_elevation():
+    bathy = _plane_bathy()
+    caster = RayCaster(bathymetry_to_mesh(bathy))
+    rng = np.random.default_rng(3)
+    xy = np.column_stack([rng.uniform(6, 24, 500), rng.uniform(-2, 16, 500)])
+    origins = np.column_stack([xy, np.zeros(500)])
+    hits = caster.cast(origins, [0.0, 0.0, -1.0] * np.ones((500, 1)), 100.0)
+    z_true = bathy.elevation_at(xy[:, 0], xy[:, 1])
+    assert np.all(hits.faces >= 0)
+    np.testing.assert_allclose(hits.ranges, -z_true, atol=1e-4)
+    np.testing.assert_allclose(hits.points[:, 2], z_true, atol=1e-4)
+
+
+def test_oblique_ray_range_on_unit_box_and_no_hit_outside():
+    box = trimesh.creation.box(extents=(2, 2, 2))  # faces at +-1
+    caster = RayCaster(box)
+    d = np.array([[1.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    o = np.array([[-5.0, -4.5, 0.0], [-10.0, 0.0, 0.0], [3.0, 0.0, 0.0], [-10.0, 0.0, 0.0]])
+    hits = caster.cast(o, d, np.array([50.0, 50.0, 50.0, 8.5]))
+    # Ray 0 enters x = -1 at t = 4 sqrt(2) (y = -0.5); ray 1 at t = 9; ray 2 misses; ray 3 is short.
+    np.testing.assert_allclose(hits.ranges[:2], [4 * np.sqrt(2), 9.0], atol=1e-5)
+    np.testing.assert_allclose(hits.points[0], [-1.0, -0.5, 0.0], atol=1e-5)
+    assert np.isnan(hits.ranges[2:]).all() and np.all(hits.faces[2:] == -1)
+    assert np.isnan(hits.points[2:]).all()
+    assert np.all(np.abs(caster.face_normals[hits.faces[:2]] @ [1.0, 0, 0] + 1) < 1e-9)
+
+
+def test_first_hit_respects_occlusion():
+    near = trimesh.creation.box(extents=(0.2, 4, 4))
+    near.apply_translation([3.0, 0, 0])
+    far = trimesh.creation.box(extents=(0.2, 20, 20))
+    far.apply_translation([8.0, 0, 0])
+    caster = RayCaster(trimesh.util.concatenate([near, far]))
+    # The second ray passes the near box's edge (y = 2.32 > 2 at x = 2.9) and hits the far one.
+    hits = caster.cast(np.zeros(3), [[1, 0, 0], [1, 0.8, 0], [1, 0.6, 0]], 20.0)
+    np.testing.assert_allclose(hits.ranges, [2.9, 7.9 * np.hypot(1, 0.8), 2.9 * np.hypot(1, 0.6)],
+                               atol=1e-5)
+
+
+def test_large_world_coordinates_keep_precision():
+    bathy = _plane_bathy(origin=(-13_560_000.0, 4_410_000.0))
+    caster = RayCaster(bathymetry_to_mesh(bathy))
+    x0, y0 = bathy.origin
+    o = np.array([[x0 + 3.3, y0 + 7.1, 0.0]])
+    hits = caster.cast(o, [[0, 0, -1]], 1e9)
+    assert abs(hits.points[0, 2] - bathy.elevation_at(o[0, 0], o[0, 1])) < 1e-3
+
+
+def test_bad_meshes_and_rays_raise():
+    with pytest.raises(ValueError, match="empty"):
+        RayCaster(trimesh.Trimesh(vertices=np.zeros((0, 3)), faces=np.zeros((0, 3), int)))
+    with pytest.raises(ValueError, match="triangle"):
+        RayCaster(trimesh.PointCloud(np.random.default_rng(0).normal(size=(10, 3))))
+    with pytest.raises(ValueError, match="triangle"):
+        RayCaster(trimesh.load_path(np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0]])))
+    caster = RayCaster(trimesh.creation.box())
+    with pytest.raises(ValueError, match="max_range"):
+        caster.cast(np.zeros(3), [[1, 0, 0]], -1.0)
+    with pytest.raises(ValueError, match="non-zero"):
+        caster.cast(np.zeros(3), [[0, 0, 0]], 1.0)
+    with pytest.raises(ValueError, match="origins"):
+        caster.cast(np.zeros((2, 3)), [[1, 0, 0]], 1.0)
