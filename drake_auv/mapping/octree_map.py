@@ -1,0 +1,185 @@
+"""The on-line probabilistic occupancy map: an OctoMap octree fed by sonar returns.
+
+`OctreeMap` wraps `octomap.OcTree` (octomap-python) with the OctoMap defaults of Hornung et
+al. (hit 0.7, miss 0.4, clamping 0.12 / 0.97, occupied above 0.5). Returns are inserted with
+free-space ray casting: a beam with a return marks its end voxel occupied and the voxels it
+crossed free; a beam without a return clears free space up to the sonar's maximum range only.
+Frame: the navigation frame (the world as the vehicle believes it), metres.
+
+Distance queries go through a KD-tree of occupied voxel centres that is rebuilt lazily, only
+when the map changed since the last build, so the 1 Hz replanner pays for it once per step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import octomap
+from scipy.spatial import cKDTree
+
+_OFFSET = 1 << 20  # voxel index offset so indices encode as non-negative 21-bit fields
+_MASK = (1 << 21) - 1
+
+
+def _encode(idx: np.ndarray) -> np.ndarray:
+    idx = idx.astype(np.int64) + _OFFSET
+    return (idx[:, 0] << 42) | (idx[:, 1] << 21) | idx[:, 2]
+
+
+def _decode(codes: np.ndarray) -> np.ndarray:
+    return np.stack([(codes >> 42) & _MASK, (codes >> 21) & _MASK, codes & _MASK],
+                    axis=1) - _OFFSET
+
+
+class OctreeMap:
+    """Probabilistic octree of the structure around the vehicle, in the navigation frame.
+
+    Args:
+        resolution: voxel edge, m, in (0.01, 10].
+        prob_hit, prob_miss: sensor model probabilities (0.7, 0.4 in OctoMap).
+        clamp_min, clamp_max: occupancy clamping thresholds (0.12, 0.97 in OctoMap).
+        beam_stride: insert every `beam_stride`-th beam of a scan (1: all), to bound the cost
+            of dense multibeam scans.
+    """
+
+    def __init__(self, resolution: float = 0.5, prob_hit: float = 0.7, prob_miss: float = 0.4,
+                 clamp_min: float = 0.12, clamp_max: float = 0.97, beam_stride: int = 1):
+        if not (np.isfinite(resolution) and 0.01 < resolution <= 10.0):
+            raise ValueError(f"resolution must be in (0.01, 10] m, got {resolution}")
+        if not 0.5 < prob_hit < 1.0:
+            raise ValueError(f"prob_hit must be in (0.5, 1), got {prob_hit}")
+        if not 0.0 < prob_miss < 0.5:
+            raise ValueError(f"prob_miss must be in (0, 0.5), got {prob_miss}")
+        if not 0.0 < clamp_min < 0.5 < clamp_max < 1.0:
+            raise ValueError(f"need 0 < clamp_min < 0.5 < clamp_max < 1, got "
+                             f"{clamp_min}, {clamp_max}")
+        if int(beam_stride) != beam_stride or beam_stride < 1:
+            raise ValueError(f"beam_stride must be an integer >= 1, got {beam_stride}")
+        self.resolution = float(resolution)
+        self.beam_stride = int(beam_stride)
+        self.tree = octomap.OcTree(self.resolution)
+        self.tree.setProbHit(prob_hit)
+        self.tree.setProbMiss(prob_miss)
+        self.tree.setClampingThresMin(clamp_min)
+        self.tree.setClampingThresMax(clamp_max)
+        self.clear()
+
+    def clear(self) -> None:
+        """Forgets everything: the whole map becomes unknown."""
+        self.tree.clear()
+        self._candidates: set[int] = set()  # voxels ever hit: a superset of the occupied ones
+        self._occupied = np.zeros((0, 3))
+        self._kdtree: cKDTree | None = None
+        self._dirty = False
+        self.revision = 0
+        self.num_scans = 0
+
+    def insert_scan(self, origin, directions, ranges, max_range: float) -> None:
+        """Inserts one scan from `origin` (3,) along unit `directions` (n, 3).
+
+        `ranges` (n,) are metres, NaN (or beyond `max_range`) where a beam had no return;
+        such beams clear free space up to `max_range` and mark nothing occupied.
+        """
+        origin = np.asarray(origin, dtype=float).reshape(-1)
+        directions = np.asarray(directions, dtype=float)
+        ranges = np.asarray(ranges, dtype=float).reshape(-1)
+        if origin.shape != (3,) or not np.all(np.isfinite(origin)):
+            raise ValueError(f"scan origin must be a finite 3-vector, got {origin}")
+        if directions.ndim != 2 or directions.shape[1] != 3 or len(directions) != len(ranges):
+            raise ValueError(f"directions must be (n, 3) matching ranges (n,), got "
+                             f"{directions.shape} and {ranges.shape}")
+        if not (np.isfinite(max_range) and max_range > 0):
+            raise ValueError(f"max_range must be > 0 m, got {max_range}")
+        if np.any(ranges < 0):
+            raise ValueError("ranges must be >= 0 m or NaN for no return")
+        directions = directions[::self.beam_stride]
+        ranges = ranges[::self.beam_stride]
+        valid = np.all(np.isfinite(directions), axis=1)
+        directions, ranges = directions[valid], ranges[valid]
+        if len(ranges) == 0:
+            return
+        hit = np.isfinite(ranges) & (ranges <= max_range)
+        # OctoMap truncates beams longer than maxrange and then only clears free space along
+        # them: placing no-return endpoints beyond max_range is its documented way to clear.
+        length = np.where(hit, ranges, max_range + 2.0 * self.resolution)
+        endpoints = origin + directions * length[:, None]
+        self.tree.insertPointCloud(endpoints, origin, maxrange=float(max_range))
+        if np.any(hit):
+            idx = np.floor(endpoints[hit] / self.resolution)
+            self._candidates.update(_encode(idx).tolist())
+        self._dirty = True
+        self.revision += 1
+        self.num_scans += 1
+
+    def insert_returns(self, returns) -> None:
+        """Inserts a `drake_auv.sensors.SonarReturns` (navigation frame)."""
+        if returns is None or len(np.atleast_1d(returns.ranges)) == 0:
+            return
+        self.insert_scan(returns.origin_nav, returns.directions_nav, returns.ranges,
+                         returns.max_range)
+
+    def _refresh(self) -> None:
+        if not self._dirty:
+            return
+        if self._candidates:
+            codes = np.fromiter(self._candidates, dtype=np.int64, count=len(self._candidates))
+            centres = (_decode(codes) + 0.5) * self.resolution
+            occupied = self.tree.getLabels(centres) == 1
+            # Voxels cleared since they were hit stop being candidates until hit again.
+            self._candidates = set(codes[occupied].tolist())
+            self._occupied = centres[occupied]
+        else:
+            self._occupied = np.zeros((0, 3))
+        self._kdtree = cKDTree(self._occupied) if len(self._occupied) else None
+        self._dirty = False
+
+    def occupied_points(self) -> np.ndarray:
+        """(m, 3) centres of the occupied voxels (finest resolution), m."""
+        self._refresh()
+        return self._occupied
+
+    @property
+    def kdtree(self) -> cKDTree | None:
+        """KD-tree of the occupied voxel centres (None while nothing is occupied)."""
+        self._refresh()
+        return self._kdtree
+
+    def distance(self, points, upper_bound: float = np.inf) -> np.ndarray:
+        """Distance from `points` (..., 3) to the nearest occupied voxel centre, m.
+
+        inf where no occupied voxel lies within `upper_bound` (or the map holds none).
+        """
+        points = np.asarray(points, dtype=float)
+        if points.shape[-1] != 3:
+            raise ValueError(f"points must have shape (..., 3), got {points.shape}")
+        tree = self.kdtree
+        if tree is None:
+            return np.full(points.shape[:-1], np.inf)
+        d, _ = tree.query(points.reshape(-1, 3), distance_upper_bound=upper_bound)
+        return d.reshape(points.shape[:-1])
+
+    def labels(self, points) -> np.ndarray:
+        """(n,) per point: 1 occupied, 0 free, -1 unknown."""
+        points = np.atleast_2d(np.asarray(points, dtype=float))
+        return np.asarray(self.tree.getLabels(points))
+
+    def write(self, filename) -> None:
+        """Saves the octree in OctoMap's binary format (.bt), readable by octovis."""
+        if not self.tree.writeBinary(str(filename).encode()):
+            raise ValueError(f"could not write octree to {filename}")
+
+
+class OctreeMapHandle:
+    """A reference to an `OctreeMap` that Drake's value copies share instead of copying.
+
+    Drake deep-copies abstract values (contexts, output caches); an octree is large and lives
+    in C++, so the handle's deepcopy returns a handle to the same map.
+    """
+
+    def __init__(self, octree_map: OctreeMap):
+        self.map = octree_map
+
+    def __deepcopy__(self, memo):
+        return OctreeMapHandle(self.map)
+
+    def __copy__(self):
+        return OctreeMapHandle(self.map)

@@ -1,0 +1,191 @@
+"""STOMP: Stochastic Trajectory Optimization for Motion Planning (Kalakrishnan et al. 2011).
+
+A trajectory is N points in D dimensions (rows are timesteps) with its first and last point
+fixed; the N - 2 interior points are optimised. Pure numpy; the cost is a callable so the
+same optimiser serves any map. Checked against the description in REFERENCE-NOTES (ros-industrial
+implementation): finite-difference acceleration matrix A (rows 1, -2, 1), R = A^T A, rollout
+noise from N(0, R^-1), per-timestep probabilities with sensitivity h, update smoothed by
+M = R^-1 with columns scaled to a maximum of 1/N.
+
+Choices the paper leaves open (see docs/replanning.md):
+- the noise covariance R^-1 is normalised to a maximum entry of 1, so `noise_std` is the largest
+  per-point standard deviation in metres;
+- the smoothness cost of a timestep is 0.5 * w * |acceleration|^2 of that timestep, with the
+  fixed end points entering the differences, so a straight evenly spaced line costs 0;
+- the trajectory with the lowest total cost seen is returned, so the result never costs more
+  than the initial trajectory.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class StompParameters:
+    """Parameters of `stomp`.
+
+    Attributes:
+        num_rollouts: noisy rollouts per iteration, >= 2.
+        max_iterations: iteration cap, >= 1.
+        noise_std: largest standard deviation of the rollout noise of one point, m (> 0);
+            a scalar or one value per dimension.
+        h: sensitivity of the exponentiated cost, > 0 (10 in the paper).
+        smoothness_weight: weight w of the smoothness cost 0.5 * w * sum |A theta|^2, >= 0.
+        tolerance: relative improvement of the best cost below which an iteration counts as
+            stalled, >= 0.
+        patience: stalled iterations in a row that end the optimisation, >= 1.
+    """
+
+    num_rollouts: int = 10
+    max_iterations: int = 50
+    noise_std: float | tuple = 0.5
+    h: float = 10.0
+    smoothness_weight: float = 1.0
+    tolerance: float = 1e-4
+    patience: int = 10
+
+    def __post_init__(self):
+        if int(self.num_rollouts) != self.num_rollouts or self.num_rollouts < 2:
+            raise ValueError(f"num_rollouts must be an integer >= 2, got {self.num_rollouts}")
+        if int(self.max_iterations) != self.max_iterations or self.max_iterations < 1:
+            raise ValueError(f"max_iterations must be an integer >= 1, got {self.max_iterations}")
+        std = np.asarray(self.noise_std, dtype=float)
+        if not (np.all(np.isfinite(std)) and np.all(std > 0)):
+            raise ValueError(f"noise_std must be > 0 m, got {self.noise_std}")
+        if not (np.isfinite(self.h) and self.h > 0):
+            raise ValueError(f"h must be > 0, got {self.h}")
+        if not (np.isfinite(self.smoothness_weight) and self.smoothness_weight >= 0):
+            raise ValueError(f"smoothness_weight must be >= 0, got {self.smoothness_weight}")
+        if not (np.isfinite(self.tolerance) and self.tolerance >= 0):
+            raise ValueError(f"tolerance must be >= 0, got {self.tolerance}")
+        if int(self.patience) != self.patience or self.patience < 1:
+            raise ValueError(f"patience must be an integer >= 1, got {self.patience}")
+
+
+@dataclass(frozen=True)
+class StompResult:
+    """What `stomp` returns.
+
+    Attributes:
+        trajectory: (N, D) the lowest-cost trajectory found (ends equal to the input's).
+        cost: its total cost (state costs plus smoothness).
+        initial_cost: total cost of the initial trajectory.
+        cost_history: (iterations + 1,) best total cost after each iteration, starting with
+            the initial cost; never increases.
+        iterations: iterations run.
+    """
+
+    trajectory: np.ndarray
+    cost: float
+    initial_cost: float
+    cost_history: np.ndarray
+    iterations: int
+
+
+class StompMatrices:
+    """The fixed matrices of STOMP for `num_points` trajectory points (ends included).
+
+    Built once per trajectory length and reused: `A` (n x n, n = num_points - 2) maps interior
+    points to accelerations at the interior timesteps; `R = A^T A`; `noise_factor` is a Cholesky
+    factor of R^-1 normalised to a maximum entry of 1; `smoothing` is STOMP's M (R^-1 with
+    each column scaled so its largest entry is 1/num_points).
+    """
+
+    def __init__(self, num_points: int):
+        if int(num_points) != num_points or num_points < 3:
+            raise ValueError(f"a STOMP trajectory needs num_points >= 3, got {num_points}")
+        n = num_points - 2
+        self.num_points = num_points
+        self.A = (np.diag(np.full(n, -2.0)) + np.diag(np.ones(n - 1), 1)
+                  + np.diag(np.ones(n - 1), -1))
+        self.R = self.A.T @ self.A
+        R_inv = np.linalg.inv(self.R)
+        R_inv = 0.5 * (R_inv + R_inv.T)
+        self.noise_factor = np.linalg.cholesky(R_inv / R_inv.max())
+        self.smoothing = R_inv / (R_inv.max(axis=0, keepdims=True) * num_points)
+
+
+def accelerations(trajectories: np.ndarray) -> np.ndarray:
+    """(..., N, D) -> (..., N, D) second differences at the interior points, 0 at the ends."""
+    acc = np.zeros_like(trajectories)
+    acc[..., 1:-1, :] = trajectories[..., :-2, :] - 2.0 * trajectories[..., 1:-1, :] \
+        + trajectories[..., 2:, :]
+    return acc
+
+
+def smoothness_costs(trajectories: np.ndarray, weight: float) -> np.ndarray:
+    """(..., N, D) -> (..., N) per-timestep smoothness cost 0.5 * weight * |acceleration|^2."""
+    return 0.5 * weight * np.sum(accelerations(trajectories) ** 2, axis=-1)
+
+
+def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
+          params: StompParameters = StompParameters(), seed: int = 0,
+          matrices: StompMatrices | None = None) -> StompResult:
+    """Optimises `initial` (N, D) against `state_cost`, keeping its first and last point.
+
+    Args:
+        initial: (N, D) initial trajectory, N >= 3, finite.
+        state_cost: maps a batch of trajectories (K, N, D) to per-timestep costs (K, N), >= 0
+            and finite; it is called once per iteration on all rollouts together.
+        params: `StompParameters`.
+        seed: seed of the rollout noise; the same seed gives the same result.
+        matrices: `StompMatrices(N)` to reuse across calls (built here when None).
+    """
+    theta = np.array(initial, dtype=float)
+    if theta.ndim != 2 or theta.shape[0] < 3:
+        raise ValueError(f"initial trajectory must have shape (N >= 3, D), got {theta.shape}")
+    if not np.all(np.isfinite(theta)):
+        raise ValueError("initial trajectory must be finite (no NaN or inf)")
+    num_points, dim = theta.shape
+    if matrices is None:
+        matrices = StompMatrices(num_points)
+    elif matrices.num_points != num_points:
+        raise ValueError(f"matrices were built for {matrices.num_points} points, "
+                         f"the trajectory has {num_points}")
+    std = np.broadcast_to(np.asarray(params.noise_std, dtype=float), (dim,))
+    rng = np.random.default_rng(seed)
+    K, w = params.num_rollouts, params.smoothness_weight
+
+    def costs_of(trajectories):
+        costs = np.asarray(state_cost(trajectories), dtype=float)
+        if costs.shape != trajectories.shape[:2] or not np.all(np.isfinite(costs)):
+            raise ValueError(f"state_cost must return finite costs of shape (K, N) = "
+                             f"{trajectories.shape[:2]}, got {costs.shape}")
+        return costs + smoothness_costs(trajectories, w)
+
+    def total_cost(traj):
+        return float(costs_of(traj[None]).sum())
+
+    best = theta.copy()
+    best_cost = total_cost(theta)
+    history = [best_cost]
+    stalled = 0
+    iterations = 0
+    for iterations in range(1, params.max_iterations + 1):
+        # Rollout noise eps[k] ~ N(0, R^-1) per dimension, zero at the fixed ends.
+        eps = np.zeros((K, num_points, dim))
+        z = rng.standard_normal((K, num_points - 2, dim))
+        eps[:, 1:-1, :] = np.einsum("ij,kjd->kid", matrices.noise_factor, z) * std
+        rollouts = theta[None] + eps
+        costs = costs_of(rollouts)  # (K, N)
+        lo, hi = costs.min(axis=0), costs.max(axis=0)
+        spread = np.where(hi - lo > 0, hi - lo, 1.0)
+        prob = np.exp(-params.h * (costs - lo) / spread)
+        prob /= prob.sum(axis=0, keepdims=True)
+        dtheta = np.einsum("ki,kid->id", prob, eps)[1:-1]
+        theta[1:-1] += matrices.smoothing @ dtheta
+        cost = total_cost(theta)
+        if cost < best_cost:
+            improved = (best_cost - cost) > params.tolerance * max(abs(best_cost), 1e-12)
+            best, best_cost = theta.copy(), cost
+            stalled = 0 if improved else stalled + 1
+        else:
+            stalled += 1
+        history.append(best_cost)
+        if stalled >= params.patience:
+            break
+    return StompResult(best, best_cost, history[0], np.array(history), iterations)

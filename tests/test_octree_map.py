@@ -1,0 +1,120 @@
+"""OctreeMap: OctoMap insertion with free-space clearing, occupied voxels against the truth."""
+
+import copy
+
+import numpy as np
+import pytest
+import trimesh
+
+from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle
+
+
+def _fan(n=480, aperture=np.radians(120.0), tilt=0.0):
+    """Unit directions of a horizontal fan looking along +x, tilted down by `tilt` rad."""
+    a = np.linspace(-aperture / 2, aperture / 2, n)
+    d = np.stack([np.cos(a), np.sin(a), np.zeros(n)], axis=1)
+    c, s = np.cos(tilt), np.sin(tilt)
+    return d @ np.array([[c, 0, -s], [0, 1, 0], [s, 0, c]]).T
+
+
+def _cast(mesh, origin, directions, max_range):
+    """Noiseless ranges from `origin` against `mesh`, NaN beyond max range."""
+    loc, ray, _ = mesh.ray.intersects_location(np.tile(origin, (len(directions), 1)),
+                                               directions, multiple_hits=False)
+    ranges = np.full(len(directions), np.nan)
+    ranges[ray] = np.linalg.norm(loc - origin, axis=1)
+    ranges[ranges > max_range] = np.nan
+    return ranges
+
+
+def _box_surface_distance(points, centre, extents):
+    """Unsigned distance from points to the surface of an axis-aligned box, m."""
+    q = np.abs(points - centre) - np.asarray(extents) / 2
+    outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+    return np.where(np.all(q <= 0, axis=1), -q.max(axis=1), outside)
+
+
+def test_occupied_voxels_lie_on_the_true_surface():
+    block = trimesh.creation.box(extents=(5.0, 5.0, 12.0))
+    block.apply_translation((0.0, 0.0, -4.0))
+    omap = OctreeMap(resolution=0.25)
+    rng = np.random.default_rng(3)
+    for angle in np.linspace(0, 2 * np.pi, 24, endpoint=False):
+        origin = np.array([8.5 * np.cos(angle), 8.5 * np.sin(angle), -5.0])
+        yaw = angle + np.pi
+        for tilt in np.radians([-20.0, 0.0, 20.0]):
+            d = _fan(tilt=tilt + rng.uniform(-0.05, 0.05))
+            rot = np.array([[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0],
+                            [0, 0, 1]])
+            d = d @ rot.T
+            omap.insert_scan(origin, d, _cast(block, origin, d, 20.0), 20.0)
+    occ = omap.occupied_points()
+    assert len(occ) > 500
+    dist = _box_surface_distance(occ, (0.0, 0.0, -4.0), (5.0, 5.0, 12.0))
+    assert np.mean(dist <= omap.resolution) >= 0.95
+    # The map's distance agrees with the true distance to within a voxel diagonal.
+    probe = np.array([[6.0, 0.0, -5.0], [0.0, -4.5, -3.0], [-3.5, 2.0, -6.0]])
+    true = _box_surface_distance(probe, (0.0, 0.0, -4.0), (5.0, 5.0, 12.0))
+    assert np.allclose(omap.distance(probe), true, atol=np.sqrt(3) * omap.resolution)
+
+
+def test_free_space_is_cleared_by_hits_and_by_no_return_beams():
+    omap = OctreeMap(resolution=0.5)
+    origin = np.zeros(3)
+    d = _fan(n=61, aperture=np.radians(30.0))
+    omap.insert_scan(origin, d, np.full(len(d), 10.0), 20.0)  # a wall at 10 m
+    wall = origin + d * 10.0
+    assert np.all(omap.labels(wall) == 1)
+    assert np.all(omap.labels(origin + d * 5.0) == 0)  # crossed by the beams: free
+    assert np.all(omap.labels(origin + d * 15.0) == -1)  # behind the wall: unknown
+    assert omap.distance(np.array([[5.0, 0.0, 0.0]]))[0] == pytest.approx(5.0, abs=0.75)
+    # The wall is gone: beams without a return clear up to max range, not beyond.
+    for _ in range(4):
+        omap.insert_scan(origin, d, np.full(len(d), np.nan), 20.0)
+    assert np.all(omap.labels(wall) == 0)
+    assert np.all(omap.labels(origin + d * 19.5) == 0)
+    assert np.all(omap.labels(origin + d * 22.0) == -1)
+    assert len(omap.occupied_points()) == 0
+    assert np.all(np.isinf(omap.distance(np.zeros((2, 3)))))
+
+
+def test_kdtree_is_rebuilt_only_when_the_map_changed():
+    omap = OctreeMap(resolution=0.5)
+    d = _fan(n=31, aperture=np.radians(20.0))
+    omap.insert_scan(np.zeros(3), d, np.full(len(d), 8.0), 20.0)
+    tree = omap.kdtree
+    assert omap.kdtree is tree
+    omap.insert_scan(np.zeros(3), d, np.full(len(d), 8.0), 20.0)
+    assert omap.kdtree is not tree
+
+
+def test_handle_deepcopy_shares_the_map():
+    handle = OctreeMapHandle(OctreeMap(resolution=0.5))
+    assert copy.deepcopy(handle).map is handle.map
+
+
+def test_beam_stride_decimates():
+    d = _fan(n=480)
+    full, strided = OctreeMap(0.5), OctreeMap(0.5, beam_stride=4)
+    for omap in (full, strided):
+        omap.insert_scan(np.zeros(3), d, np.full(480, 12.0), 20.0)
+    assert 0 < len(strided.occupied_points()) < len(full.occupied_points())
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"resolution": 0.0}, "resolution"), ({"resolution": np.nan}, "resolution"),
+    ({"prob_hit": 0.4}, "prob_hit"), ({"prob_miss": 0.6}, "prob_miss"),
+    ({"clamp_min": 0.6}, "clamp_min"), ({"beam_stride": 0}, "beam_stride")])
+def test_bad_parameters_raise(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        OctreeMap(**kwargs)
+
+
+def test_bad_scan_raises():
+    omap = OctreeMap(0.5)
+    with pytest.raises(ValueError, match="origin"):
+        omap.insert_scan([np.nan, 0, 0], np.ones((2, 3)), np.ones(2), 20.0)
+    with pytest.raises(ValueError, match="directions"):
+        omap.insert_scan(np.zeros(3), np.ones((2, 3)), np.ones(3), 20.0)
+    with pytest.raises(ValueError, match="max_range"):
+        omap.insert_scan(np.zeros(3), np.ones((2, 3)), np.ones(2), -1.0)

@@ -1,0 +1,97 @@
+"""STOMP on analytic costs, without Drake."""
+
+import numpy as np
+import pytest
+
+from drake_auv.planning.stomp import (StompMatrices, StompParameters, accelerations,
+                                      smoothness_costs, stomp)
+
+N = 20
+LINE = np.linspace([0.0, 0.0, -5.0], [10.0, 0.0, -5.0], N)
+CENTRE, RADIUS, CLEARANCE = np.array([5.0, 0.3, -5.0]), 2.0, 1.0
+
+
+def free_field(trajectories):
+    return np.zeros(trajectories.shape[:2])
+
+
+def sphere_cost(trajectories):
+    """Hinge penalty on the clearance to a sphere's surface below CLEARANCE."""
+    d = np.linalg.norm(trajectories - CENTRE, axis=-1) - RADIUS
+    return 100.0 * np.maximum(0.0, CLEARANCE + 0.3 - d) ** 2
+
+
+def test_matrices():
+    m = StompMatrices(N)
+    assert np.allclose(m.R, m.A.T @ m.A)
+    assert np.allclose(np.diag(m.A), -2.0) and np.allclose(np.diag(m.A, 1), 1.0)
+    assert np.allclose(m.smoothing.max(axis=0), 1.0 / N)
+    cov = m.noise_factor @ m.noise_factor.T
+    assert np.allclose(cov, np.linalg.inv(m.R) / np.linalg.inv(m.R).max())
+
+
+def test_free_field_keeps_the_straight_line():
+    result = stomp(LINE, free_field, StompParameters(), seed=0)
+    assert np.allclose(result.trajectory, LINE, atol=1e-9)
+    assert result.cost == pytest.approx(0.0, abs=1e-12)
+
+
+def test_free_field_straightens_a_bent_initial_trajectory():
+    bent = LINE.copy()
+    bent[1:-1, 1] += 2.0 * np.sin(np.linspace(0, np.pi, N))[1:-1]
+    params = StompParameters(max_iterations=200, noise_std=0.3, patience=50)
+    result = stomp(bent, free_field, params, seed=1)
+    assert np.abs(result.trajectory[:, 1]).max() < 0.1 * np.abs(bent[:, 1]).max()
+    assert result.cost < 0.05 * result.initial_cost
+    assert np.array_equal(result.trajectory[[0, -1]], LINE[[0, -1]])
+
+
+def test_around_a_sphere_keeps_the_clearance():
+    params = StompParameters(max_iterations=100, noise_std=1.0)
+    initial_clearance = (np.linalg.norm(LINE - CENTRE, axis=1) - RADIUS).min()
+    assert initial_clearance < 0  # the straight line goes through the sphere
+    for seed in range(5):
+        result = stomp(LINE, sphere_cost, params, seed=seed)
+        clearance = np.linalg.norm(result.trajectory - CENTRE, axis=1) - RADIUS
+        assert clearance.min() > CLEARANCE, seed
+        assert np.array_equal(result.trajectory[[0, -1]], LINE[[0, -1]])
+        # The detour stays smooth: no acceleration larger than a gentle arc needs.
+        assert np.abs(accelerations(result.trajectory)).max() < 0.5
+
+
+def test_cost_never_increases_from_the_initial():
+    params = StompParameters(max_iterations=60, noise_std=2.0, h=1.0)
+    for seed in range(5):
+        result = stomp(LINE, sphere_cost, params, seed=seed)
+        assert result.cost_history[0] == pytest.approx(result.initial_cost)
+        assert np.all(np.diff(result.cost_history) <= 0)
+        total = sphere_cost(result.trajectory[None])[0].sum() \
+            + smoothness_costs(result.trajectory, params.smoothness_weight).sum()
+        assert result.cost == pytest.approx(total)
+        assert result.cost <= result.initial_cost
+
+
+def test_same_seed_same_result():
+    params = StompParameters(max_iterations=30)
+    a = stomp(LINE, sphere_cost, params, seed=7)
+    b = stomp(LINE, sphere_cost, params, seed=7)
+    c = stomp(LINE, sphere_cost, params, seed=8)
+    assert np.array_equal(a.trajectory, b.trajectory)
+    assert not np.array_equal(a.trajectory, c.trajectory)
+
+
+def test_bad_input_raises():
+    with pytest.raises(ValueError, match="num_rollouts"):
+        StompParameters(num_rollouts=1)
+    with pytest.raises(ValueError, match="noise_std"):
+        StompParameters(noise_std=0.0)
+    with pytest.raises(ValueError, match="h must"):
+        StompParameters(h=np.nan)
+    with pytest.raises(ValueError, match="N >= 3"):
+        stomp(LINE[:2], free_field)
+    bad = LINE.copy()
+    bad[3, 0] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        stomp(bad, free_field)
+    with pytest.raises(ValueError, match="state_cost"):
+        stomp(LINE, lambda t: np.zeros(3))
