@@ -1,0 +1,262 @@
+"""Behaviours of sensor-based profile following, combined into a tracker reference.
+
+Three behaviours act on the `ProfileEstimate` of the scan plane (our choice of combination; the
+reference publishes only that they are behaviour-based):
+
+- keep offset: a position correction along the normal, (offset - distance) * normal, capped at
+  `max_correction` so the tracker's position loop, not a new gain, sets the approach dynamics;
+- advance: survey speed along the profile tangent, the normal turned by -90 degrees (`side` = +1:
+  the profile stays on the right of the motion in the plane's (a, b) axes, i.e. clockwise) or
+  +90 degrees (`side` = -1); the speed fades linearly to zero as |distance - offset| grows to
+  `slow_band`, so the vehicle re-acquires the offset before it moves on;
+- face: the yaw reference, rate-limited to `yaw_rate`.
+
+`HorizontalFollower` circumnavigates at constant depth in the horizontal scan plane and faces
+the profile (heading = -normal). `VerticalFollower` follows the profile in the vertical plane of
+a fixed horizontal direction (bottom, wall, overhang, ceiling); the vehicle cannot pitch, so
+it faces along the plane, and when advancing would mean moving backwards (the motion's
+horizontal component opposes the heading by more than `turn_threshold`, which happens under a
+ceiling) it turns 180 degrees in place, holding the offset, before it goes on.
+
+Both are pure (numpy) and own their local map; the Drake controller is a thin adapter.
+Reference: `[x, y, z, yaw, vx, vy, vz, yaw_rate]` in the world frame (architecture.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drake_auv.perception.local_map import LocalProfileMap
+from drake_auv.perception.profile_estimation import (EstimatorParams, ProfileEstimate,
+                                                     estimate_profile)
+
+
+@dataclass(frozen=True)
+class FollowingParams:
+    """Behaviour parameters (SI units, radians).
+
+    offset: desired distance to the profile, m.
+    speed: survey speed along the profile, m/s.
+    side: +1 keeps the profile on the right of the motion, -1 on the left.
+    max_correction: cap of the position correction along the normal, m.
+    slow_band: distance error at which the advance speed has faded to zero, m.
+    yaw_rate: maximum rate of the yaw reference, rad/s.
+    plane_band: half-thickness of the map slice taken around the scan plane, m.
+    search_speed: speed straight ahead while no profile is seen, m/s.
+    turn_threshold: vertical mode, turn when the motion's horizontal component is below
+        -turn_threshold times the heading (a cosine, in (0, 1)).
+    turn_tolerance: vertical mode, the advance waits while the yaw error exceeds this, rad.
+    max_age, max_points: forgetting of the local map.
+    estimator: `EstimatorParams`.
+    """
+
+    offset: float = 2.0
+    speed: float = 0.3
+    side: int = 1
+    max_correction: float = 1.0
+    slow_band: float = 1.0
+    yaw_rate: float = np.radians(15.0)
+    plane_band: float = 0.5
+    search_speed: float = 0.3
+    turn_threshold: float = 0.5
+    turn_tolerance: float = np.radians(20.0)
+    max_age: float = 20.0
+    max_points: int = 4000
+    estimator: EstimatorParams = field(default_factory=EstimatorParams)
+
+    def __post_init__(self):
+        for name in ("offset", "speed", "max_correction", "slow_band", "yaw_rate", "plane_band",
+                     "max_age"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"FollowingParams.{name} must be a finite number > 0, got {value}")
+        if not (np.isfinite(self.search_speed) and self.search_speed >= 0):
+            raise ValueError(f"FollowingParams.search_speed must be >= 0 m/s, got {self.search_speed}")
+        if self.side not in (1, -1):
+            raise ValueError(f"FollowingParams.side must be +1 (profile on the right) or -1, got {self.side}")
+        if not 0 < self.turn_threshold < 1:
+            raise ValueError(f"FollowingParams.turn_threshold must be in (0, 1), got {self.turn_threshold}")
+        if not 0 < self.turn_tolerance < np.pi:
+            raise ValueError(f"FollowingParams.turn_tolerance must be in (0, pi) rad, got {self.turn_tolerance}")
+        if self.estimator.window <= self.offset:
+            raise ValueError(f"FollowingParams.estimator.window ({self.estimator.window} m) must "
+                             f"exceed the offset ({self.offset} m)")
+
+
+def follow_step(estimate: ProfileEstimate, params: FollowingParams):
+    """(correction (2,), velocity (2,)) in the scan plane from the keep-offset and advance
+    behaviours."""
+    n = estimate.normal
+    error = params.offset - estimate.distance
+    correction = np.clip(error, -params.max_correction, params.max_correction) * n
+    tangent = params.side * np.array([n[1], -n[0]])
+    fade = np.clip(1.0 - abs(error) / params.slow_band, 0.0, 1.0)
+    return correction, fade * params.speed * tangent
+
+
+def wrap_angle(angle):
+    """Angle(s) wrapped to [-pi, pi)."""
+    return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi
+
+
+@dataclass
+class FollowerOutput:
+    """One update: the tracker reference (8,), the estimate (None if no profile is seen), the
+    scan-plane points it used, and the behaviour's mode ("search", "follow" or "turn")."""
+
+    reference: np.ndarray
+    estimate: ProfileEstimate | None
+    points: np.ndarray
+    mode: str
+
+
+class _Follower:
+    """Common part: local map, seeded RANSAC generator, rate-limited yaw reference."""
+
+    def __init__(self, params: FollowingParams, seed: int):
+        self.params = params
+        self.map = LocalProfileMap(params.max_age, params.max_points)
+        self.rng = np.random.default_rng(seed)
+        self.yaw_ref = None
+        self.time = None
+        self.look = None
+        self.normal = None
+
+    def _begin(self, time, state, points_nav):
+        state = np.asarray(state, dtype=float)
+        if state.shape != (12,) or not np.all(np.isfinite(state)):
+            raise ValueError(f"state must be a finite 12-vector, got shape {state.shape}")
+        dt = 0.0 if self.time is None else time - self.time
+        if dt < 0:
+            raise ValueError(f"follower updates must go forward in time: {time} < {self.time}")
+        self.time = time
+        if self.yaw_ref is None:
+            self.yaw_ref = float(state[5])
+        self.map.add(points_nav, time)
+        return state, dt
+
+    def _steer_yaw(self, target, dt):
+        """Moves the yaw reference towards `target` at most yaw_rate * dt; returns the rate."""
+        step = np.clip(wrap_angle(target - self.yaw_ref), -self.params.yaw_rate * dt,
+                       self.params.yaw_rate * dt)
+        self.yaw_ref = float(wrap_angle(self.yaw_ref + step))
+        return float(step / dt) if dt > 0 else 0.0
+
+    def _estimate(self, points):
+        estimate = estimate_profile(points, self.params.estimator, self.rng, self.look, self.normal)
+        if estimate is not None:
+            self.normal = estimate.normal
+        return estimate
+
+
+class HorizontalFollower(_Follower):
+    """Horizontal profile following at constant depth, facing the profile.
+
+    Args:
+        params: `FollowingParams`.
+        depth_z: z of the horizontal plane to follow, m (world, z up); None holds the z of the
+            first update.
+        seed: seed of the RANSAC generator.
+    """
+
+    def __init__(self, params: FollowingParams = FollowingParams(), depth_z=None, seed: int = 0):
+        super().__init__(params, seed)
+        if depth_z is not None and not np.isfinite(depth_z):
+            raise ValueError(f"HorizontalFollower depth_z must be finite, got {depth_z}")
+        self.depth_z = None if depth_z is None else float(depth_z)
+
+    def update(self, time: float, state, points_nav) -> FollowerOutput:
+        """Adds the new return points (navigation frame) and computes the reference from the
+        estimated `state` (12)."""
+        state, dt = self._begin(time, state, points_nav)
+        if self.depth_z is None:
+            self.depth_z = float(state[2])
+        position = state[:3]
+        points = self.map.horizontal_slice(position, self.params.plane_band)
+        if self.look is None:
+            self.look = np.array([np.cos(state[5]), np.sin(state[5])])
+        estimate = self._estimate(points)
+        reference = np.zeros(8)
+        if estimate is None:
+            heading = np.array([np.cos(self.yaw_ref), np.sin(self.yaw_ref)])
+            reference[:2] = position[:2]
+            reference[4:6] = self.params.search_speed * heading
+            mode = "search"
+            yaw_rate = self._steer_yaw(self.yaw_ref, dt)
+        else:
+            correction, velocity = follow_step(estimate, self.params)
+            reference[:2] = position[:2] + correction
+            reference[4:6] = velocity
+            yaw_rate = self._steer_yaw(np.arctan2(-estimate.normal[1], -estimate.normal[0]), dt)
+            tangent = self.params.side * np.array([estimate.normal[1], -estimate.normal[0]])
+            self.look = tangent
+            mode = "follow"
+        reference[2] = self.depth_z
+        reference[3] = self.yaw_ref
+        reference[7] = yaw_rate
+        return FollowerOutput(reference, estimate, points, mode)
+
+
+class VerticalFollower(_Follower):
+    """Vertical profile following in the vertical plane along yaw `plane_yaw`.
+
+    The plane's 2D axes are s = (cos, sin, 0) of `plane_yaw` and h = z up; the heading is
+    `plane_yaw` or `plane_yaw + pi` and flips (the 180 degree turn) instead of moving backwards.
+
+    Args:
+        params: `FollowingParams` (`side` = +1: the profile on the right of the motion with s
+            to the right and h up, e.g. bottom below while moving along +s).
+        plane_yaw: direction of the plane, rad; None takes the yaw of the first update.
+        seed: seed of the RANSAC generator.
+    """
+
+    def __init__(self, params: FollowingParams = FollowingParams(), plane_yaw=None, seed: int = 0):
+        super().__init__(params, seed)
+        if plane_yaw is not None and not np.isfinite(plane_yaw):
+            raise ValueError(f"VerticalFollower plane_yaw must be finite, got {plane_yaw}")
+        self.plane_yaw = None if plane_yaw is None else float(plane_yaw)
+        self.heading_sign = None
+        self.turns = 0
+
+    def update(self, time: float, state, points_nav) -> FollowerOutput:
+        """Adds the new return points (navigation frame) and computes the reference from the
+        estimated `state` (12)."""
+        state, dt = self._begin(time, state, points_nav)
+        if self.plane_yaw is None:
+            self.plane_yaw = float(state[5])
+        if self.heading_sign is None:
+            self.heading_sign = 1 if np.cos(state[5] - self.plane_yaw) >= 0 else -1
+        e = np.array([np.cos(self.plane_yaw), np.sin(self.plane_yaw), 0.0])
+        up = np.array([0.0, 0.0, 1.0])
+        position = state[:3]
+        points = self.map.vertical_slice(position, self.plane_yaw, self.params.plane_band)
+        if self.look is None:
+            self.look = np.array([float(self.heading_sign), 0.0])
+        estimate = self._estimate(points)
+        correction = np.zeros(2)
+        velocity = np.zeros(2)
+        if estimate is None:
+            velocity = np.array([self.heading_sign * self.params.search_speed, 0.0])
+            mode = "search"
+        else:
+            correction, velocity = follow_step(estimate, self.params)
+            speed = np.linalg.norm(velocity)
+            if speed > 1e-9:
+                self.look = velocity / speed
+                if self.heading_sign * self.look[0] < -self.params.turn_threshold:
+                    self.heading_sign = -self.heading_sign  # ceiling: turn, do not back up
+                    self.turns += 1
+            mode = "follow"
+        target = self.plane_yaw + (0.0 if self.heading_sign > 0 else np.pi)
+        if abs(wrap_angle(target - state[5])) > self.params.turn_tolerance:
+            velocity = np.zeros(2)  # hold the offset while turning
+            mode = "turn"
+        yaw_rate = self._steer_yaw(target, dt)
+        reference = np.zeros(8)
+        reference[:3] = position + correction[0] * e + correction[1] * up
+        reference[3] = self.yaw_ref
+        reference[4:7] = velocity[0] * e + velocity[1] * up
+        reference[7] = yaw_rate
+        return FollowerOutput(reference, estimate, points, mode)
