@@ -1,0 +1,96 @@
+"""Trajectory-tracking control law for a hovering 4-DOF vehicle (pure numpy, no Drake).
+
+Position and heading are controlled independently: a hovering vehicle can look one way and move
+another. The law is a computed-force PID in the world frame:
+
+    a = kp e_p + kd (v_ref - v) + ki int(e_p)          (world, m/s^2)
+    F_body = M_t R_WB^T a + D(v_body) v_body           (surge, sway, heave)
+    N = I_z (kp_yaw e_yaw + kd_yaw (r_ref - r)) + D(r) r
+
+where M_t and I_z are the diagonal entries of M = M_RB + M_A and D the model's damping at the
+current velocity (cancelled, so the error dynamics are the chosen second-order ones and the
+reference velocity is tracked without lag). Roll and pitch are left to passive stability.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from drake_auv.vehicle import Girona500Params
+
+
+@dataclass(frozen=True)
+class TrackingGains:
+    """Gains of the tracking law (natural frequency ~0.8 rad/s, critically damped, by default).
+
+    Attributes:
+        kp: position stiffness, 1/s^2.  kd: velocity gain, 1/s.  ki: integral gain, 1/s^3.
+        kp_yaw: 1/s^2.  kd_yaw: 1/s.
+        integral_limit: anti-windup bound on each component of the position integral, m s.
+    """
+
+    kp: float = 0.64
+    kd: float = 1.6
+    ki: float = 0.05
+    kp_yaw: float = 1.0
+    kd_yaw: float = 2.0
+    integral_limit: float = 5.0
+
+    def __post_init__(self):
+        for name in ("kp", "kd", "ki", "kp_yaw", "kd_yaw", "integral_limit"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value <= 1e3):
+                raise ValueError(f"TrackingGains.{name} must be in [0, 1000], got {value}")
+        if self.ki > 0 and not self.ki < self.kp * self.kd:
+            raise ValueError(f"TrackingGains.ki must be < kp * kd = {self.kp * self.kd:g} for a "
+                             f"stable loop, got {self.ki}")
+
+
+def wrap_angle(a):
+    """Angle(s) wrapped to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def rotation_world_body(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """R_WB = Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+class TrackingController:
+    """Computes the body wrench [X, Y, Z, N] that tracks an 8-vector reference."""
+
+    def __init__(self, params: Girona500Params | None = None, gains: TrackingGains | None = None):
+        params = params if params is not None else Girona500Params()
+        self.gains = gains if gains is not None else TrackingGains()
+        mass = params.mass_matrix()
+        self.mass_t = np.diag(mass)[:3].copy()
+        self.inertia_z = float(mass[5, 5])
+        self.d_lin = np.asarray(params.linear_damping, dtype=float)
+        self.d_quad = np.asarray(params.quadratic_damping, dtype=float)
+        # Net buoyancy is compensated by feed-forward (world +z force, N).
+        self.net_up = params.buoyancy - params.weight
+
+    def wrench(self, reference: np.ndarray, state: np.ndarray, integral: np.ndarray,
+               dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """(wrench (4,), updated position integral (3,)) for one control period dt (s)."""
+        g = self.gains
+        rot = rotation_world_body(state[3], state[4], state[5])
+        v_body = state[6:9]
+        e_p = reference[0:3] - state[0:3]
+        integral = np.clip(integral + e_p * dt, -g.integral_limit, g.integral_limit)
+        accel = g.kp * e_p + g.kd * (reference[4:7] - rot @ v_body) + g.ki * integral
+        force = (self.mass_t * (rot.T @ accel) + self.d_lin[:3] * v_body
+                 + self.d_quad[:3] * np.abs(v_body) * v_body - self.net_up * rot[2])
+        r = state[11]
+        e_yaw = float(wrap_angle(reference[3] - state[5]))
+        yaw_moment = (self.inertia_z * (g.kp_yaw * e_yaw + g.kd_yaw * (reference[7] - r))
+                      + self.d_lin[5] * r + self.d_quad[5] * abs(r) * r)
+        return np.array([force[0], force[1], force[2], yaw_moment]), integral

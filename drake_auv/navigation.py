@@ -1,0 +1,95 @@
+"""Dead-reckoning navigation error model (DVL + compass), pure numpy.
+
+The estimated state is the true state plus an error: a position drift that grows with the
+distance travelled, as in DVL dead reckoning, and white measurement noise.
+
+Per navigation update, with dp the true horizontal displacement since the last update:
+    drift += ((1 + scale_error) Rz(heading_bias) - I) dp + random_walk sqrt(|dp|) n,  n ~ N(0, I2)
+The first term is the systematic drift of a compass bias and a DVL scale-factor error (linear in
+distance), the second a random walk in distance (growing as sqrt(distance)). The estimated yaw
+carries the compass bias. White noise (position, depth, heading) is redrawn every update.
+Draws come from `np.random.default_rng([seed, update_index])`, so a run is reproducible and its
+error state fits in a plain vector. All parameters zero (the default): estimate == truth.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+# Layout of the error vector kept by the Navigation system.
+ERROR_SIZE = 10  # drift x, y; noise x, y, z, yaw; last true x, y; update index; started flag
+
+
+@dataclass(frozen=True)
+class NavigationParams:
+    """Attributes (1-sigma where random):
+        heading_bias: compass bias, rad, in [-pi/4, pi/4].
+        scale_error: DVL scale-factor error (fraction), in [-0.5, 0.5].
+        random_walk: drift random walk, m per sqrt(m travelled), in [0, 1].
+        position_noise: horizontal white noise, m, in [0, 10].
+        depth_noise: depth-sensor white noise, m, in [0, 10].
+        heading_noise: compass white noise, rad, in [0, 1].
+        period: navigation update period, s, in [0.01, 10].
+        seed: seed of the random draws (int >= 0).
+    """
+
+    heading_bias: float = 0.0
+    scale_error: float = 0.0
+    random_walk: float = 0.0
+    position_noise: float = 0.0
+    depth_noise: float = 0.0
+    heading_noise: float = 0.0
+    period: float = 0.1
+    seed: int = 0
+
+    def __post_init__(self):
+        ranges = {"heading_bias": (-math.pi / 4, math.pi / 4), "scale_error": (-0.5, 0.5),
+                  "random_walk": (0.0, 1.0), "position_noise": (0.0, 10.0),
+                  "depth_noise": (0.0, 10.0), "heading_noise": (0.0, 1.0),
+                  "period": (0.01, 10.0)}
+        for name, (low, high) in ranges.items():
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and low <= value <= high):
+                raise ValueError(f"NavigationParams.{name} must be in [{low:g}, {high:g}], "
+                                 f"got {value!r}")
+        if not (isinstance(self.seed, (int, np.integer)) and self.seed >= 0):
+            raise ValueError(f"NavigationParams.seed must be an int >= 0, got {self.seed!r}")
+
+    @property
+    def exact(self) -> bool:
+        """True when every error source is zero (the estimate is the true state)."""
+        return not any((self.heading_bias, self.scale_error, self.random_walk,
+                        self.position_noise, self.depth_noise, self.heading_noise))
+
+
+def update_error(params: NavigationParams, error: np.ndarray, true_state: np.ndarray) -> np.ndarray:
+    """The error vector after one navigation update at `true_state` (12)."""
+    error = error.copy()
+    x, y = true_state[0], true_state[1]
+    index = int(error[8])
+    rng = np.random.default_rng([params.seed, index])
+    n = rng.standard_normal(6)
+    if error[9]:
+        dx, dy = x - error[6], y - error[7]
+        c, s = math.cos(params.heading_bias), math.sin(params.heading_bias)
+        k = 1.0 + params.scale_error
+        walk = params.random_walk * math.sqrt(math.hypot(dx, dy))
+        error[0] += k * (c * dx - s * dy) - dx + walk * n[0]
+        error[1] += k * (s * dx + c * dy) - dy + walk * n[1]
+    error[2:6] = n[2:6] * (params.position_noise, params.position_noise, params.depth_noise,
+                           params.heading_noise)
+    error[6], error[7], error[8], error[9] = x, y, index + 1, 1.0
+    return error
+
+
+def estimate(params: NavigationParams, error: np.ndarray, true_state: np.ndarray) -> np.ndarray:
+    """The estimated 12-state: true state with the position drift, noise and compass error."""
+    est = np.array(true_state, dtype=float)
+    est[0] += error[0] + error[2]
+    est[1] += error[1] + error[3]
+    est[2] += error[4]
+    est[5] += params.heading_bias + error[5]
+    return est

@@ -1,0 +1,318 @@
+"""GIRONA 500 model: parameters, YAML loader, thruster geometry, and the 6-DOF Fossen model.
+
+Pure numpy (no Drake), so it is unit-tested on its own; `drake_auv.systems.dynamics` wraps it.
+Frames follow DESIGN.md: world z up; body FLU (x forward, y left, z up), origin at the centre of
+buoyancy (CB). The YAML file gives positions in its source's NED/FRD body frame; `load_girona500`
+converts them to FLU once, here, by flipping y and z.
+
+Model (Fossen 2011): M nu_dot + C(nu) nu + D(nu) nu + g(eta) = tau, with M = M_RB + M_A,
+C from Fossen's Theorem 3.2 applied to the whole M, D(nu) = D_lin + D_quad |nu|,
+restoring forces from weight at the CG and buoyancy at the CB, and tau = B f where B is the
+thruster configuration matrix and f the thrusts, each following its command with a first-order
+lag. State x = [x, y, z, roll, pitch, yaw, u, v, w, p, q, r, f_1 .. f_5] (the first 12 are the
+`state` signal of docs/architecture.md).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path as FilePath
+
+import numpy as np
+import yaml
+
+DEFAULT_MODEL = FilePath(__file__).resolve().parent.parent / "models" / "girona500.yaml"
+THRUSTER_NAMES = ("surge_port", "surge_starboard", "heave_bow", "heave_stern", "sway")
+FRD_TO_FLU = np.diag([1.0, -1.0, -1.0])  # the same matrix takes FLU back to FRD
+WRENCH_ROWS = (0, 1, 2, 5)  # surge X, sway Y, heave Z, yaw N rows of a 6-DOF wrench
+STATE_SIZE = 12
+NUM_THRUSTERS = len(THRUSTER_NAMES)
+
+
+@dataclass(frozen=True)
+class Girona500Params:
+    """Physical parameters in SI units, body frame FLU, origin at the CB.
+
+    Attributes:
+        mass: rigid-body mass, kg.
+        inertia: (3,) principal moments about the body axes at the origin, kg m^2.
+        centre_of_gravity: (3,) CG position from the CB, m (z < 0: CG below CB).
+        gravity: m/s^2.
+        buoyancy_ratio: buoyancy / weight (1 = neutral).
+        added_mass: (6,) diagonal added mass, kg and kg m^2 (positive magnitudes).
+        linear_damping: (6,) N s/m and N m s/rad.
+        quadratic_damping: (6,) kg/m and kg m^2.
+        max_thrust: per-thruster thrust limit, N (symmetric).
+        thruster_time_constant: first-order thruster lag, s.
+        thruster_positions: (5, 3) m, FLU, in the order of THRUSTER_NAMES.
+        thruster_directions: (5, 3) unit directions of positive thrust, FLU.
+    """
+
+    mass: float = 98.0
+    inertia: tuple = (8.0, 8.0, 8.0)
+    centre_of_gravity: tuple = (0.0, 0.0, -0.05)
+    gravity: float = 9.81
+    buoyancy_ratio: float = 1.0
+    added_mass: tuple = (49.0, 49.0, 49.0, 0.0, 0.0, 0.0)
+    linear_damping: tuple = (0.0, 0.0, 0.0, 130.0, 130.0, 130.0)
+    quadratic_damping: tuple = (148.0, 148.0, 148.0, 180.0, 180.0, 180.0)
+    max_thrust: float = 153.8
+    thruster_time_constant: float = 0.2
+    thruster_positions: tuple = ((-0.330, 0.259, 0.021), (-0.330, -0.259, 0.021),
+                                 (0.535, 0.0, 0.314), (-0.583, 0.0, 0.314),
+                                 (-0.063, -0.031, 0.021))
+    thruster_directions: tuple = ((1.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0),
+                                  (0.0, 0.0, 1.0), (0.0, 1.0, 0.0))
+
+    def __post_init__(self):
+        _check_scalar("mass", self.mass, 1e-3, 1e5, "kg")
+        _check_scalar("gravity", self.gravity, 1e-3, 100.0, "m/s^2")
+        _check_scalar("buoyancy_ratio", self.buoyancy_ratio, 0.5, 1.5, "")
+        _check_scalar("max_thrust", self.max_thrust, 1e-3, 1e5, "N")
+        _check_scalar("thruster_time_constant", self.thruster_time_constant, 1e-3, 10.0, "s")
+        for name, size, low in (("inertia", 3, 1e-6), ("added_mass", 6, 0.0),
+                                ("linear_damping", 6, 0.0), ("quadratic_damping", 6, 0.0)):
+            _check_vector(name, getattr(self, name), size, low, 1e6)
+        _check_vector("centre_of_gravity", self.centre_of_gravity, 3, -10.0, 10.0)
+        positions = np.asarray(self.thruster_positions, dtype=float)
+        directions = np.asarray(self.thruster_directions, dtype=float)
+        if positions.shape != (NUM_THRUSTERS, 3) or not np.all(np.isfinite(positions)):
+            raise ValueError(f"thruster_positions must be {NUM_THRUSTERS} finite (x, y, z) "
+                             f"rows in m, got {positions.tolist()}")
+        norms = np.linalg.norm(directions, axis=1) if directions.ndim == 2 else None
+        if (directions.shape != (NUM_THRUSTERS, 3) or not np.all(np.isfinite(directions))
+                or np.any(norms < 1e-9)):
+            raise ValueError(f"thruster_directions must be {NUM_THRUSTERS} finite non-zero "
+                             f"(x, y, z) rows, got {directions.tolist()}")
+        object.__setattr__(self, "thruster_directions",
+                           tuple(map(tuple, directions / norms[:, None])))
+
+    @property
+    def weight(self) -> float:
+        """W = m g, N."""
+        return self.mass * self.gravity
+
+    @property
+    def buoyancy(self) -> float:
+        """B, N."""
+        return self.buoyancy_ratio * self.weight
+
+    def rigid_body_mass_matrix(self) -> np.ndarray:
+        """(6, 6) M_RB about the CB with the CG offset r_g (Fossen eq. 3.44)."""
+        m = self.mass
+        s_g = _skew(self.centre_of_gravity)
+        mrb = np.zeros((6, 6))
+        mrb[:3, :3] = m * np.eye(3)
+        mrb[:3, 3:] = -m * s_g
+        mrb[3:, :3] = m * s_g
+        mrb[3:, 3:] = np.diag(self.inertia)
+        return mrb
+
+    def mass_matrix(self) -> np.ndarray:
+        """(6, 6) M = M_RB + M_A."""
+        return self.rigid_body_mass_matrix() + np.diag(self.added_mass)
+
+    def thruster_configuration_matrix(self) -> np.ndarray:
+        """(6, 5) B: body wrench [X, Y, Z, K, M, N] = B @ thrusts (columns [d; r x d])."""
+        d = np.asarray(self.thruster_directions)
+        r = np.asarray(self.thruster_positions)
+        return np.vstack([d.T, np.cross(r, d).T])
+
+    def allocation_matrix(self) -> np.ndarray:
+        """(5, 4) minimum-norm pseudo-inverse of the [X, Y, Z, N] rows of B."""
+        return np.linalg.pinv(self.thruster_configuration_matrix()[list(WRENCH_ROWS)])
+
+
+def _skew(a) -> np.ndarray:
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+
+
+def _check_scalar(name, value, low, high, unit):
+    try:
+        ok = low <= float(value) <= high
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ValueError(f"{name} must be a number in [{low:g}, {high:g}] {unit}, got {value!r}")
+
+
+def _check_vector(name, value, size, low, high):
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        arr = None
+    if arr is None or arr.shape != (size,) or not np.all((arr >= low) & (arr <= high)):
+        raise ValueError(f"{name} must be {size} numbers in [{low:g}, {high:g}], got {value!r}")
+
+
+def _get(tree, dotted: str, filename):
+    node = tree
+    for key in dotted.split("."):
+        if not isinstance(node, dict) or key not in node:
+            raise ValueError(f"{filename}: missing field '{dotted}'")
+        node = node[key]
+    return node
+
+
+def load_girona500(filename=None) -> Girona500Params:
+    """Reads a vehicle YAML file (default `models/girona500.yaml`) into FLU parameters.
+
+    Raises FileNotFoundError for a missing file and ValueError naming the field for a
+    malformed file, a missing field or a value out of its range.
+    """
+    filename = FilePath(filename) if filename is not None else DEFAULT_MODEL
+    if not filename.is_file():
+        raise FileNotFoundError(f"vehicle model file not found: {filename}")
+    try:
+        tree = yaml.safe_load(filename.read_text())
+    except yaml.YAMLError as err:
+        raise ValueError(f"{filename}: not valid YAML: {err}") from None
+    if not isinstance(tree, dict):
+        raise ValueError(f"{filename}: expected a mapping with 'rigid_body', 'hydrodynamics' "
+                         f"and 'thrusters', got {type(tree).__name__}")
+    frame = _get(tree, "frame", filename)
+    if frame not in ("FRD", "FLU"):
+        raise ValueError(f"{filename}: field 'frame' must be 'FRD' or 'FLU', got {frame!r}")
+    # The one conversion of source coordinates to the body frame FLU of DESIGN.md.
+    to_flu = FRD_TO_FLU if frame == "FRD" else np.eye(3)
+
+    units = _get(tree, "thrusters.units", filename)
+    if not isinstance(units, list) or len(units) != NUM_THRUSTERS:
+        raise ValueError(f"{filename}: field 'thrusters.units' must list {NUM_THRUSTERS} "
+                         f"thrusters {THRUSTER_NAMES}")
+    names = tuple(u.get("name") if isinstance(u, dict) else None for u in units)
+    if names != THRUSTER_NAMES:
+        raise ValueError(f"{filename}: field 'thrusters.units' names must be {THRUSTER_NAMES} "
+                         f"in that order, got {names}")
+    positions, directions = [], []
+    for i, unit in enumerate(units):
+        for key, out in (("position", positions), ("direction", directions)):
+            field_name = f"thrusters.units[{i}].{key}"
+            value = unit.get(key)
+            try:
+                vec = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                vec = None
+            if vec is None or vec.shape != (3,) or not np.all(np.isfinite(vec)):
+                raise ValueError(f"{filename}: field '{field_name}' must be 3 finite numbers, "
+                                 f"got {value!r}")
+            out.append(tuple(to_flu @ vec))
+
+    fields = {
+        "mass": "rigid_body.mass", "inertia": "rigid_body.inertia",
+        "gravity": "rigid_body.gravity", "buoyancy_ratio": "rigid_body.buoyancy_ratio",
+        "added_mass": "hydrodynamics.added_mass",
+        "linear_damping": "hydrodynamics.linear_damping",
+        "quadratic_damping": "hydrodynamics.quadratic_damping",
+        "max_thrust": "thrusters.max_thrust", "thruster_time_constant": "thrusters.time_constant",
+    }
+    kwargs = {}
+    for attr, dotted in fields.items():
+        value = _get(tree, dotted, filename)
+        kwargs[attr] = tuple(value) if isinstance(value, list) else value
+    cg = _get(tree, "rigid_body.centre_of_gravity", filename)
+    try:
+        kwargs["centre_of_gravity"] = tuple(to_flu @ np.asarray(cg, dtype=float))
+    except (TypeError, ValueError):
+        raise ValueError(f"{filename}: field 'rigid_body.centre_of_gravity' must be 3 numbers, "
+                         f"got {cg!r}") from None
+    try:
+        return Girona500Params(thruster_positions=tuple(positions),
+                               thruster_directions=tuple(directions), **kwargs)
+    except ValueError as err:
+        attr = str(err).split(" ", 1)[0]
+        raise ValueError(f"{filename}: field '{fields.get(attr, attr)}': {err}") from None
+
+
+def allocate_thrust(allocation: np.ndarray, wrench, max_thrust: float) -> np.ndarray:
+    """Thrusts (5,) for a desired [X, Y, Z, N] wrench, scaled as a whole to the thrust limit.
+
+    `allocation` is `Girona500Params.allocation_matrix()`. When some thruster would exceed
+    `max_thrust`, all thrusts are scaled by the same factor, so the wrench produced keeps the
+    direction of the wrench asked for (only its magnitude shrinks).
+    """
+    thrust = allocation @ np.asarray(wrench, dtype=float)
+    peak = np.max(np.abs(thrust))
+    if peak > max_thrust:
+        thrust *= max_thrust / peak
+    return thrust
+
+
+class Girona500Model:
+    """The 6-DOF Fossen model with thruster lag, integrated with fixed-step RK4.
+
+    Matrices are precomputed once; `derivative` uses scalar math on the 17-vector
+    [eta (6), nu (6), thrusts (5)] because numpy call overhead dominates at this size.
+    """
+
+    def __init__(self, params: Girona500Params | None = None):
+        self.params = params if params is not None else Girona500Params()
+        p = self.params
+        self.M = p.mass_matrix()
+        self.M_inv = np.linalg.inv(self.M)
+        self.B = p.thruster_configuration_matrix()
+        # Force and moment on tau come together: tau_thrust = B f, solved via M^-1 B.
+        self.M_inv_B = self.M_inv @ self.B
+        self.d_lin = tuple(float(d) for d in p.linear_damping)
+        self.d_quad = tuple(float(d) for d in p.quadratic_damping)
+        self.r_g = tuple(float(c) for c in p.centre_of_gravity)
+        self.net_up = p.buoyancy - p.weight  # N, along world +z
+        self.weight = p.weight
+        self.inv_tau = 1.0 / p.thruster_time_constant
+        self.max_thrust = p.max_thrust
+
+    def derivative(self, x: np.ndarray, thrust_command: np.ndarray) -> np.ndarray:
+        """d/dt of the 17-vector state, given commanded thrusts (N, within the limit).
+
+        Scalar math on Python floats: at this size numpy's per-call overhead dominates.
+        """
+        _, _, _, roll, pitch, yaw, u, v, w, p, q, r = x[:12].tolist()
+        cr, sr = math.cos(roll), math.sin(roll)
+        cp, sp = math.cos(pitch), math.sin(pitch)
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        # R_WB = Rz(yaw) Ry(pitch) Rx(roll); world position rate = R_WB v.
+        r00, r01, r02 = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+        r10, r11, r12 = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+        r20, r21, r22 = -sp, cp * sr, cp * cr
+        # Coriolis and centripetal terms, Fossen Thm 3.2 for the symmetric M = M_RB + M_A:
+        # C(nu) nu = [w x h1; w x h2 + v x h1] with h = M nu = (h1, h2).
+        h0, h1, h2, h3, h4, h5 = (self.M @ x[6:12]).tolist()
+        # Restoring: weight at the CG, buoyancy at the CB (the origin); world +z in body = row 2.
+        W = self.weight
+        gx, gy, gz = -W * r20, -W * r21, -W * r22
+        xg, yg, zg = self.r_g
+        nb = self.net_up
+        dl, dq = self.d_lin, self.d_quad
+        rhs = np.array([
+            -(q * h2 - r * h1) + nb * r20 - (dl[0] + dq[0] * abs(u)) * u,
+            -(r * h0 - p * h2) + nb * r21 - (dl[1] + dq[1] * abs(v)) * v,
+            -(p * h1 - q * h0) + nb * r22 - (dl[2] + dq[2] * abs(w)) * w,
+            -(q * h5 - r * h4) - (v * h2 - w * h1) + yg * gz - zg * gy - (dl[3] + dq[3] * abs(p)) * p,
+            -(r * h3 - p * h5) - (w * h0 - u * h2) + zg * gx - xg * gz - (dl[4] + dq[4] * abs(q)) * q,
+            -(p * h4 - q * h3) - (u * h1 - v * h0) + xg * gy - yg * gx - (dl[5] + dq[5] * abs(r)) * r,
+        ])
+        thrust = x[12:17]
+        out = np.empty(17)
+        out[0] = r00 * u + r01 * v + r02 * w
+        out[1] = r10 * u + r11 * v + r12 * w
+        out[2] = r20 * u + r21 * v + r22 * w
+        # Euler-angle rates from body rates (singular at pitch = +/-90 deg, never reached by a
+        # passively stable hovering vehicle).
+        t = (q * sr + r * cr) / cp
+        out[3] = p + t * sp
+        out[4] = q * cr - r * sr
+        out[5] = t
+        out[6:12] = self.M_inv @ rhs + self.M_inv_B @ thrust
+        out[12:17] = (thrust_command - thrust) * self.inv_tau
+        return out
+
+    def step(self, x: np.ndarray, thrust_command: np.ndarray, dt: float) -> np.ndarray:
+        """One classical RK4 step of length dt (s), the command (clipped to the thrust limit)
+        held over the step."""
+        cmd = np.clip(thrust_command, -self.max_thrust, self.max_thrust)
+        k1 = self.derivative(x, cmd)
+        k2 = self.derivative(x + (0.5 * dt) * k1, cmd)
+        k3 = self.derivative(x + (0.5 * dt) * k2, cmd)
+        k4 = self.derivative(x + dt * k3, cmd)
+        return x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
