@@ -18,6 +18,8 @@ Steps (all our choices, the reference does not publish its regression):
    vehicle, weighted by exp(-(d_k - d_min) / blend): near a concave corner it turns smoothly
    towards the bisector instead of jumping from one wall to the next; around a convex corner
    (segment end) it rotates about the end point.
+5. Normal distance: the range from the vehicle along -normal to the segments, the distance a
+   sensor facing the profile measures (longer than the nearest distance in a concave corner).
 """
 
 from __future__ import annotations
@@ -94,6 +96,7 @@ class ProfileEstimate:
     orientation: direction angle of the nearest segment, rad, in (-pi/2, pi/2].
     segments: the fitted segments, nearest first.
     n_points: points used after windowing and the density filter.
+    normal_distance: range along -normal to the segments (>= distance), m.
     """
 
     distance: float
@@ -102,6 +105,7 @@ class ProfileEstimate:
     orientation: float
     segments: tuple
     n_points: int
+    normal_distance: float
 
 
 def estimate_profile(points, params: EstimatorParams = EstimatorParams(), rng=None,
@@ -171,7 +175,26 @@ def estimate_profile(points, params: EstimatorParams = EstimatorParams(), rng=No
         orientation += np.pi
     elif orientation > np.pi / 2:
         orientation -= np.pi
-    return ProfileEstimate(d_min, normal, closest[0], orientation, tuple(segments), n_points)
+    normal_distance = max(_ray_distance(-normal, segments, params.inlier_tolerance), d_min)
+    return ProfileEstimate(d_min, normal, closest[0], orientation, tuple(segments), n_points,
+                           normal_distance)
+
+
+def _ray_distance(direction, segments, tolerance) -> float:
+    """Range from the origin along `direction` to the nearest segment (each extended by
+    `tolerance` at its ends so a ray through a vertex hits); inf when none is hit."""
+    best = np.inf
+    for seg in segments:
+        e = seg.direction
+        den = direction[0] * e[1] - direction[1] * e[0]
+        if abs(den) < 1e-9:
+            continue
+        a = seg.start
+        t = (a[0] * e[1] - a[1] * e[0]) / den
+        u = (a[0] * direction[1] - a[1] * direction[0]) / den
+        if t > 0 and -tolerance <= u <= np.linalg.norm(seg.end - seg.start) + tolerance:
+            best = min(best, t)
+    return float(best)
 
 
 def _extract_segment(pool: np.ndarray, params: EstimatorParams, rng):
