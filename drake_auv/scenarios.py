@@ -326,44 +326,38 @@ def _state(x, y, z, yaw=0.0) -> np.ndarray:
 
 _SITES = {
     "caldera": dict(
-        description="Santorini-like caldera rim ROI, 100 m x 250 m, slopes up to 0.62, "
-                    "camera coverage at 2 m",
+        description="Santorini-like caldera rim ROI, 100 m x 250 m, slopes up to 0.62; camera at 2 m",
         geometry=_caldera_geometry,
         start=lambda: _state(50.0, 5.0, -317.5, np.pi / 2),  # 2 m above the floor
         params=dict(omega=2.0, aperture_deg=60.0, slope_threshold=0.5, speed=0.5,
                     prior_spacing=1.0, max_range=20.0)),
     "pool": dict(
-        description="CIRS-like test pool 16 m x 8 m: vertical walls, 90 degree corners, "
-                    "V-shaped bottom 5-7 m deep; operated at 4 m depth",
+        description="CIRS-like pool 16 m x 8 m: vertical walls, 90 degree corners, V bottom; 4 m depth",
         geometry=_pool_geometry,
         start=lambda: _state(-4.0, 0.0, -4.0, 0.0),
         params=dict(omega=2.0, depth=4.0, speed=0.3, laps=2, prior_spacing=0.25,
                     max_range=20.0)),
     "c_object": dict(
-        description="man-made object with a C-shaped vertical profile (floor, 8 m wall, "
-                    "ceiling overhang) for vertical profile following at 2 m",
+        description="man-made object with a C-shaped vertical profile: floor, wall, ceiling overhang",
         geometry=_c_object_geometry,
         start=lambda: _state(-6.0, 0.0, -15.0, 0.0),
         params=dict(omega=2.0, speed=0.3, profile_plane="vertical", prior_spacing=0.5,
                     max_range=20.0)),
     "breakwater": dict(
-        description="row of 20 concrete blocks 5 m x 5 m, +2 m to the seabed at 10 m, "
-                    "0.5 m gaps; inspect the right-most block at 5 m depth, offset 6 m",
+        description="breakwater: 20 concrete blocks 5 m x 5 m, +2 m to the 10 m seabed, 0.5 m gaps",
         geometry=_breakwater_geometry,
         start=lambda: _state(0.0, -14.0, -5.0, np.pi / 2),
         params=dict(omega=6.0, depth=5.0, speed=0.3, target_block=NUM_BLOCKS - 1,
                     block_size=BLOCK_SIZE, block_gap=BLOCK_GAP, prior_spacing=1.0,
                     max_range=20.0, replan_radius=5.0)),
     "boulder": dict(
-        description="l'Amarrador-like boulder rising from 40 m to 28 m depth with steep and "
-                    "overhanging faces; 0.4 m prior grid, offset 10 m",
+        description="l'Amarrador-like boulder, 40 m to 28 m depth, steep and overhanging; 0.4 m prior grid",
         geometry=_boulder_geometry,
         start=lambda: _state(-25.0, 0.0, -30.0, 0.0),
         params=dict(omega=10.0, contours=2, contour_spacing=2.0, speed=0.5,
                     prior_spacing=0.4, max_range=20.0, replan_radius=5.0)),
     "monterey": dict(
-        description="real Monterey Canyon head tile (NOAA DEM, ~8 m x 10 m cells), "
-                    "depths 29-224 m, canyon walls steeper than 0.5",
+        description="real Monterey Canyon head tile (NOAA DEM, ~8 x 10 m cells), depths 29-224 m",
         geometry=_monterey_geometry,
         start=None,
         params=dict(omega=20.0, aperture_deg=60.0, slope_threshold=0.5, speed=1.0,
