@@ -24,17 +24,20 @@ from drake_auv.vehicle import Girona500Params
 
 @dataclass(frozen=True)
 class TrackingGains:
-    """Gains of the tracking law (natural frequency ~0.8 rad/s, critically damped, by default).
+    """Gains of the tracking law (by default natural frequency 1 rad/s, critically damped).
 
     Attributes:
-        kp: position stiffness, 1/s^2.  kd: velocity gain, 1/s.  ki: integral gain, 1/s^3.
+        kp: position stiffness, 1/s^2.  kd: velocity gain, 1/s.
+        ki: integral gain, 1/s^3; 0 by default because the model's damping and net buoyancy are
+            cancelled exactly and an integral adds a slow pole (~ki/kp) that drags the stop at
+            the end of a path; raise it (e.g. 0.05) against unmodelled currents.
         kp_yaw: 1/s^2.  kd_yaw: 1/s.
         integral_limit: anti-windup bound on each component of the position integral, m s.
     """
 
-    kp: float = 0.64
-    kd: float = 1.6
-    ki: float = 0.05
+    kp: float = 1.0
+    kd: float = 2.0
+    ki: float = 0.0
     kp_yaw: float = 1.0
     kd_yaw: float = 2.0
     integral_limit: float = 5.0
@@ -94,3 +97,24 @@ class TrackingController:
         yaw_moment = (self.inertia_z * (g.kp_yaw * e_yaw + g.kd_yaw * (reference[7] - r))
                       + self.d_lin[5] * r + self.d_quad[5] * abs(r) * r)
         return np.array([force[0], force[1], force[2], yaw_moment]), integral
+
+
+def cross_track_distance(points, polyline, chunk: int = 2048) -> np.ndarray:
+    """(n,) distance of each point (n, 3) to the nearest segment of a polyline (m, 3), m.
+
+    Vectorised over segments; points are processed in chunks to bound memory.
+    """
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    polyline = np.atleast_2d(np.asarray(polyline, dtype=float))
+    if len(polyline) == 1:
+        return np.linalg.norm(points - polyline[0], axis=1)
+    a, b = polyline[:-1], polyline[1:]
+    ab = b - a
+    denom = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-18)
+    out = np.empty(len(points))
+    for start in range(0, len(points), chunk):
+        p = points[start:start + chunk, None, :]
+        t = np.clip(np.einsum("nmj,mj->nm", p - a, ab) / denom, 0.0, 1.0)
+        d = p - (a + t[..., None] * ab)
+        out[start:start + chunk] = np.sqrt(np.einsum("nmj,nmj->nm", d, d).min(axis=1))
+    return out
