@@ -1,0 +1,178 @@
+"""Meshcat scene for drake_auv: terrain and world meshes, paths, the vehicle and its trail.
+
+A `Scene` owns one `Meshcat` (on localhost only) and draws everything under `/drake_auv/<name>`.
+Other modules add their own layers (sonar beams, octree, coverage) through `scene.meshcat` and
+`scene.path_of(name)`. The vehicle is posed from a `state` port by `VehicleVisualizer`, a
+LeafSystem that publishes periodically; with `start_recording` every pose (and each completed
+piece of the trail, by its visibility) is also keyframed, and `write_html` saves the whole
+animation as one standalone HTML file.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path as FilePath
+
+import numpy as np
+from pydrake.geometry import Box, Capsule, Meshcat, MeshcatParams, Rgba
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+from pydrake.systems.framework import LeafSystem
+
+from drake_auv.planning.path import Path
+
+# GIRONA 500 envelope: 1.5 m long, 1.0 m wide, 1.0 m high, two buoyant upper hulls and one
+# lower hull (Ribas et al. 2012); hull radius and spacing picked to match that envelope.
+_HULL_RADIUS = 0.15
+_HULL_LENGTH = 1.5 - 2 * _HULL_RADIUS  # cylinder part of the capsule
+_HULLS = (("hull_port", (0.0, 0.3, 0.2), Rgba(0.95, 0.75, 0.1, 1.0)),
+          ("hull_starboard", (0.0, -0.3, 0.2), Rgba(0.95, 0.75, 0.1, 1.0)),
+          ("hull_lower", (0.0, 0.0, -0.3), Rgba(0.35, 0.35, 0.4, 1.0)))
+
+
+def _rgba(value) -> Rgba:
+    if isinstance(value, Rgba):
+        return value
+    value = tuple(float(c) for c in value)
+    if len(value) not in (3, 4) or not all(0.0 <= c <= 1.0 for c in value):
+        raise ValueError(f"rgba must be 3 or 4 numbers in [0, 1], got {value}")
+    return Rgba(*value) if len(value) == 4 else Rgba(*value, 1.0)
+
+
+class Scene:
+    """One Meshcat scene. Attributes: `meshcat`, `root` (scene-tree prefix), `recording`."""
+
+    def __init__(self, meshcat: Meshcat | None = None, root: str = "drake_auv"):
+        self.meshcat = meshcat if meshcat is not None else Meshcat(MeshcatParams(host="localhost"))
+        self.root = "/" + root.strip("/")
+        self.recording = False
+        self.playback_speed = 1.0
+
+    def path_of(self, name: str) -> str:
+        """The scene-tree path of a named layer."""
+        return f"{self.root}/{name.strip('/')}"
+
+    def add_mesh(self, name: str, mesh, rgba=(0.55, 0.5, 0.42, 1.0), wireframe: bool = False) -> str:
+        """Draws a `trimesh.Trimesh` (world frame) at `name`; returns its scene path."""
+        vertices = np.asarray(mesh.vertices, dtype=float)
+        faces = np.asarray(mesh.faces, dtype=np.int32)
+        if len(vertices) == 0 or len(faces) == 0:
+            raise ValueError(f"add_mesh({name!r}): the mesh is empty")
+        path = self.path_of(name)
+        self.meshcat.SetTriangleMesh(path, np.asfortranarray(vertices.T),
+                                     np.asfortranarray(faces.T), _rgba(rgba), wireframe)
+        return path
+
+    def add_terrain(self, bathymetry, stride: int = 1, rgba=(0.55, 0.5, 0.42, 1.0)) -> str:
+        """Draws a `Bathymetry` grid as the seabed surface at `terrain`."""
+        from drake_auv.terrain.mesh import bathymetry_to_mesh
+
+        return self.add_mesh("terrain", bathymetry_to_mesh(bathymetry, stride), rgba)
+
+    def add_path(self, name: str, path, rgba=(1.0, 0.55, 0.0, 1.0), line_width: float = 2.0) -> str:
+        """Draws a `Path` (or an (N, 3) array of points) as a polyline at `name`."""
+        points = path.points if isinstance(path, Path) else np.asarray(path, dtype=float)
+        if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
+            raise ValueError(f"add_path({name!r}): need (N >= 2, 3) points, got {points.shape}")
+        scene_path = self.path_of(name)
+        self.meshcat.SetLine(scene_path, np.asfortranarray(points.T), line_width, _rgba(rgba))
+        return scene_path
+
+    def add_vehicle_visualizer(self, builder, state_port, name: str = "vehicle",
+                               period: float = 0.1, trail: bool = True) -> "VehicleVisualizer":
+        """Adds a `VehicleVisualizer` fed by `state_port` (12-state) to a DiagramBuilder."""
+        visualizer = builder.AddNamedSystem(f"{name}_visualizer",
+                                            VehicleVisualizer(self, name, period, trail))
+        builder.Connect(state_port, visualizer.state_input)
+        return visualizer
+
+    def start_recording(self, playback_speed: float = 1.0, frames_per_second: float = 32.0,
+                        live: bool = True) -> None:
+        """Keyframes every later vehicle pose; the animation plays `playback_speed` times
+        faster than simulated time. With `live`, poses also go to open browsers meanwhile."""
+        if not (math.isfinite(playback_speed) and 0.01 <= playback_speed <= 1000):
+            raise ValueError(f"playback_speed must be in [0.01, 1000], got {playback_speed}")
+        if not (math.isfinite(frames_per_second) and 1 <= frames_per_second <= 240):
+            raise ValueError(f"frames_per_second must be in [1, 240], got {frames_per_second}")
+        self.playback_speed = float(playback_speed)
+        self.meshcat.StartRecording(frames_per_second, live)
+        self.recording = True
+
+    def recording_time(self, sim_time: float) -> float:
+        """Time in the animation of a simulated time, s."""
+        return sim_time / self.playback_speed
+
+    def write_html(self, filename) -> FilePath:
+        """Publishes the recording (if any) and writes the scene as one standalone HTML file."""
+        if self.recording:
+            self.meshcat.StopRecording()
+            self.meshcat.PublishRecording()
+            self.recording = False
+        filename = FilePath(filename)
+        filename.parent.mkdir(parents=True, exist_ok=True)
+        filename.write_text(self.meshcat.StaticHtml())
+        return filename
+
+
+class VehicleVisualizer(LeafSystem):
+    """Poses the three-hull vehicle from `state` every `period` s and draws its trail.
+
+    The trail is drawn in pieces of `trail_piece` samples; while recording, each piece is
+    hidden at the start of the animation and shown from the time it was completed.
+    """
+
+    def __init__(self, scene: Scene, name: str = "vehicle", period: float = 0.1,
+                 trail: bool = True, trail_piece: int = 20):
+        super().__init__()
+        if not (math.isfinite(period) and 1e-3 <= period <= 10.0):
+            raise ValueError(f"visualizer period must be in [0.001, 10] s, got {period}")
+        self.scene = scene
+        self.vehicle_path = scene.path_of(name)
+        self.trail_path = scene.path_of(f"{name}_trail")
+        self.trail = trail
+        self.trail_piece = int(trail_piece)
+        self._trail_points: list[np.ndarray] = []
+        self._pieces = 0
+        self.state_input = self.DeclareVectorInputPort("state", 12)
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish_pose)
+        self.DeclareForcedPublishEvent(self._publish_pose)
+        self.DeclareInitializationPublishEvent(self._reset_trail)
+        self._draw_vehicle()
+
+    def _draw_vehicle(self):
+        meshcat = self.scene.meshcat
+        along_x = RotationMatrix.MakeYRotation(np.pi / 2)
+        for hull, offset, rgba in _HULLS:
+            path = f"{self.vehicle_path}/{hull}"
+            meshcat.SetObject(path, Capsule(_HULL_RADIUS, _HULL_LENGTH), rgba)
+            meshcat.SetTransform(path, RigidTransform(along_x, offset))
+        for i, x in enumerate((-0.45, 0.45)):  # vertical frames joining the hulls
+            path = f"{self.vehicle_path}/frame_{i}"
+            meshcat.SetObject(path, Box(0.06, 0.75, 0.55), Rgba(0.2, 0.2, 0.2, 1.0))
+            meshcat.SetTransform(path, RigidTransform([x, 0.0, -0.05]))
+
+    def _reset_trail(self, context):
+        self._trail_points = []
+        if self._pieces:
+            self.scene.meshcat.Delete(self.trail_path)
+        self._pieces = 0
+        self._publish_pose(context)
+
+    def _publish_pose(self, context):
+        x = self.state_input.Eval(context)
+        t = context.get_time()
+        scene = self.scene
+        when = scene.recording_time(t) if scene.recording else None
+        scene.meshcat.SetTransform(self.vehicle_path, RigidTransform(RollPitchYaw(x[3:6]), x[:3]),
+                                   when)
+        if not self.trail:
+            return
+        self._trail_points.append(np.array(x[:3]))
+        if len(self._trail_points) > self.trail_piece:
+            path = f"{self.trail_path}/{self._pieces}"
+            points = np.asfortranarray(np.array(self._trail_points).T)
+            scene.meshcat.SetLine(path, points, 2.0, Rgba(0.1, 0.6, 1.0, 1.0))
+            if scene.recording:
+                scene.meshcat.SetProperty(path, "visible", False, 0.0)
+                scene.meshcat.SetProperty(path, "visible", True, when)
+            self._pieces += 1
+            self._trail_points = self._trail_points[-1:]  # the next piece starts here

@@ -1,0 +1,67 @@
+"""Meshcat scene: layers, the vehicle visualiser, and the recorded standalone HTML."""
+
+import base64
+import re
+
+import numpy as np
+import pytest
+import trimesh
+from pydrake.systems.analysis import Simulator
+
+from drake_auv.diagrams.vehicle import build_tracking_diagram
+from drake_auv.planning import Path
+from drake_auv.terrain.synthetic import random_seabed
+from drake_auv.visualization import Scene
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return Scene()
+
+
+def embedded_commands(html: str) -> list[bytes]:
+    """The msgpack-encoded Meshcat commands a StaticHtml file replays on load."""
+    return [base64.b64decode(b64) for b64 in
+            re.findall(r'data:application/octet-binary;base64,([A-Za-z0-9+/=]+)"', html)]
+
+
+def test_recorded_html_holds_the_animation(scene, tmp_path):
+    bathy = random_seabed(seed=1, shape=(30, 40), relief=3.0)
+    scene.add_terrain(bathy)
+    path = Path(np.array([[2.0, 2.0, -40.0], [22.0, 2.0, -40.0], [22.0, 6.0, -40.0]]), 0.0,
+                (0.0, 0.0, -1.0))
+    scene.add_path("path", path)
+    diagram, handles = build_tracking_diagram(path, scene=scene)
+    assert handles.visualizer.get_name() == "vehicle_visualizer"
+    scene.start_recording(playback_speed=10.0, frames_per_second=32.0)
+    simulator = Simulator(diagram)
+    simulator.AdvanceTo(handles.end_time)
+    html_file = scene.write_html(tmp_path / "mission.html")
+    assert not scene.recording
+    html = html_file.read_text()
+    assert html.lstrip().lower().startswith("<!doctype html") or "<html" in html[:200].lower()
+    commands = embedded_commands(html)
+    animations = [c for c in commands if b"set_animation" in c]
+    assert len(animations) == 1
+    animation = animations[0]
+    assert b"/drake_auv/vehicle" in animation
+    # 48 s simulated at 10x and 32 frames/s: about 154 frames for each of the vehicle's
+    # position and quaternion tracks, plus the trail pieces' visibility keys.
+    frames = handles.end_time / 10.0 * 32.0
+    assert animation.count(b"time") >= 2 * 0.9 * frames
+    assert animation.count(b"visible") >= 2
+    objects = b"".join(c for c in commands if b"set_object" in c)
+    assert b"/drake_auv/terrain" in objects and b"/drake_auv/path" in objects
+    assert b"/drake_auv/vehicle/hull_lower" in objects
+    assert b"/drake_auv/vehicle_trail/0" in objects
+
+
+def test_scene_rejects_bad_input(scene):
+    with pytest.raises(ValueError, match="empty"):
+        scene.add_mesh("nothing", trimesh.Trimesh())
+    with pytest.raises(ValueError, match="points"):
+        scene.add_path("bad", np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="rgba"):
+        scene.add_path("red", np.zeros((2, 3)), rgba=(2.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="playback_speed"):
+        scene.start_recording(playback_speed=0.0)
