@@ -1,0 +1,49 @@
+"""`SonarReturns`: what a sonar system outputs, the returns of the pings of its last update."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SonarReturns:
+    """Returns of n beams, placed with the estimated (navigation) state.
+
+    Attributes:
+        time: time of the update, s.
+        origin_nav: (3,) sensor origin in the navigation frame, m.
+        angles: (n,) beam angles in the scan plane of the sensor, rad.
+        ranges: (n,) measured range, m; NaN where a beam had no return.
+        directions_nav: (n, 3) unit beam directions in the navigation frame.
+        points_nav: (n, 3) return points in the navigation frame, m (NaN rows: no return).
+        points_body: (n, 3) return points in the body frame, m (NaN rows: no return).
+        max_range: the sensor's maximum range, m (a beam without return saw free space to it).
+        sequence: update counter, 0 before the first update, +1 at each update, so consumers
+            can tell new data from old.
+    """
+
+    time: float
+    origin_nav: np.ndarray
+    angles: np.ndarray
+    ranges: np.ndarray
+    directions_nav: np.ndarray
+    points_nav: np.ndarray
+    points_body: np.ndarray
+    max_range: float
+    sequence: int = 0
+
+    @classmethod
+    def empty(cls, max_range: float) -> "SonarReturns":
+        """No beams yet (the value before the first update)."""
+        return cls(0.0, np.zeros(3), np.zeros(0), np.zeros(0), np.zeros((0, 3)),
+                   np.zeros((0, 3)), np.zeros((0, 3)), float(max_range), 0)
+
+    def __len__(self) -> int:
+        return len(self.ranges)
+
+    @property
+    def hit(self) -> np.ndarray:
+        """(n,) True where a beam returned."""
+        return np.isfinite(self.ranges)

@@ -1,0 +1,205 @@
+"""Pure sonar models (no Drake): ranges against known geometry, frames, noise, bad input."""
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from drake_auv.geometry import RayCaster
+from drake_auv.sensors import (SonarModel, SonarMount, SonarNoise, fan_angles, head_angles,
+                               scan)
+from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.mesh import bathymetry_to_mesh
+
+
+def _state(x=0.0, y=0.0, z=0.0, roll=0.0, pitch=0.0, yaw=0.0):
+    s = np.zeros(12)
+    s[:6] = x, y, z, roll, pitch, yaw
+    return s
+
+
+def _wall(distance, thickness=1.0, size=60.0):
+    """A wall whose near face is the plane x = distance."""
+    box = trimesh.creation.box(extents=(thickness, size, size))
+    box.apply_translation([distance + thickness / 2, 0.0, 0.0])
+    return box
+
+
+def _flat_seabed(z=-30.0):
+    return bathymetry_to_mesh(Bathymetry(np.full((61, 61), z), (2.0, 2.0), (-60.0, -60.0)))
+
+
+def test_profiler_wall_distance_grazing_range_and_occlusion():
+    caster = RayCaster(_wall(4.0))
+    model = SonarModel(SonarMount.named("horizontal"), max_range=20.0)
+    angles = np.radians(np.arange(-89.1, 89.2, 0.9))
+    ret = scan(caster, model, angles, _state(), _state())
+    # Where the wall is within range and the beam is not grazing: d / cos(a).
+    expected = 4.0 / np.cos(angles)
+    ok = (expected <= 20.0) & (np.abs(angles) <= np.radians(85.0))
+    np.testing.assert_allclose(ret.ranges[ok], expected[ok], atol=1e-4)
+    assert np.isnan(ret.ranges[~ok]).all()
+    # Grazing: the wall 1 m away at 87 deg is 19.1 m along the beam (in range) but returns nothing.
+    graze = scan(RayCaster(_wall(1.0)), model, np.radians([87.0, 80.0]), _state(), _state())
+    assert np.isnan(graze.ranges[0]) and abs(graze.ranges[1] - 1.0 / np.cos(np.radians(80))) < 1e-4
+    # Beyond range.
+    assert np.isnan(scan(RayCaster(_wall(25.0)), model, [0.0], _state(), _state()).ranges).all()
+    # Occlusion: a post in front of the wall hides it.
+    post = trimesh.creation.box(extents=(0.4, 0.4, 4.0))
+    post.apply_translation([2.0, 0.0, 0.0])
+    both = RayCaster(trimesh.util.concatenate([_wall(4.0), post]))
+    np.testing.assert_allclose(scan(both, model, [0.0], _state(), _state()).ranges, [1.8], atol=1e-4)
+
+
+def test_pencil_beam_width_reports_the_nearest_echo_in_the_cone():
+    caster = RayCaster(_wall(4.0))
+    wide = SonarModel(SonarMount.named("horizontal"), beam_width=np.radians(2.0))
+    ret = scan(caster, wide, np.radians([0.0, 30.0]), _state(), _state())
+    assert abs(ret.ranges[0] - 4.0) < 1e-4  # the axis is the nearest at normal incidence
+    # At 30 deg the cone edge towards the normal comes back first: 4 / cos(29 deg).
+    assert abs(ret.ranges[1] - 4.0 / np.cos(np.radians(29.0))) < 1e-3
+    assert ret.ranges[1] < 4.0 / np.cos(np.radians(30.0))
+
+
+def test_multibeam_over_flat_seabed_returns_h_over_cos():
+    caster = RayCaster(_flat_seabed(-30.0))
+    angles = fan_angles(480, np.radians(120.0))
+    assert len(angles) == 480 and abs(np.degrees(angles[-1] - angles[0]) - 120) < 1e-9
+    model = SonarModel(SonarMount.named("down", position=(0.2, 0.0, -0.3)), max_range=20.0)
+    ret = scan(caster, model, angles, _state(3.0, -2.0, -21.7, yaw=0.8), _state(3.0, -2.0, -21.7, yaw=0.8))
+    h = 8.0  # sensor at -22.0
+    np.testing.assert_allclose(ret.ranges, h / np.cos(angles), atol=1e-4)
+    np.testing.assert_allclose(ret.points_nav[:, 2], -30.0, atol=1e-4)
+    # Across track: positive angles to port (+y in the body).
+    assert np.all(np.diff(ret.points_body[:, 1]) > 0)
+
+
+def test_side_looking_mounts_point_sideways():
+    caster = RayCaster(_wall(4.0))
+    port = SonarModel(SonarMount.named("port"))
+    star = SonarModel(SonarMount.named("starboard"))
+    # Yaw -90 deg: the port side (body +y) faces world +x, the wall.
+    s = _state(yaw=-np.pi / 2)
+    assert abs(scan(caster, port, [0.0], s, s).ranges[0] - 4.0) < 1e-4
+    assert np.isnan(scan(caster, star, [0.0], s, s).ranges[0])
+    s = _state(yaw=np.pi / 2)
+    assert abs(scan(caster, star, [0.0], s, s).ranges[0] - 4.0) < 1e-4
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_returns_land_on_the_true_mesh_for_arbitrary_poses(seed):
+    """Inside a closed 40 x 30 x 20 m room, every return placed with an exact navigation state
+    lies on a wall, whatever the roll, pitch and yaw; directions match an independent rotation."""
+    half = np.array([20.0, 15.0, 10.0])
+    room = trimesh.creation.box(extents=2 * half)
+    room.invert()  # normals into the room
+    caster = RayCaster(room)
+    rng = np.random.default_rng(seed)
+    mount = SonarMount(np.array([0.5, -0.2, 0.3]),
+                       Rotation.from_euler("xyz", rng.uniform(-1, 1, 3)).as_matrix())
+    model = SonarModel(mount, max_range=100.0, max_incidence=np.pi / 2)
+    angles = head_angles(np.arange(400), (-np.pi, np.pi), np.radians(0.9))
+    for _ in range(5):
+        s = _state(*rng.uniform(-5, 5, 3), *rng.uniform([-0.6, -0.6, -np.pi], [0.6, 0.6, np.pi]))
+        ret = scan(caster, model, angles, s, s)
+        assert ret.hit.all()
+        on_wall = np.max(np.abs(ret.points_nav) / half, axis=1)
+        np.testing.assert_allclose(on_wall, 1.0, atol=1e-5)
+        r_wb = Rotation.from_euler("ZYX", s[[5, 4, 3]]).as_matrix()
+        d_s = np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
+        np.testing.assert_allclose(ret.directions_nav, d_s @ (r_wb @ mount.rotation).T, atol=1e-12)
+        np.testing.assert_allclose(ret.origin_nav, s[:3] + r_wb @ mount.position, atol=1e-12)
+        np.testing.assert_allclose(ret.points_nav, ret.origin_nav + ret.ranges[:, None] * ret.directions_nav,
+                                   atol=1e-9)
+        np.testing.assert_allclose(ret.points_nav, s[:3] + ret.points_body @ r_wb.T, atol=1e-9)
+
+
+def test_navigation_error_moves_returns_rigidly():
+    caster = RayCaster(_flat_seabed())
+    model = SonarModel(SonarMount.named("down"))
+    angles = fan_angles(31, np.radians(120))
+    truth = _state(1.0, 2.0, -25.0, 0.05, -0.04, 0.3)
+    est = truth.copy()
+    est[[0, 1, 5]] += [1.5, -0.7, 0.1]
+    a, b = scan(caster, model, angles, truth, truth), scan(caster, model, angles, truth, est)
+    np.testing.assert_array_equal(a.ranges, b.ranges)  # the measurement is the truth's
+    np.testing.assert_allclose(a.points_body, b.points_body)
+    # points_nav = p_N + R_NB R_WB^T (points_world - p_W): the scan moves rigidly with the error.
+    r_wb = Rotation.from_euler("ZYX", truth[[5, 4, 3]]).as_matrix()
+    r_nb = Rotation.from_euler("ZYX", est[[5, 4, 3]]).as_matrix()
+    moved = (a.points_nav - truth[:3]) @ (r_nb @ r_wb.T).T + est[:3]
+    np.testing.assert_allclose(b.points_nav, moved, atol=1e-9)
+    assert np.linalg.norm(b.points_nav - a.points_nav, axis=1).min() > 1.0
+
+
+def test_head_schedule_rotates_or_sweeps_the_sector():
+    step = np.radians(0.9)
+    full = head_angles(np.arange(800), (-np.pi, np.pi), step)
+    assert np.all((full >= -np.pi) & (full < np.pi))
+    np.testing.assert_allclose(np.diff(np.unwrap(full)), step, atol=1e-12)
+    sector = head_angles(np.arange(400), np.radians((-45.0, 45.0)), step)
+    assert sector.min() >= np.radians(-45) - 1e-12 and sector.max() <= np.radians(45) + 1e-12
+    np.testing.assert_allclose(np.abs(np.diff(sector)), step, atol=1e-9)  # back and forth
+    assert np.sum(np.diff(np.sign(np.diff(sector))) != 0) >= 3
+
+
+def test_noise_off_by_default_and_deterministic_under_seed():
+    assert not SonarNoise().enabled and not SonarModel().noise.enabled
+    caster = RayCaster(_flat_seabed())
+    angles = fan_angles(480, np.radians(120))
+    s = _state(z=-22.0)
+    clean = scan(caster, SonarModel(SonarMount.named("down")), angles, s, s)
+    noise = SonarNoise(range_sigma=0.05, dropout_prob=0.1, spurious_prob=0.02)
+    model = SonarModel(SonarMount.named("down"), noise=noise)
+    a = scan(caster, model, angles, s, s, rng=np.random.default_rng(11))
+    b = scan(caster, model, angles, s, s, rng=np.random.default_rng(11))
+    c = scan(caster, model, angles, s, s, rng=np.random.default_rng(12))
+    np.testing.assert_array_equal(a.ranges, b.ranges)
+    assert not np.array_equal(np.nan_to_num(a.ranges), np.nan_to_num(c.ranges))
+    # Statistics over many pings: dropouts ~10 %, spurious ~2 %, the rest ~N(0, 0.05).
+    rng = np.random.default_rng(5)
+    err = np.concatenate([scan(caster, model, angles, s, s, rng=rng).ranges - clean.ranges
+                          for _ in range(40)])
+    dropped = np.isnan(err).mean()
+    assert 0.09 < dropped < 0.12  # 0.1 + a few spurious returns beyond range get dropped too
+    good = err[np.abs(err) < 0.3]
+    assert abs(good.std() - 0.05) < 0.005 and abs(good.mean()) < 0.005
+    outliers = np.mean(np.abs(err[np.isfinite(err)]) >= 0.3)
+    assert 0.01 < outliers < 0.03
+    with pytest.raises(ValueError, match="rng"):
+        scan(caster, model, angles, s, s)
+
+
+def test_sea_surface_reflections():
+    caster = RayCaster(_flat_seabed(-30.0))
+    angles = np.radians(np.arange(-90.0, 90.1, 5.0))
+    s = _state(z=-4.0)
+    model = SonarModel(SonarMount.named("vertical"),
+                       noise=SonarNoise(surface_prob=1.0))
+    ret = scan(caster, model, angles, s, s, rng=np.random.default_rng(0))
+    up = np.sin(angles) > np.sin(np.radians(11.6))  # surface within 20 m: 4 / sin(a) <= 20
+    np.testing.assert_allclose(ret.points_nav[up, 2], 0.0, atol=1e-9)
+    assert np.isnan(ret.ranges[(angles > 0) & ~up]).all()
+    clean = scan(caster, SonarModel(SonarMount.named("vertical")), angles, s, s)
+    np.testing.assert_array_equal(ret.ranges[angles <= 0], clean.ranges[angles <= 0])
+
+
+def test_bad_input_raises():
+    with pytest.raises(ValueError, match="num_beams"):
+        fan_angles(0, np.radians(120))
+    with pytest.raises(ValueError, match="max_range"):
+        SonarModel(max_range=-1.0)
+    with pytest.raises(ValueError, match="beam_width"):
+        SonarModel(beam_width=-0.1)
+    with pytest.raises(ValueError, match="max_incidence"):
+        SonarModel(max_incidence=0.0)
+    with pytest.raises(ValueError, match="range_sigma"):
+        SonarNoise(range_sigma=-0.1)
+    with pytest.raises(ValueError, match="dropout_prob"):
+        SonarNoise(dropout_prob=1.5)
+    with pytest.raises(ValueError, match="mount"):
+        SonarMount.named("upside-down")
+    with pytest.raises(ValueError, match="rotation"):
+        SonarMount(rotation=2 * np.eye(3))
+    with pytest.raises(ValueError, match="state"):
+        scan(RayCaster(_wall(4.0)), SonarModel(), [0.0], np.full(12, np.nan), _state())
