@@ -88,30 +88,36 @@ def test_convex_block_closed_loop_without_contact():
     assert np.all(np.abs(log[log[:, 0] > 15, 4] - 2.0) < 0.5)
 
 
-# A C-shaped object opening towards +s on a seabed at h = 0, in the (s, h) plane
+# A C-shaped object opening towards +s on a seabed at h = 0, in the (s, h) plane; z = h + Z0
+Z0 = -30.0
 C_PROFILE = _polyline([[-20, 0], [10, 0], [10, 10], [18, 10], [18, 8], [12, 8], [12, 2],
                        [18, 2], [18, 0], [40, 0]], closed=False)
 
 
-def test_vertical_whole_c_with_ceiling_turn():
-    plane_yaw = 0.3
+def _run_vertical(profile, start_sh, duration, params, plane_yaw=0.3):
+    """Kinematic vertical following in the plane along `plane_yaw`; the profile is in (s, h)
+    with z = h + Z0. Log rows: s, h, true distance, cos(yaw - plane_yaw), turning, z reference."""
     e = np.array([np.cos(plane_yaw), np.sin(plane_yaw), 0.0])
-    follower = VerticalFollower(FollowingParams(offset=2.0), seed=0)
-    sh, yaw, beam, log = np.array([0.0, 2.0]), plane_yaw, 0.0, []
-    for k in range(int(240 / DT)):
+    follower = VerticalFollower(params, seed=0)
+    sh, yaw, beam, log = np.array(start_sh, float), plane_yaw, 0.0, []
+    for k in range(int(duration / DT)):
         angles = beam + STEP * np.arange(3)
         beam += 3 * STEP
         facing = np.sign(np.cos(yaw - plane_yaw))
         dirs = np.column_stack([facing * np.cos(angles), np.sin(angles)])
-        hits = sh + _cast(sh, dirs, C_PROFILE)[:, None] * dirs
+        hits = sh + _cast(sh, dirs, profile)[:, None] * dirs
         state = np.zeros(12)
-        state[:3], state[5] = sh[0] * e + [0, 0, sh[1]], yaw
-        out = follower.update(k * DT, state, hits[:, :1] * e + hits[:, 1:] * [0, 0, 1])
+        state[:3], state[5] = sh[0] * e + [0, 0, sh[1] + Z0], yaw
+        out = follower.update(k * DT, state, hits[:, :1] * e + (hits[:, 1:] + Z0) * [0, 0, 1])
         p, yaw = _vehicle_step(state[:3], yaw, out.reference)
-        sh = np.array([p @ e, p[2]])
-        log.append((sh[0], sh[1], _distance(sh, C_PROFILE), np.cos(yaw - plane_yaw),
-                    out.mode == "turn"))
-    log = np.array(log)
+        sh = np.array([p @ e, p[2] - Z0])
+        log.append((sh[0], sh[1], _distance(sh, profile), np.cos(yaw - plane_yaw),
+                    out.mode == "turn", out.reference[2]))
+    return np.array(log), follower
+
+
+def test_vertical_whole_c_with_ceiling_turn():
+    log, follower = _run_vertical(C_PROFILE, [0.0, 2.0], 240, FollowingParams(offset=2.0))
     assert np.all(log[:, 2] > 1.5)  # no contact, offset held within 0.5 m
     above = log[:, 1] > 11.5
     under_ceiling = (log[:, 0] > 13) & (log[:, 0] < 17) & (log[:, 1] > 5) & (log[:, 1] < 7)
@@ -122,6 +128,16 @@ def test_vertical_whole_c_with_ceiling_turn():
     assert log[first_ceiling, 3] < -0.9
     assert np.any(log[:, 4]) and follower.turns >= 2
     assert log[-1, 0] > 25 and abs(log[-1, 1] - 2.0) < 0.3  # out of the C, back on the seabed
+
+
+def test_vertical_wall_to_the_surface_respects_min_depth():
+    # seabed at z = -10 (h = 20), then a quay wall at s = 6 rising above the surface
+    quay = _polyline([[-20, 20], [6, 20], [6, 31], [20, 31]], closed=False)
+    params = FollowingParams(offset=2.0, min_depth=1.5)
+    log, _ = _run_vertical(quay, [0.0, 22.0], 90, params)
+    assert np.all(log[:, 5] <= -1.5 + 1e-9)
+    assert log[:, 1].max() + Z0 == pytest.approx(-1.5, abs=0.1)  # climbed to the limit
+    assert np.all(log[:, 2] > 1.5)
 
 
 def test_follow_step_directions_and_fading():

@@ -52,6 +52,8 @@ class FollowingParams:
         -turn_threshold times the heading (a cosine, in (0, 1)).
     turn_tolerance: vertical mode, the advance waits while the yaw error exceeds this, rad.
     corner_weight: weight in [0, 1] of the range along the normal in the controlled distance.
+    min_depth: the reference never rises above z = -min_depth (a wall can lead to the
+        surface), m, >= 0.
     max_age, max_points: forgetting of the local map.
     estimator: `EstimatorParams`.
     """
@@ -67,11 +69,14 @@ class FollowingParams:
     turn_threshold: float = 0.5
     turn_tolerance: float = np.radians(20.0)
     corner_weight: float = 0.0
+    min_depth: float = 1.0
     max_age: float = 20.0
     max_points: int = 4000
     estimator: EstimatorParams = field(default_factory=EstimatorParams)
 
     def __post_init__(self):
+        if not (np.isfinite(self.min_depth) and self.min_depth >= 0):
+            raise ValueError(f"FollowingParams.min_depth must be >= 0 m, got {self.min_depth}")
         for name in ("offset", "speed", "max_correction", "slow_band", "yaw_rate", "plane_band",
                      "max_age"):
             value = getattr(self, name)
@@ -268,4 +273,7 @@ class VerticalFollower(_Follower):
         reference[3] = self.yaw_ref
         reference[4:7] = velocity[0] * e + velocity[1] * up
         reference[7] = yaw_rate
+        if reference[2] >= -self.params.min_depth:  # depth limit: hold below it
+            reference[2] = -self.params.min_depth
+            reference[6] = min(reference[6], 0.0)
         return FollowerOutput(reference, estimate, points, mode)
