@@ -42,7 +42,7 @@ def caldera_site(cell: float = 0.5, seed: int = 0) -> Bathymetry:
     rim_centre = 125.0 + 6.0 * np.sin(np.pi * x / 100.0)
     d = y - rim_centre
     # Rim slope along y, integrated analytically: a plateau of steepness s(x) tapered at both sides.
-    steep = 0.43 + 0.04 * np.sin(2.0 * np.pi * x / 100.0 + 0.4)
+    steep = 0.465 + 0.035 * np.sin(2.0 * np.pi * x / 100.0 + 0.4)
     rise = steep * _integrated_taper(d, 45.0, 8.0)
     undulation = (1.0 * np.sin(2 * np.pi * x / 45.0 + 0.7) * np.cos(2 * np.pi * y / 60.0)
                   + 0.5 * np.sin(2 * np.pi * (x + y) / 33.0))

@@ -1,0 +1,176 @@
+"""`plan_coverage`: the off-line 3D coverage planner of the reference's Section 5.2.
+
+Bathymetry -> slope map -> classification -> boustrophedon cells over the planar area and
+slicing contours over each high-slope region -> one path visiting every region (an exhaustive
+walk of the graph whose nodes are the planar cells and the high-slope regions) with safe
+transits -> the lawnmower baseline -> metrics for both.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drake_auv.planning.boustrophedon import (Decomposition, best_sweep_angle,
+                                              boustrophedon_waypoints, cell_lanes, decompose,
+                                              exhaustive_walk, sweep_raster)
+from drake_auv.planning.lawnmower import check_sensor_parameters, lane_spacing, plan_lawnmower
+from drake_auv.planning.path import Path
+from drake_auv.planning.route import RouteBuilder
+from drake_auv.planning.slicing import Contour, order_contours, slice_levels, slice_region
+from drake_auv.planning.surface import TerrainSurface
+from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.roi import crop_to_roi
+from drake_auv.terrain.slope import TerrainLabels, classify
+
+
+@dataclass(frozen=True)
+class CoveragePlan:
+    """Everything `plan_coverage` computed, for export, figures and the simulator.
+
+    Attributes:
+        bathy: the bathymetry the plan was made on (cropped to the ROI).
+        path: combined path, labels "planar", "slice" and "transit".
+        lawnmower: the baseline, labels "lawnmower" and "transit".
+        labels: the terrain classification.
+        cells: boustrophedon decomposition of the planar area.
+        contours: slicing contour pieces in visiting order.
+        visit_order: the walk over the graph nodes: ("cell", k) or ("region", r).
+        parameters: the planner's parameters (omega, aperture_deg, ...; sweep angle in degrees).
+        metrics: `PlanMetrics` of both paths (None when not computed).
+        surface: the shared `TerrainSurface` (heights, normals, distances).
+    """
+
+    bathy: Bathymetry
+    path: Path
+    lawnmower: Path
+    labels: TerrainLabels
+    cells: Decomposition
+    contours: list[Contour]
+    visit_order: list[tuple[str, int]]
+    parameters: dict
+    metrics: object = None
+    surface: TerrainSurface = field(default=None, repr=False)
+
+
+def _region_adjacency(dec: Decomposition, bathy: Bathymetry, regions: np.ndarray):
+    """(cell, region) pairs where a cell's free run ends against a high-slope region."""
+    _, (reg,) = sweep_raster(bathy, [regions.astype(np.int32)], dec.frame.angle,
+                             dec.frame.resolution)
+    label = dec.label_raster
+    nr, nc = label.shape
+    pairs = set()
+    # Across the sweep direction (run ends) and along it (cell sides): compare neighbours.
+    for a_cell, b_reg in ((label[:-1, :], reg[1:, :]), (label[1:, :], reg[:-1, :]),
+                          (label[:, :-1], reg[:, 1:]), (label[:, 1:], reg[:, :-1])):
+        m = (a_cell > 0) & (b_reg > 0)
+        if m.any():
+            pairs.update(zip((a_cell[m] - 1).tolist(), b_reg[m].tolist()))
+    return sorted(pairs)
+
+
+def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_deg: float = 60.0,
+                  overlap: float = 0.1, slope_threshold: float = 0.5,
+                  sweep_angle_deg: float | None = None, slice_spacing: float | None = None,
+                  closing_radius: float | None = None, opening_radius: float | None = None,
+                  min_area: float | None = None, sample_spacing: float | None = None,
+                  sensor_range: float | None = None, compute_metrics: bool = True,
+                  progress: bool = False) -> CoveragePlan:
+    """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) at offset `omega`.
+
+    Args:
+        roi: rectangle (xmin, ymin, xmax, ymax) or polygon [(x, y), ...] in map coordinates of
+            the bathymetry's CRS (world metres when it has none).
+        omega: offset to the terrain, m (> 0).
+        aperture_deg: sensor aperture, degrees in (0, 180).
+        overlap: overlap of neighbouring lanes and contours, [0, 1).
+        slope_threshold: delta_s > 0 of the classification.
+        sweep_angle_deg: lane direction of the planar cells, degrees from +x (None: fewest lanes).
+        slice_spacing: vertical spacing of the slicing planes, m (None: from the footprint).
+        closing_radius, opening_radius, min_area: classification clean-up (see `classify`).
+        sample_spacing: largest distance between path samples, m (default Omega / 4).
+        sensor_range: largest range at which the sensor sees, m (default 2 Omega), for metrics.
+        compute_metrics: compute `PlanMetrics` for the path and the lawnmower.
+        progress: show a tqdm bar over the stages.
+    """
+    from tqdm import tqdm
+
+    check_sensor_parameters(omega, aperture_deg, overlap)
+    if not isinstance(bathy, Bathymetry):
+        raise ValueError(f"plan_coverage needs a Bathymetry, got {type(bathy).__name__}")
+    if slice_spacing is not None and not (np.isfinite(slice_spacing) and slice_spacing > 0):
+        raise ValueError(f"slice_spacing must be > 0 m, got {slice_spacing}")
+    if sweep_angle_deg is not None and not np.isfinite(sweep_angle_deg):
+        raise ValueError(f"sweep_angle_deg must be a finite angle in degrees, got {sweep_angle_deg}")
+    ds = omega / 4.0 if sample_spacing is None else float(sample_spacing)
+    if not (np.isfinite(ds) and ds > 0):
+        raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
+    bar = tqdm(total=5, desc="plan", disable=not progress, leave=False)
+    if roi is not None:
+        bathy = crop_to_roi(bathy, roi)
+    labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
+    bar.update()
+    surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0))
+    spacing = lane_spacing(omega, aperture_deg, overlap)
+    planar = labels.planar
+    if planar.any():
+        angle = (best_sweep_angle(bathy, planar, spacing) if sweep_angle_deg is None
+                 else np.radians(float(sweep_angle_deg)))
+    else:
+        angle = 0.0 if sweep_angle_deg is None else np.radians(float(sweep_angle_deg))
+    dec = decompose(bathy, planar, angle)
+    bar.update()
+    # Graph over planar cells (0..C-1) and high-slope regions (C..C+R-1).
+    n_cells = len(dec.cells)
+    adjacency = dec.adjacency() + [[] for _ in range(labels.n_regions)]
+    for c, r in _region_adjacency(dec, bathy, labels.regions):
+        adjacency[c].append(n_cells + r - 1)
+        adjacency[n_cells + r - 1].append(c)
+    positions = [c.centroid(dec.frame) for c in dec.cells]
+    xx, yy = np.meshgrid(bathy.x, bathy.y)
+    for r in range(1, labels.n_regions + 1):
+        m = labels.regions == r
+        positions.append(np.array([xx[m].mean(), yy[m].mean()]))
+    positions = np.array(positions).reshape(-1, 2)
+    order = exhaustive_walk(adjacency, positions, 0)
+    bar.update()
+    route = RouteBuilder(surface, omega, ds)
+    contours_done: list[Contour] = []
+    visit = []
+    for node in order:
+        here = route.position
+        if node < n_cells:
+            visit.append(("cell", node))
+            lanes = cell_lanes(dec.cells[node], dec.frame, spacing)
+            route.add_terrain_following(
+                boustrophedon_waypoints(lanes, dec.frame, None if here is None else here[:2]),
+                "planar")
+            continue
+        r = node - n_cells + 1
+        visit.append(("region", r))
+        mask = labels.regions == r
+        levels = slice_levels(surface, mask, labels.slope, spacing, slice_spacing)
+        per_level = slice_region(surface, mask, r, levels, omega, ds, min_length=spacing)
+        start = here if here is not None else np.append(positions[node], surface.z[mask].min())
+        for c in order_contours(per_level, start):
+            route.add_oriented(c.path, c.sensor_dir, "slice")
+            contours_done.append(c)
+    bar.update()
+    path = route.build()
+    lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=aperture_deg, overlap=overlap,
+                          sample_spacing=ds, surface=surface)
+    bar.update()
+    params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
+                  slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
+                  slice_spacing=slice_spacing, lane_spacing=spacing, sample_spacing=ds,
+                  sensor_range=2.0 * omega if sensor_range is None else float(sensor_range))
+    plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
+                        None, surface)
+    bar.close()
+    if compute_metrics:
+        from drake_auv.planning.metrics import evaluate_plan
+
+        plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
+                            evaluate_plan(plan), surface)
+    return plan

@@ -1,0 +1,90 @@
+"""Assembling a `Path` from coverage pieces: terrain-following legs, transits, clearance.
+
+A transit is the straight line between two pieces, lifted where needed to at least Omega above
+the terrain below it; after assembly every sample closer than Omega to the surface (3D distance,
+not just altitude) is pushed away from it (`TerrainSurface.enforce_clearance`). Samples are at
+most `sample_spacing` apart, so the clearance holds along the segments to within that spacing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drake_auv.planning.path import Path
+from drake_auv.planning.polyline import densify, motion_heading
+from drake_auv.planning.surface import TerrainSurface
+
+DOWN = np.array([0.0, 0.0, -1.0])
+
+
+class RouteBuilder:
+    """Accumulates labelled pieces in order, then builds one `Path`."""
+
+    def __init__(self, surface: TerrainSurface, omega: float, sample_spacing: float):
+        self.surface = surface
+        self.omega = float(omega)
+        self.ds = float(sample_spacing)
+        self._points, self._sensor, self._labels, self._facing = [], [], [], []
+
+    @property
+    def position(self) -> np.ndarray | None:
+        return self._points[-1][-1] if self._points else None
+
+    def _add(self, points, sensor, label, facing):
+        if len(points) == 0:
+            return
+        if self._points and np.allclose(points[0], self._points[-1][-1]):
+            points, sensor, facing = points[1:], sensor[1:], facing[1:]
+            if len(points) == 0:
+                return
+        self._points.append(points)
+        self._sensor.append(sensor)
+        self._labels.append(np.full(len(points), label, dtype=object))
+        self._facing.append(facing)
+
+    def add_terrain_following(self, xy_waypoints: np.ndarray, label: str) -> None:
+        """Straight legs through `xy_waypoints` at altitude Omega, sensor down, heading along
+        the motion. Joined to the previous piece by a transit."""
+        xy = densify(np.asarray(xy_waypoints, float), self.ds)
+        z = self.surface.elevation(xy[:, 0], xy[:, 1]) + self.omega
+        pts = np.column_stack([xy, z])
+        self.add_transit(pts[0])
+        self._add(pts, np.tile(DOWN, (len(pts), 1)), label, np.full(len(pts), np.nan))
+
+    def add_oriented(self, points: np.ndarray, sensor_dir: np.ndarray, label: str) -> None:
+        """Samples with their own sensor axes; the heading faces the sensor's horizontal part
+        (the motion direction where the sensor looks straight down)."""
+        points = np.asarray(points, float)
+        sensor_dir = np.asarray(sensor_dir, float)
+        self.add_transit(points[0])
+        horiz = np.linalg.norm(sensor_dir[:, :2], axis=1)
+        facing = np.where(horiz > 1e-3, np.arctan2(sensor_dir[:, 1], sensor_dir[:, 0]), np.nan)
+        self._add(points, sensor_dir, label, facing)
+
+    def add_transit(self, target: np.ndarray) -> None:
+        """Straight line from the current position to `target`, never lower than Omega above
+        the terrain below it; sensor down."""
+        if self.position is None:
+            return
+        a, b = self.position, np.asarray(target, float)
+        if np.linalg.norm(b - a) <= 1e-9:
+            return
+        line = densify(np.vstack([a, b]), self.ds)[1:-1]
+        if len(line) == 0:
+            return
+        floor = self.surface.elevation(line[:, 0], line[:, 1]) + self.omega
+        line[:, 2] = np.maximum(line[:, 2], floor)
+        self._add(line, np.tile(DOWN, (len(line), 1)), "transit", np.full(len(line), np.nan))
+
+    def build(self, enforce_clearance: bool = True) -> Path:
+        """The assembled path; every sample at least Omega from the terrain if asked."""
+        if not self._points:
+            raise ValueError("the route is empty: nothing to cover")
+        points = np.vstack(self._points)
+        sensor = np.vstack(self._sensor)
+        labels = np.concatenate(self._labels)
+        facing = np.concatenate(self._facing)
+        if enforce_clearance:
+            points = self.surface.enforce_clearance(points, self.omega)
+        heading = np.where(np.isnan(facing), motion_heading(points), facing)
+        return Path(points, heading, sensor, labels)

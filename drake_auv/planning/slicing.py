@@ -1,0 +1,125 @@
+"""Slicing of high-slope regions (after Atkar et al., adapted to bathymetry).
+
+Horizontal planes z = const cut the region's surface in contours (marching squares, contourpy).
+The vehicle follows each contour at offset Omega along the local surface normal and its sensor
+looks back along the inward normal, so it sees the wall square-on (a tilted forward-looking
+sensor). Contours are swept level by level, bottom to top, each piece entered at its end nearest
+to the vehicle.
+
+Plane spacing: the reference spaces the planes by the sensor's footprint. A footprint of width
+w = 2 Omega tan(aperture / 2) (1 - overlap) measured along a wall of slope S spans
+w S / sqrt(1 + S^2) in height; we take S as a low quantile (10 %) of the region's slope so the
+gentler parts of the wall are still covered without gaps. `slice_spacing` overrides it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import contourpy
+import numpy as np
+from scipy import ndimage
+
+from drake_auv.planning.polyline import length, resample
+from drake_auv.planning.surface import TerrainSurface
+
+
+@dataclass(frozen=True)
+class Contour:
+    """One piece of a slicing contour and the path that follows it.
+
+    Attributes:
+        region: high-slope region number (1-based, as in `TerrainLabels.regions`).
+        level: elevation of the slicing plane, m.
+        surface: (n, 3) points of the contour on the terrain.
+        path: (n, 3) path samples, offset Omega along the upward normal.
+        sensor_dir: (n, 3) unit sensor axes (the inward normal).
+        closed: whether the contour is a loop.
+    """
+
+    region: int
+    level: float
+    surface: np.ndarray
+    path: np.ndarray
+    sensor_dir: np.ndarray
+    closed: bool
+
+    @property
+    def length(self) -> float:
+        return length(self.path)
+
+
+def slice_levels(surface: TerrainSurface, region_mask: np.ndarray, slope: np.ndarray,
+                 footprint: float, spacing: float | None = None) -> np.ndarray:
+    """Elevations of the slicing planes across one region, m (at least one)."""
+    z = surface.z[region_mask]
+    zmin, zmax = float(z.min()), float(z.max())
+    if spacing is None:
+        s_low = float(np.nanquantile(slope[region_mask], 0.1))
+        s_low = max(s_low, 0.05)
+        spacing = footprint * s_low / np.sqrt(1.0 + s_low ** 2)
+    n = max(1, int(np.ceil((zmax - zmin) / spacing - 1e-9)))
+    first = zmin + 0.5 * ((zmax - zmin) - (n - 1) * spacing)
+    return first + spacing * np.arange(n)
+
+
+def slice_region(surface: TerrainSurface, region_mask: np.ndarray, region: int,
+                 levels: np.ndarray, omega: float, sample_spacing: float,
+                 min_length: float) -> list[list[Contour]]:
+    """Contours of one region per level (lowest level first); pieces shorter than
+    `min_length` (m) are dropped, the neighbouring levels' footprints cover them."""
+    grown = ndimage.binary_dilation(region_mask, iterations=1)
+    bathy = surface.bathy
+    zm = np.ma.array(surface.z, mask=~grown)
+    gen = contourpy.contour_generator(bathy.x, bathy.y, zm, line_type=contourpy.LineType.Separate)
+    out = []
+    for level, lines in zip(levels, gen.multi_lines(levels)):
+        pieces = []
+        for line in lines:
+            if len(line) < 2 or length(line) < min_length:
+                continue
+            closed = bool(np.allclose(line[0], line[-1]))
+            xy = resample(line, sample_spacing)
+            q = np.column_stack([xy, np.full(len(xy), level)])
+            n = surface.normal(xy[:, 0], xy[:, 1])
+            pieces.append(Contour(region, float(level), q, q + omega * n, -n, closed))
+        out.append(pieces)
+    return out
+
+
+def order_contours(levels: list[list[Contour]], start_xyz) -> list[Contour]:
+    """Contour pieces in sweep order: level by level; within a level the piece nearest to the
+    current position next, entered at its nearest end (loops at their nearest sample)."""
+    here = np.asarray(start_xyz, dtype=float)
+    ordered = []
+    for pieces in levels:
+        todo = list(pieces)
+        while todo:
+            best = None
+            for k, c in enumerate(todo):
+                if c.closed:
+                    d = np.linalg.norm(c.path - here, axis=1)
+                    i = int(np.argmin(d))
+                    cand = (d[i], k, ("roll", i))
+                else:
+                    d0 = np.linalg.norm(c.path[0] - here)
+                    d1 = np.linalg.norm(c.path[-1] - here)
+                    cand = (d0, k, ("fwd",)) if d0 <= d1 else (d1, k, ("rev",))
+                if best is None or cand[0] < best[0]:
+                    best = cand
+            _, k, how = best
+            c = todo.pop(k)
+            if how[0] == "rev":
+                c = Contour(c.region, c.level, c.surface[::-1], c.path[::-1], c.sensor_dir[::-1], False)
+            elif how[0] == "roll" and how[1]:
+                i = how[1]
+                c = Contour(c.region, c.level, _restart_loop(c.surface, i), _restart_loop(c.path, i),
+                            _restart_loop(c.sensor_dir, i), True)
+            ordered.append(c)
+            here = c.path[-1]
+    return ordered
+
+
+def _restart_loop(samples: np.ndarray, i: int) -> np.ndarray:
+    """A closed polyline (first sample == last) restarted at sample i, still closed."""
+    return np.vstack([samples[i:-1], samples[:i + 1]])

@@ -1,0 +1,178 @@
+"""The terrain as the planners query it: elevation, normals, distance and ray hits on a grid.
+
+Built once per bathymetry (the KD-tree lazily, on first distance query) and shared by the
+planners and the metrics. No-data cells are filled with the nearest valid elevation for these
+geometric queries only, so a path may pass over a hole without NaN; the planners still treat
+the holes as no-go for coverage.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+from drake_auv.terrain.bathymetry import Bathymetry
+
+
+def bilinear(grid: np.ndarray, origin, spacing, x, y) -> np.ndarray:
+    """Bilinear interpolation of a cell-centred grid at world points (clamped to the grid)."""
+    ny, nx = grid.shape
+    fj = np.clip((np.asarray(x, dtype=float) - origin[0]) / spacing[0], 0, nx - 1)
+    fi = np.clip((np.asarray(y, dtype=float) - origin[1]) / spacing[1], 0, ny - 1)
+    j0 = np.minimum(fj.astype(int), nx - 2)
+    i0 = np.minimum(fi.astype(int), ny - 2)
+    tj, ti = fj - j0, fi - i0
+    g00, g01 = grid[i0, j0], grid[i0, j0 + 1]
+    g10, g11 = grid[i0 + 1, j0], grid[i0 + 1, j0 + 1]
+    return (1 - ti) * ((1 - tj) * g00 + tj * g01) + ti * ((1 - tj) * g10 + tj * g11)
+
+
+class TerrainSurface:
+    """Geometric queries on a bathymetric surface (world frame, z up, metres).
+
+    Args:
+        bathy: the grid.
+        distance_resolution: largest spacing of the surface samples in the KD-tree used for
+            distances, m (default: the cell size). A sampled surface overestimates the distance
+            to the true (bilinear) surface by at most delta^2 / (2 d), delta being half the
+            sample diagonal; `clearance_target` adds that margin.
+    """
+
+    def __init__(self, bathy: Bathymetry, distance_resolution: float | None = None):
+        self.bathy = bathy
+        self.origin = np.asarray(bathy.origin, dtype=float)
+        self.spacing = np.asarray(bathy.spacing, dtype=float)
+        valid = bathy.valid
+        z = bathy.z
+        if not valid.all():
+            _, (ii, jj) = ndimage.distance_transform_edt(~valid, sampling=bathy.spacing[::-1],
+                                                         return_indices=True)
+            z = z[ii, jj]
+        self.z = z
+        self.valid = valid
+        gy, gx = np.gradient(z, bathy.spacing[1], bathy.spacing[0])
+        self.gx, self.gy = gx, gy
+        self.distance_resolution = (float(max(bathy.spacing)) if distance_resolution is None
+                                    else float(distance_resolution))
+        if not self.distance_resolution > 0:
+            raise ValueError(f"distance_resolution must be > 0 m, got {distance_resolution}")
+        self._tree = None
+        self._tree_points = None
+
+    # -- pointwise queries -------------------------------------------------------------------
+    def elevation(self, x, y) -> np.ndarray:
+        """Elevation at world (x, y), m (bilinear, holes filled)."""
+        return bilinear(self.z, self.origin, self.spacing, x, y)
+
+    def gradient(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """(dz/dx, dz/dy) at world (x, y), bilinear in the grid's central differences."""
+        return (bilinear(self.gx, self.origin, self.spacing, x, y),
+                bilinear(self.gy, self.origin, self.spacing, x, y))
+
+    def normal(self, x, y) -> np.ndarray:
+        """(N, 3) upward unit surface normal (out of the seabed, into the water)."""
+        gx, gy = self.gradient(x, y)
+        n = np.column_stack([-np.ravel(gx), -np.ravel(gy), np.ones(np.size(gx))])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+    def inside(self, x, y) -> np.ndarray:
+        """True where (x, y) lies on the grid's extent."""
+        xmin, xmax, ymin, ymax = self.bathy.extent
+        return (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)
+
+    # -- distance ------------------------------------------------------------------------------
+    def _build_tree(self):
+        ny, nx = self.z.shape
+        fx = max(1, int(np.ceil(self.spacing[0] / self.distance_resolution)))
+        fy = max(1, int(np.ceil(self.spacing[1] / self.distance_resolution)))
+        xs = self.origin[0] + self.spacing[0] * np.linspace(0, nx - 1, (nx - 1) * fx + 1)
+        ys = self.origin[1] + self.spacing[1] * np.linspace(0, ny - 1, (ny - 1) * fy + 1)
+        xx, yy = np.meshgrid(xs, ys)
+        zz = self.elevation(xx, yy) if (fx > 1 or fy > 1) else self.z
+        self._tree_points = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
+        self._tree = cKDTree(self._tree_points, balanced_tree=False)
+        self._sample_half_diagonal = 0.5 * np.hypot(self.spacing[0] / fx, self.spacing[1] / fy)
+
+    def distance(self, points, upper_bound: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
+        """(N,) distance from each point to the surface, m, and (N, 3) the nearest surface sample.
+
+        Exact up to the sampling bound of the class docstring; points outside the grid's extent
+        get the distance to its nearest edge sample. Points farther than `upper_bound` get inf
+        and a NaN nearest sample (a much faster query when only close points matter).
+        """
+        if self._tree is None:
+            self._build_tree()
+        d, idx = self._tree.query(np.asarray(points, dtype=float), k=1,
+                                  distance_upper_bound=upper_bound)
+        found = idx < len(self._tree_points)
+        nearest = np.full((len(d), 3), np.nan)
+        nearest[found] = self._tree_points[idx[found]]
+        return d, nearest
+
+    def clearance_target(self, omega: float) -> float:
+        """Distance to the sampled surface that guarantees at least `omega` to the true one."""
+        if self._tree is None:
+            self._build_tree()
+        return float(np.hypot(omega, self._sample_half_diagonal))
+
+    def enforce_clearance(self, points: np.ndarray, omega: float, iterations: int = 6) -> np.ndarray:
+        """Moves points closer than `omega` to the surface straight away from their nearest
+        surface sample until they are at `omega` (then lifts any stubborn one vertically)."""
+        points = np.array(points, dtype=float)
+        target = self.clearance_target(omega)
+        todo = np.arange(len(points))
+        for _ in range(iterations):
+            d, q = self.distance(points[todo], upper_bound=target)
+            close = d < target - 1e-9
+            if not close.any():
+                return points
+            todo, d, q = todo[close], d[close], q[close]
+            away = points[todo] - q
+            norm = np.linalg.norm(away, axis=1)
+            away = np.where(norm[:, None] > 1e-9, away / np.maximum(norm, 1e-12)[:, None],
+                            np.array([0.0, 0.0, 1.0]))
+            away[away[:, 2] < 0] *= -1.0  # a point under the height field goes out through the top
+            points[todo] = q + away * (target + 1e-6)
+        for _ in range(50):
+            d, _ = self.distance(points[todo], upper_bound=target)
+            close = d < target - 1e-9
+            if not close.any():
+                break
+            todo = todo[close]
+            points[todo, 2] += target - d[close] + 1e-3
+        return points
+
+    # -- rays ----------------------------------------------------------------------------------
+    def raycast(self, origins, directions, max_range: float, step: float | None = None):
+        """First intersection of rays with the height field, by marching and linear refinement.
+
+        Returns (N,) ranges (NaN where a ray leaves the grid or goes beyond `max_range` without
+        a hit) and (N, 3) hit points. `step` defaults to a third of the smallest cell.
+        """
+        o = np.asarray(origins, dtype=float)
+        d = np.asarray(directions, dtype=float)
+        step = float(min(self.spacing) / 3.0 if step is None else step)
+        ts = np.arange(0.0, max_range + step, step)
+        ranges = np.full(len(o), np.nan)
+        prev_h = o[:, 2] - self.elevation(o[:, 0], o[:, 1])
+        prev_t = np.zeros(len(o))
+        alive = prev_h > 0
+        for t in ts[1:]:
+            idx = np.flatnonzero(alive)
+            if idx.size == 0:
+                break
+            p = o[idx] + t * d[idx]
+            h = p[:, 2] - self.elevation(p[:, 0], p[:, 1])
+            out = ~self.inside(p[:, 0], p[:, 1])
+            hit = (h <= 0) & ~out
+            if hit.any():
+                hi = idx[hit]
+                h0, h1 = prev_h[hi], h[hit]
+                ranges[hi] = prev_t[hi] + (t - prev_t[hi]) * h0 / (h0 - h1)
+                alive[hi] = False
+            alive[idx[out & ~hit]] = False
+            prev_h[idx] = h
+            prev_t[idx] = t
+        hits = o + np.nan_to_num(ranges)[:, None] * d
+        return ranges, hits

@@ -1,0 +1,114 @@
+"""Slope map and terrain classification into high-slope regions and the effectively planar rest.
+
+S(x, y) = |grad z| (rise over run, dimensionless) with the true cell spacing. Cells with
+S > delta_s are high-slope; a morphological closing (joins fragments of one wall), then an
+opening (drops thin spurs), then removal of components smaller than a minimum area clean the
+mask. The reference fixes only delta_s = 0.5; the structuring sizes and the minimum area are
+ours (defaults below, in metres so they do not depend on the cell size).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from drake_auv.terrain.bathymetry import Bathymetry
+
+
+def slope_map(bathy: Bathymetry) -> np.ndarray:
+    """(ny, nx) slope |grad z| with the true spacing; NaN where a neighbour is no-data.
+
+    Central differences inside, one-sided at the grid's edges (np.gradient).
+    """
+    dx, dy = bathy.spacing
+    gy, gx = np.gradient(bathy.z, dy, dx)
+    return np.hypot(gx, gy)
+
+
+def surface_gradient(bathy: Bathymetry, z: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(dz/dx, dz/dy) on the grid, from `z` (default: the bathymetry's own, NaN kept)."""
+    dx, dy = bathy.spacing
+    gy, gx = np.gradient(bathy.z if z is None else z, dy, dx)
+    return gx, gy
+
+
+@dataclass(frozen=True)
+class TerrainLabels:
+    """Result of `classify`.
+
+    Attributes:
+        slope: (ny, nx) slope map S.
+        high: (ny, nx) bool, cleaned high-slope mask.
+        regions: (ny, nx) int, 0 for planar or no-data, k = 1..n_regions for high-slope region k.
+        n_regions: number of high-slope regions.
+        valid: (ny, nx) bool, cells holding data.
+    """
+
+    slope: np.ndarray
+    high: np.ndarray
+    regions: np.ndarray
+    n_regions: int
+    valid: np.ndarray
+
+    @property
+    def planar(self) -> np.ndarray:
+        """(ny, nx) bool, valid cells outside every high-slope region."""
+        return self.valid & ~self.high
+
+
+def _disk(radius_cells_x: float, radius_cells_y: float) -> np.ndarray:
+    rx, ry = max(radius_cells_x, 0.5), max(radius_cells_y, 0.5)
+    ny, nx = int(np.floor(ry)), int(np.floor(rx))
+    yy, xx = np.mgrid[-ny:ny + 1, -nx:nx + 1]
+    return (xx / rx) ** 2 + (yy / ry) ** 2 <= 1.0 + 1e-9
+
+
+def classify(bathy: Bathymetry, slope_threshold: float = 0.5, closing_radius: float | None = None,
+             opening_radius: float | None = None, min_area: float | None = None) -> TerrainLabels:
+    """Splits the valid cells into high-slope regions and the effectively planar rest.
+
+    Args:
+        slope_threshold: delta_s > 0; cells with S > delta_s are high-slope (0.5 is about 26.6 deg).
+        closing_radius: radius of the disk for the closing, m (default 2 cells).
+        opening_radius: radius of the disk for the opening, m (default 2 cells).
+        min_area: high-slope components smaller than this are dropped, m^2
+            (default 1 % of the valid area, at least 25 cells).
+    """
+    if not (np.isfinite(slope_threshold) and slope_threshold > 0):
+        raise ValueError(f"slope_threshold (delta_s) must be > 0, got {slope_threshold}")
+    dx, dy = bathy.spacing
+    cell_area = dx * dy
+    closing_radius = 2.0 * max(dx, dy) if closing_radius is None else closing_radius
+    opening_radius = 2.0 * max(dx, dy) if opening_radius is None else opening_radius
+    for name, value in (("closing_radius", closing_radius), ("opening_radius", opening_radius)):
+        if not (np.isfinite(value) and value >= 0):
+            raise ValueError(f"{name} must be >= 0 m, got {value}")
+    valid = bathy.valid
+    if min_area is None:
+        min_area = max(0.01 * valid.sum() * cell_area, 25 * cell_area)
+    if not (np.isfinite(min_area) and min_area >= 0):
+        raise ValueError(f"min_area must be >= 0 m^2, got {min_area}")
+    slope = slope_map(bathy)
+    high = np.nan_to_num(slope, nan=0.0) > slope_threshold
+    if closing_radius > 0:
+        disk = _disk(closing_radius / dx, closing_radius / dy)
+        pad = max(disk.shape)
+        padded = np.pad(high, pad, mode="edge")  # no closing artefacts at the grid's border
+        high = ndimage.binary_closing(padded, structure=disk)[pad:-pad, pad:-pad]
+    if opening_radius > 0:
+        disk = _disk(opening_radius / dx, opening_radius / dy)
+        pad = max(disk.shape)
+        padded = np.pad(high, pad, mode="edge")
+        high = ndimage.binary_opening(padded, structure=disk)[pad:-pad, pad:-pad]
+    high &= valid
+    regions, n = ndimage.label(high)
+    if n:
+        areas = ndimage.sum_labels(np.ones_like(regions), regions, np.arange(1, n + 1)) * cell_area
+        keep = np.concatenate([[False], areas >= min_area])
+        remap = np.cumsum(keep) * keep
+        regions = remap[regions]
+        n = int(keep.sum())
+        high = regions > 0
+    return TerrainLabels(slope, high, regions, n, valid)
