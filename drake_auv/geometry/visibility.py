@@ -1,0 +1,138 @@
+"""Which faces of the true world a camera or a sonar fan sees, unoccluded, and how well.
+
+Camera: a circular cone of aperture `aperture` (full angle, rad) about its axis, out to
+`max_range` (water clarity). A face is seen when its centroid lies in the cone and in range,
+the face turns its front to the camera, and a ray from the camera to the centroid meets
+nothing nearer (one ray per candidate face, candidates from a KD-tree of centroids built once).
+This measures coverage at face resolution without the holes a sparse ray grid leaves.
+
+Viewing angle, 0 is ideal: the angle between the sensor axis and the inward surface normal
+(the reference's definition), so a down-looking camera over flat ground views every face at 0.
+For a sonar fan, the faces its beams hit are seen, at the angle between beam and normal.
+
+`CoverageMap` keeps the best (smallest) viewing angle per target face; coverage is the seen
+share of the target area.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from drake_auv.geometry.raycast import RayCaster, RayHits
+
+
+class FaceVisibility:
+    """Visibility queries against one world, built once.
+
+    Args:
+        caster: ray caster of the world.
+        target_faces: (F,) bool, the faces to report (all if None); occlusion uses all faces.
+    """
+
+    def __init__(self, caster: RayCaster, target_faces=None):
+        self.caster = caster
+        mesh = caster.mesh
+        num_faces = caster.num_faces
+        target = (np.ones(num_faces, bool) if target_faces is None
+                  else np.asarray(target_faces, dtype=bool))
+        if target.shape != (num_faces,):
+            raise ValueError(f"target_faces must be a bool mask of the {num_faces} world faces, "
+                             f"got shape {target.shape}")
+        if not target.any():
+            raise ValueError("target_faces is empty: select at least one face")
+        self.target_index = np.flatnonzero(target)  # world face index of each target face
+        self.centroids = np.asarray(mesh.triangles_center)[self.target_index]
+        self.normals = caster.face_normals[self.target_index]
+        self.areas = np.asarray(mesh.area_faces)[self.target_index]
+        self._tree = cKDTree(self.centroids)
+        # Target slot of each world face (-1: not a target), to map sonar hits.
+        self._slot = np.full(num_faces, -1, dtype=np.int64)
+        self._slot[self.target_index] = np.arange(len(self.target_index))
+
+    def camera(self, origin, axis, aperture: float, max_range: float):
+        """Target faces a camera sees: (slots (k,) into the target faces, angles (k,) rad)."""
+        origin = np.asarray(origin, dtype=float)
+        axis = np.asarray(axis, dtype=float)
+        axis = axis / np.linalg.norm(axis)
+        if not (0 < aperture < np.pi):
+            raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
+        if not (np.isfinite(max_range) and max_range > 0):
+            raise ValueError(f"max_range must be > 0 m, got {max_range}")
+        slots = np.asarray(self._tree.query_ball_point(origin, max_range), dtype=np.int64)
+        if len(slots) == 0:
+            return slots, np.zeros(0)
+        v = self.centroids[slots] - origin
+        dist = np.linalg.norm(v, axis=1)
+        u = v / np.maximum(dist, 1e-12)[:, None]
+        normals = self.normals[slots]
+        keep = (u @ axis >= np.cos(0.5 * aperture)) & (np.einsum("ij,ij->i", u, normals) < 0)
+        slots, u, dist, normals = slots[keep], u[keep], dist[keep], normals[keep]
+        if len(slots) == 0:
+            return slots, np.zeros(0)
+        hits = self.caster.cast(origin, u, max_range)
+        tol = 1e-3 + 1e-4 * dist
+        seen = (hits.faces == self.target_index[slots]) | ~(hits.ranges < dist - tol)
+        angles = np.arccos(np.clip(-(normals[seen] @ axis), -1.0, 1.0))
+        return slots[seen], angles
+
+    def beams(self, hits: RayHits, directions):
+        """Target faces hit by sonar beams: (slots, angles between beam and inward normal)."""
+        directions = np.asarray(directions, dtype=float)
+        faces = np.asarray(hits.faces)
+        hit = faces >= 0
+        slots = self._slot[faces[hit]]
+        target = slots >= 0
+        d = directions[hit][target]
+        d = d / np.linalg.norm(d, axis=1, keepdims=True)
+        cosang = np.abs(np.einsum("ij,ij->i", self.normals[slots[target]], d))
+        return slots[target], np.arccos(np.clip(cosang, -1.0, 1.0))
+
+
+def merge_best(best: np.ndarray, slots: np.ndarray, angles: np.ndarray) -> np.ndarray:
+    """Copy of `best` (NaN: unseen) with the smaller angle kept for each observed slot."""
+    out = np.array(best, dtype=float)
+    if len(slots):
+        current = np.full(len(out), np.inf)
+        np.minimum.at(current, slots, angles)
+        out = np.fmin(out, current)
+        out[np.isinf(out)] = np.nan
+    return out
+
+
+def coverage_share(best: np.ndarray, areas: np.ndarray) -> float:
+    """Seen share of the area (faces with a finite best angle)."""
+    return float(areas[np.isfinite(best)].sum() / areas.sum())
+
+
+def angle_histogram(best: np.ndarray, areas: np.ndarray, bin_deg: float = 5.0):
+    """Area (m^2) seen per viewing-angle bin: (area (k,), edges (k + 1,) deg, 0 to 90)."""
+    if not (np.isfinite(bin_deg) and 0 < bin_deg <= 90):
+        raise ValueError(f"bin_deg must be in (0, 90] deg, got {bin_deg}")
+    edges = np.arange(0.0, 90.0 + 0.5 * bin_deg, bin_deg)
+    seen = np.isfinite(best)
+    area, edges = np.histogram(np.degrees(best[seen]), bins=edges, weights=areas[seen])
+    return area, edges
+
+
+class CoverageMap:
+    """Pure accumulator of the best viewing angle per target face (no Drake): for offline
+    evaluation of a sequence of poses and for tests."""
+
+    def __init__(self, caster: RayCaster, target_faces=None):
+        self.visibility = FaceVisibility(caster, target_faces)
+        self.best = np.full(len(self.visibility.target_index), np.nan)
+
+    def observe_camera(self, origin, axis, aperture: float, max_range: float) -> None:
+        slots, angles = self.visibility.camera(origin, axis, aperture, max_range)
+        self.best = merge_best(self.best, slots, angles)
+
+    def observe_beams(self, hits: RayHits, directions) -> None:
+        slots, angles = self.visibility.beams(hits, directions)
+        self.best = merge_best(self.best, slots, angles)
+
+    def coverage(self) -> float:
+        return coverage_share(self.best, self.visibility.areas)
+
+    def histogram(self, bin_deg: float = 5.0):
+        return angle_histogram(self.best, self.visibility.areas, bin_deg)
