@@ -7,6 +7,8 @@ axes), origin at the centre of the first cell. `to_crs` maps world (x, y) back t
 map coordinates, so exports land in its CRS. Ground metres differ from map units for
 geographic CRSs (degrees, converted with the local radius) and for Mercator projections
 (map metres are inflated by 1 / cos(latitude); scaled by cos of the grid centre's latitude).
+A CRS-less grid whose coordinate variables are in degrees (GMT/COARDS netCDF) is taken as
+WGS 84 longitude/latitude; any other CRS-less grid is taken to be in metres.
 """
 
 from __future__ import annotations
@@ -55,11 +57,11 @@ def _read_npz(path: FilePath) -> Bathymetry:
         raise ValueError(f"{path}: {err}") from None
 
 
-def _ground_scale(crs, centre_map: np.ndarray) -> tuple[float, float]:
+def _ground_scale(crs, centre_map: np.ndarray, degrees: bool) -> tuple[float, float]:
     """Ground metres per map unit along map x and y at the grid centre."""
-    if crs is None:
+    if crs is None and not degrees:
         return 1.0, 1.0
-    if crs.is_geographic:
+    if degrees or crs.is_geographic:
         lat = np.radians(centre_map[1])
         per_deg = np.pi / 180.0 * _EARTH_RADIUS
         return per_deg * np.cos(lat), per_deg
@@ -73,17 +75,28 @@ def _ground_scale(crs, centre_map: np.ndarray) -> tuple[float, float]:
     return unit, unit
 
 
+def _degree_axes(tags: dict) -> bool:
+    """True when a CRS-less grid (typically a GMT/COARDS netCDF) declares degree coordinates."""
+    return any(k.endswith("#units") and "degree" in str(v).lower() for k, v in tags.items())
+
+
 def _read_raster(path: FilePath) -> Bathymetry:
+    import warnings
+
     import rasterio
-    from rasterio.errors import RasterioIOError
+    from rasterio.errors import NotGeoreferencedWarning, RasterioIOError
 
     try:
-        with rasterio.open(path) as ds:
-            if ds.count < 1:
-                raise ValueError(f"{path}: the raster has no band")
-            band = ds.read(1, masked=True).astype(float)
-            transform = ds.transform
-            crs = ds.crs
+        with warnings.catch_warnings():
+            # A grid without georeferencing is read in its own units, taken as metres.
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)
+            with rasterio.open(path) as ds:
+                if ds.count < 1:
+                    raise ValueError(f"{path}: the raster has no band")
+                band = ds.read(1, masked=True).astype(float)
+                transform = ds.transform
+                crs = ds.crs
+                degrees = crs is None and _degree_axes(ds.tags())
     except RasterioIOError as err:
         raise ValueError(f"{path}: not a raster GDAL can read ({err})") from None
     z = np.ma.filled(band, np.nan)
@@ -97,7 +110,7 @@ def _read_raster(path: FilePath) -> Bathymetry:
     if flip:
         z = z[::-1]
     centre = np.array([c, f]) + jac @ np.array([nx / 2.0, ny / 2.0])
-    kx, ky = _ground_scale(crs, centre)
+    kx, ky = _ground_scale(crs, centre, degrees)
     col_ground = np.hypot(a * kx, d * ky)
     row_ground = np.hypot(b * kx, e * ky)
     # world (x, y) -> (column, row) of the file, centre-based -> map coordinates.
@@ -111,7 +124,7 @@ def _read_raster(path: FilePath) -> Bathymetry:
                              [d, e, f + 0.5 * (d + e)],
                              [0.0, 0.0, 1.0]])
     to_crs = index_to_map @ world_to_index
-    crs_name = None
+    crs_name = "EPSG:4326" if degrees else None
     if crs is not None:
         epsg = crs.to_epsg()
         crs_name = f"EPSG:{epsg}" if epsg else crs.to_wkt()

@@ -43,18 +43,18 @@ def crop_to_roi(bathy: Bathymetry, roi) -> Bathymetry:
     """The part of `bathy` inside `roi` (map coordinates of the file's CRS, or world metres when
     the grid has no georeferencing); cells outside the polygon become no-data."""
     poly_map = roi_polygon(roi)
-    if bathy.to_crs is not None:
-        to_world = np.linalg.inv(np.asarray(bathy.to_crs, dtype=float))
-        poly = (np.hstack([poly_map, np.ones((len(poly_map), 1))]) @ to_world.T)[:, :2]
-    else:
-        poly = poly_map
     xx, yy = np.meshgrid(bathy.x, bathy.y)
-    inside = PolygonPath(poly).contains_points(np.column_stack([xx.ravel(), yy.ravel()]))
+    centres = bathy.world_to_crs(np.column_stack([xx.ravel(), yy.ravel()]))
+    # Cell centres on the boundary count as inside (matplotlib's test is orientation-dependent
+    # on the boundary, so take both signs of a tiny tolerance).
+    tol = 1e-6 * float(np.ptp(poly_map, axis=0).max())
+    path = PolygonPath(poly_map)
+    inside = path.contains_points(centres, radius=tol) | path.contains_points(centres, radius=-tol)
     inside = inside.reshape(bathy.shape)
     if not inside.any():
-        xmin, xmax, ymin, ymax = bathy.extent
-        raise ValueError(f"ROI {poly_map.tolist()} does not contain any cell centre of the grid "
-                         f"(world extent x [{xmin:.1f}, {xmax:.1f}], y [{ymin:.1f}, {ymax:.1f}] m)")
+        lo, hi = centres.min(axis=0), centres.max(axis=0)
+        raise ValueError(f"ROI {poly_map.tolist()} lies outside the grid: its cell centres span "
+                         f"x [{lo[0]:.2f}, {hi[0]:.2f}], y [{lo[1]:.2f}, {hi[1]:.2f}] in map units")
     rows = np.flatnonzero(inside.any(axis=1))
     cols = np.flatnonzero(inside.any(axis=0))
     i0, i1, j0, j1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
