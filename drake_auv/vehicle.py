@@ -207,6 +207,7 @@ def load_girona500(filename=None) -> Girona500Params:
         "quadratic_damping": "hydrodynamics.quadratic_damping",
         "max_thrust": "thrusters.max_thrust", "thruster_time_constant": "thrusters.time_constant",
     }
+    errors_of = {**fields, "centre_of_gravity": "rigid_body.centre_of_gravity"}
     kwargs = {}
     for attr, dotted in fields.items():
         value = _get(tree, dotted, filename)
@@ -222,7 +223,7 @@ def load_girona500(filename=None) -> Girona500Params:
                                thruster_directions=tuple(directions), **kwargs)
     except ValueError as err:
         attr = str(err).split(" ", 1)[0]
-        raise ValueError(f"{filename}: field '{fields.get(attr, attr)}': {err}") from None
+        raise ValueError(f"{filename}: field '{errors_of.get(attr, attr)}': {err}") from None
 
 
 def allocate_thrust(allocation: np.ndarray, wrench, max_thrust: float) -> np.ndarray:

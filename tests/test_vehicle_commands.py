@@ -63,3 +63,9 @@ def test_bad_inputs_are_named(tmp_path):
         demo.terrain_following_lanes(seabed, 50.0, 5.0, 3, 3.0)
     with pytest.raises(ValueError, match="altitude"):
         demo.terrain_following_lanes(seabed, 10.0, 5.0, 2, -1.0)
+
+
+def test_realtime_rate_validated(tmp_path):
+    path = Path(np.array([[0.0, 0, -5], [5, 0, -5]]), 0.0, (0.0, 0.0, -1.0))
+    with pytest.raises(ValueError, match="realtime_rate"):
+        simulate.fly_path(path, tmp_path, realtime_rate=-1.0, progress=False)

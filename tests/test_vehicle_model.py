@@ -174,6 +174,9 @@ def test_malformed_yaml_names_the_file(tmp_path):
     ("position: [ 0.535,  0.000, -0.314]", "position: [0.535, 0.0]",
      r"thrusters.units\[2\].position"),
     ("name: sway", "name: lateral", "thrusters.units"),
+    ("centre_of_gravity: [0.0, 0.0, 0.05]", "centre_of_gravity: [0.0, 0.0, 50.0]",
+     "rigid_body.centre_of_gravity"),
+    ("frame: FRD", "frame: NWU", "'frame'"),
     ("  mass: 98.0", "  weight: 98.0", "rigid_body.mass"),
 ])
 def test_bad_field_is_named(tmp_path, old, new, field):

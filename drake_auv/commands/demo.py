@@ -72,7 +72,8 @@ def run(args) -> int:
           f"{args.altitude:g} m above a random seabed (seed {args.seed}); {path.length:.0f} m "
           f"at {args.speed:g} m/s")
     result = fly_path(path, out, args.speed, scene, playback_speed=args.playback_speed,
-                      settle_samples=first_lane - 1, progress=not args.quiet)
+                      settle_samples=first_lane - 1, progress=not args.quiet,
+                      realtime_rate=args.realtime_rate)
     report(result, out)
     return 0
 
@@ -94,6 +95,9 @@ def add_parser(subparsers) -> None:
                         help="seabed relief peak to peak, m (default 4)")
     parser.add_argument("--playback-speed", type=float, default=10.0,
                         help="the HTML animation plays this many times faster than real time")
+    parser.add_argument("--realtime-rate", type=float, default=0.0,
+                        help="pace the simulation to watch it live (1 = real time; default 0 = "
+                             "as fast as possible)")
     parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)

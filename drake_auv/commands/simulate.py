@@ -46,12 +46,13 @@ class FlightResult:
 
 def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
              playback_speed: float = 10.0, settle_samples: int = 1, extra_time: float = 10.0,
-             progress: bool = True) -> FlightResult:
+             progress: bool = True, realtime_rate: float = 0.0) -> FlightResult:
     """Simulates the vehicle tracking `path` at `speed`, draws it in `scene` if given, and writes
     mission.html (with a scene), tracking_error.png and state.csv into `out_dir`.
 
     Statistics exclude the time until the reference reaches sample `settle_samples` (the end of
-    the first lane for a lawnmower given by its corner points).
+    the first lane for a lawnmower given by its corner points). A `realtime_rate` > 0 paces the
+    simulation (e.g. 1.0 to watch it live in the Meshcat tab); 0 runs as fast as possible.
     """
     from pydrake.systems.analysis import Simulator
     from tqdm import tqdm
@@ -64,6 +65,8 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
                          f"1.4 m/s), got {speed}")
     if len(path) < 2:
         raise ValueError("the path needs at least 2 samples to fly")
+    if not (np.isfinite(realtime_rate) and realtime_rate >= 0):
+        raise ValueError(f"realtime_rate must be >= 0 (0 = as fast as possible), got {realtime_rate}")
     out_dir = FilePath(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if scene is not None:
@@ -73,6 +76,9 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     if scene is not None:
         scene.start_recording(playback_speed=playback_speed)
     simulator = Simulator(diagram)
+    simulator.set_target_realtime_rate(realtime_rate)
+    if scene is not None:
+        print(f"live view: {scene.meshcat.web_url()}")
     end = handles.end_time + extra_time
     start = time.perf_counter()
     with tqdm(total=round(end), unit="sim s", disable=not progress, desc="simulate") as bar:
@@ -137,7 +143,7 @@ def run(args) -> int:
                                   random_walk=args.random_walk, seed=args.seed)
     scene = None if args.no_html else Scene()
     result = fly_path(path, args.out, args.speed, scene, navigation, args.playback_speed,
-                      progress=not args.quiet)
+                      progress=not args.quiet, realtime_rate=args.realtime_rate)
     report(result, args.out)
     return 0
 
@@ -157,6 +163,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the navigation noise")
     parser.add_argument("--playback-speed", type=float, default=10.0,
                         help="the HTML animation plays this many times faster than real time")
+    parser.add_argument("--realtime-rate", type=float, default=0.0,
+                        help="pace the simulation to watch it live (1 = real time; default 0 = "
+                             "as fast as possible)")
     parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
