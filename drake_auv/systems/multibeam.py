@@ -1,0 +1,52 @@
+"""`MultibeamSonar`: a multibeam echosounder (Imagenex DeltaT 837 class), one fan per update.
+
+`num_beams` equiangular beams over `fan_deg` in the fan plane of the mount: "down" (across
+track, below the vehicle), "port" / "starboard" (side-looking, centre beam horizontal), or
+"forward" (horizontal fan ahead). `returns` is the point cloud of the last ping.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from drake_auv.sensors.noise import SonarNoise
+from drake_auv.sensors.sonar import SonarModel, SonarMount, fan_angles
+from drake_auv.systems.sonar import RangeSonar
+
+
+class MultibeamSonar(RangeSonar):
+    """Inputs `true_state`, `estimated_state` (12 each); output `returns` (`SonarReturns`).
+
+    Args:
+        world: true world, a trimesh or a shared `RayCaster`.
+        num_beams: beams per ping, >= 1.
+        fan_deg: fan aperture, deg, in [0, 360).
+        rate: pings per second, > 0.
+        max_range: m, > 0.
+        mount: "down", "port", "starboard", "forward", or a `SonarMount`.
+        mount_position: sensor position in the body frame, m (with a named mount).
+        beam_width_deg: beam cone angle, deg (0: one ray per beam).
+        noise: error options (default: none).
+        seed: seed of the noise.
+        max_incidence_deg: grazing limit, deg.
+    """
+
+    def __init__(self, world, num_beams: int = 480, fan_deg: float = 120.0, rate: float = 10.0,
+                 max_range: float = 20.0, mount="down", mount_position=(0.0, 0.0, 0.0),
+                 beam_width_deg: float = 0.0, noise: SonarNoise | None = None, seed: int = 0,
+                 max_incidence_deg: float = 85.0):
+        if not (np.isfinite(rate) and rate > 0):
+            raise ValueError(f"rate must be > 0 pings/s, got {rate}")
+        if isinstance(mount, str):
+            if mount not in ("down", "port", "starboard", "forward"):
+                raise ValueError(f"multibeam mount must be 'down', 'port', 'starboard' or "
+                                 f"'forward', got {mount!r}")
+            mount = SonarMount.named(mount, mount_position)
+        self.angles = fan_angles(num_beams, np.radians(fan_deg))
+        model = SonarModel(mount, max_range=max_range, beam_width=np.radians(beam_width_deg),
+                           max_incidence=np.radians(max_incidence_deg),
+                           noise=noise if noise is not None else SonarNoise())
+        super().__init__(world, model, 1.0 / rate, seed)
+
+    def update_angles(self, n: int) -> np.ndarray:
+        return self.angles

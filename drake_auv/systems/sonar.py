@@ -1,0 +1,62 @@
+"""`RangeSonar`: the LeafSystem adapter shared by the profiler and the multibeam.
+
+Inputs `true_state` (12, to cast against the true world) and `estimated_state` (12, to place
+the returns in the navigation frame); output `returns` (`SonarReturns`, the abstract state
+written by a periodic unrestricted update, so the beams are cast at the sensor's rate and not
+at every integrator step). Update n (n = 0, 1, ...) fires at t = n * period; its noise draws
+come from `default_rng([seed, n])`, so the same seed gives the same returns.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import LeafSystem
+
+from drake_auv.geometry.raycast import RayCaster
+from drake_auv.sensors.returns import SonarReturns
+from drake_auv.sensors.sonar import SonarModel, scan
+
+STATE_SIZE = 12
+
+
+def as_caster(world) -> RayCaster:
+    """A RayCaster for `world` (a trimesh, built here) or `world` itself if it is one."""
+    if isinstance(world, RayCaster):
+        return world
+    if isinstance(world, trimesh.Trimesh):
+        return RayCaster(world)
+    raise ValueError(f"world must be a trimesh.Trimesh or a RayCaster, got {type(world).__name__}")
+
+
+class RangeSonar(LeafSystem):
+    """Base of the sonar systems; subclasses give the beam angles of each update."""
+
+    def __init__(self, world, model: SonarModel, period: float, seed: int = 0):
+        super().__init__()
+        if not (np.isfinite(period) and period > 0):
+            raise ValueError(f"sonar update period must be > 0 s, got {period}")
+        self.caster = as_caster(world)
+        self.model = model
+        self.period = float(period)
+        self.seed = int(seed)
+        self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
+        self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
+        self._returns_index = self.DeclareAbstractState(
+            AbstractValue.Make(SonarReturns.empty(model.max_range)))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_returns)
+        self.returns_output = self.DeclareStateOutputPort("returns", self._returns_index)
+
+    def update_angles(self, n: int) -> np.ndarray:
+        """Beam angles (rad, scan plane) fired by update n."""
+        raise NotImplementedError
+
+    def _update_returns(self, context, state):
+        n = context.get_abstract_state(self._returns_index).get_value().sequence
+        rng = np.random.default_rng([self.seed, n]) if self.model.noise.enabled else None
+        returns = scan(self.caster, self.model, self.update_angles(n),
+                       self.true_state_input.Eval(context),
+                       self.estimated_state_input.Eval(context),
+                       rng=rng, time=context.get_time(), sequence=n + 1)
+        state.get_mutable_abstract_state(self._returns_index).set_value(returns)
