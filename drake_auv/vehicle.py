@@ -253,7 +253,7 @@ class Girona500Model:
         self.M = p.mass_matrix()
         self.M_inv = np.linalg.inv(self.M)
         self.B = p.thruster_configuration_matrix()
-        # Force and moment on tau come together: tau_thrust = B f, solved via M^-1 B.
+        # The thrust term of nu_dot, M^-1 B f, with M^-1 B precomputed.
         self.M_inv_B = self.M_inv @ self.B
         self.d_lin = tuple(float(d) for d in p.linear_damping)
         self.d_quad = tuple(float(d) for d in p.quadratic_damping)
