@@ -3,7 +3,8 @@
 Camera mode: a cone of `aperture_deg` about `axis_body` (default straight down), range
 `max_range`; multibeam mode: the faces hit by a fan of beams. Periodic discrete update at
 `rate` (frames per second) from the true state; the discrete state is the best viewing angle
-per target face (rad, NaN while unseen). Output `coverage`: the seen share of the target area.
+per target face (rad, NaN while unseen). Outputs: `coverage`, the seen share of the target
+area, and `face_angles`, that state (for colouring the mesh in Meshcat).
 The pure work is in `drake_auv.geometry.visibility`.
 """
 
@@ -20,7 +21,8 @@ from drake_auv.systems.sonar import STATE_SIZE, as_caster
 
 
 class CoverageRecorder(LeafSystem):
-    """Input `true_state` (12); output `coverage` (1, share of the target area in [0, 1]).
+    """Input `true_state` (12); outputs `coverage` (1, share of the target area in [0, 1]) and
+    `face_angles` (T, best viewing angle per target face, rad, NaN while unseen).
 
     Args:
         world: true world, a trimesh or a shared `RayCaster`.
@@ -69,6 +71,9 @@ class CoverageRecorder(LeafSystem):
         self.coverage_output = self.DeclareVectorOutputPort(
             "coverage", 1, self._calc_coverage,
             prerequisites_of_calc={self.discrete_state_ticket(self._best_index)})
+        self.face_angles_output = self.DeclareVectorOutputPort(
+            "face_angles", num_target, self._calc_face_angles,
+            prerequisites_of_calc={self.discrete_state_ticket(self._best_index)})
 
     def _update_best(self, context, discrete_state):
         state = self.true_state_input.Eval(context)
@@ -87,6 +92,9 @@ class CoverageRecorder(LeafSystem):
 
     def _calc_coverage(self, context, output):
         output.SetAtIndex(0, self.coverage(context))
+
+    def _calc_face_angles(self, context, output):
+        output.SetFromVector(context.get_discrete_state(self._best_index).get_value())
 
     def best_angles(self, context) -> np.ndarray:
         """(T,) best viewing angle per target face, rad, NaN where unseen."""
