@@ -9,7 +9,6 @@ import pytest
 
 from drake_auv.commands import demo, simulate
 from drake_auv.planning import Path
-from drake_auv.terrain.synthetic import random_seabed
 
 
 def parse(module, argv):
@@ -20,8 +19,7 @@ def parse(module, argv):
 
 def test_demo_writes_recording_and_error_plot(tmp_path, capsys):
     out = tmp_path / "demo"
-    args = parse(demo, ["demo", "--out", str(out), "--lanes", "2", "--lane-length", "20",
-                        "--quiet"])
+    args = parse(demo, ["demo", "--out", str(out), "--extent", "20", "8", "--quiet"])
     assert args.func(args) == 0
     html = (out / "mission.html").read_text()
     commands = [base64.b64decode(b64) for b64 in
@@ -58,11 +56,20 @@ def test_bad_inputs_are_named(tmp_path):
     with pytest.raises(FileNotFoundError):
         args = parse(simulate, ["simulate", str(tmp_path / "missing.csv"), "--no-html"])
         args.func(args)
-    seabed = random_seabed(seed=0, shape=(20, 20))
-    with pytest.raises(ValueError, match="does not fit"):
-        demo.terrain_following_lanes(seabed, 50.0, 5.0, 3, 3.0)
-    with pytest.raises(ValueError, match="altitude"):
-        demo.terrain_following_lanes(seabed, 10.0, 5.0, 2, -1.0)
+    with pytest.raises(ValueError, match="extent"):
+        args = parse(demo, ["demo", "--out", str(tmp_path), "--extent", "1", "8", "--no-html"])
+        args.func(args)
+    with pytest.raises(ValueError, match="omega"):
+        args = parse(demo, ["demo", "--out", str(tmp_path), "--altitude", "-1", "--no-html"])
+        args.func(args)
+
+
+def test_first_turn_index_finds_the_end_of_the_first_lane():
+    points = [(x, 0.0, -5.0) for x in range(11)] + [(10.0, 2.0, -5.0), (9.0, 2.0, -5.0)]
+    path = Path(np.array(points), 0.0, (0.0, 0.0, -1.0))
+    assert demo.first_turn_index(path) == 10
+    straight = Path(np.array([(0.0, 0, 0), (1.0, 0.1, 0), (2.0, 0, 0)]), 0.0, (0.0, 0.0, -1.0))
+    assert demo.first_turn_index(straight) == 2
 
 
 def test_realtime_rate_validated(tmp_path):

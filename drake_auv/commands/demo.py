@@ -1,5 +1,8 @@
 """`drake-auv demo`: the GIRONA 500 flies a lawnmower over a synthetic seabed.
 
+The lawnmower comes from the off-line planner (`drake_auv.planning.lawnmower.plan_lawnmower`):
+lanes spaced by the down-looking footprint at altitude Omega, following the terrain.
+
 Writes `<out>/mission.html` (standalone Meshcat recording: seabed, path, vehicle and trail),
 `<out>/tracking_error.png`, `<out>/path.csv` and `<out>/state.csv`. At this stage the demo
 exercises the vehicle foundation (dynamics, allocation, tracking, navigation, visualisation);
@@ -13,54 +16,36 @@ import numpy as np
 DEFAULT_OUT = "out/demo"
 
 
-def terrain_following_lanes(bathy, lane_length: float, lane_spacing: float, lanes: int,
-                            altitude: float, origin=(5.0, 5.0), sample: float = 1.0):
-    """A lawnmower of `lanes` lanes along world x, `lane_spacing` apart, flown at `altitude`
-    above the seabed; heading along each lane, sensor looking down, label "lawnmower".
-
-    Returns the Path and the number of samples in its first lane.
-    """
-    from drake_auv.planning.path import Path
-
-    for name, value, low in (("lane_length", lane_length, 1.0), ("lane_spacing", lane_spacing, 0.5),
-                             ("altitude", altitude, 0.5), ("sample", sample, 0.05)):
-        if not (np.isfinite(value) and value >= low):
-            raise ValueError(f"{name} must be >= {low} m, got {value}")
-    if int(lanes) != lanes or lanes < 1:
-        raise ValueError(f"lanes must be an integer >= 1, got {lanes}")
-    x_min, x_max, y_min, y_max = bathy.extent
-    x0, y0 = origin
-    if x0 < x_min or x0 + lane_length > x_max or y0 < y_min or y0 + (lanes - 1) * lane_spacing > y_max:
-        raise ValueError(f"the lawnmower ({lane_length} m x {(lanes - 1) * lane_spacing} m from "
-                         f"{origin}) does not fit the seabed extent {bathy.extent}")
-    along = np.linspace(0.0, lane_length, int(np.ceil(lane_length / sample)) + 1)
-    points, heading = [], []
-    for i in range(int(lanes)):
-        xs = x0 + (along if i % 2 == 0 else along[::-1])
-        ys = np.full_like(xs, y0 + i * lane_spacing)
-        points.append(np.column_stack([xs, ys, bathy.elevation_at(xs, ys) + altitude]))
-        heading.append(np.full(len(xs), 0.0 if i % 2 == 0 else np.pi))
-    points, heading = np.vstack(points), np.concatenate(heading)
-    if not np.all(np.isfinite(points)):
-        raise ValueError("the lawnmower crosses no-data cells of the seabed")
-    return Path(points, heading, (0.0, 0.0, -1.0), "lawnmower"), len(along)
+def first_turn_index(path, angle_deg: float = 45.0) -> int:
+    """Index of the sample where the horizontal direction of travel first turns by more than
+    `angle_deg` from the first segment's (the end of the first lane); the last index if never."""
+    d = np.diff(path.points[:, :2], axis=0)
+    moving = np.linalg.norm(d, axis=1) > 1e-9
+    if not moving.any():
+        return len(path) - 1
+    d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
+    first = d[np.argmax(moving)]
+    turned = moving & (d @ first < np.cos(np.radians(angle_deg)))
+    return int(np.argmax(turned)) if turned.any() else len(path) - 1
 
 
 def run(args) -> int:
     from pathlib import Path as FilePath
 
     from drake_auv.commands.simulate import fly_path, report
+    from drake_auv.planning.lawnmower import lane_spacing, plan_lawnmower
     from drake_auv.terrain.synthetic import random_seabed
     from drake_auv.visualization import Scene
 
-    lane_length, spacing, lanes = args.lane_length, args.lane_spacing, args.lanes
-    margin = 5.0
+    width, length = args.extent
+    if not (5.0 <= width <= 2000.0 and 5.0 <= length <= 2000.0):
+        raise ValueError(f"--extent must be two sizes in [5, 2000] m, got {args.extent}")
     cell = 1.0
-    shape = (int(np.ceil(((lanes - 1) * spacing + 2 * margin) / cell)) + 1,
-             int(np.ceil((lane_length + 2 * margin) / cell)) + 1)
+    shape = (int(round(length / cell)) + 1, int(round(width / cell)) + 1)
     seabed = random_seabed(seed=args.seed, shape=shape, cell=cell, relief=args.relief)
-    path, first_lane = terrain_following_lanes(seabed, lane_length, spacing, lanes,
-                                               args.altitude, origin=(margin, margin))
+    path = plan_lawnmower(seabed, omega=args.altitude, aperture_deg=args.aperture_deg,
+                          overlap=args.overlap)
+    spacing = lane_spacing(args.altitude, args.aperture_deg, args.overlap)
     out = FilePath(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path.to_csv(out / "path.csv")
@@ -68,11 +53,11 @@ def run(args) -> int:
     if not args.no_html:
         scene = Scene()
         scene.add_terrain(seabed)
-    print(f"lawnmower: {lanes} lanes of {lane_length:g} m, {spacing:g} m apart, "
-          f"{args.altitude:g} m above a random seabed (seed {args.seed}); {path.length:.0f} m "
-          f"at {args.speed:g} m/s")
+    print(f"lawnmower over a {width:g} m x {length:g} m random seabed (seed {args.seed}): "
+          f"lanes {spacing:.2f} m apart, {args.altitude:g} m above the seabed; "
+          f"{path.length:.0f} m at {args.speed:g} m/s")
     result = fly_path(path, out, args.speed, scene, playback_speed=args.playback_speed,
-                      settle_samples=first_lane - 1, progress=not args.quiet,
+                      settle_samples=first_turn_index(path), progress=not args.quiet,
                       realtime_rate=args.realtime_rate)
     report(result, out)
     return 0
@@ -81,16 +66,20 @@ def run(args) -> int:
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "demo", help="fly a lawnmower over a synthetic seabed and record it",
-        description="The GIRONA 500 tracks a terrain-following lawnmower over a random smooth "
-                    "seabed; writes mission.html (Meshcat recording) and tracking_error.png.")
+        description="The GIRONA 500 tracks a constant-altitude lawnmower (the planner's "
+                    "plan_lawnmower) over a random smooth seabed; writes mission.html (Meshcat recording) and tracking_error.png.")
     parser.add_argument("--out", default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic seabed")
     parser.add_argument("--speed", type=float, default=0.5, help="survey speed, m/s (default 0.5)")
-    parser.add_argument("--lane-length", type=float, default=50.0, help="m (default 50)")
-    parser.add_argument("--lane-spacing", type=float, default=5.0, help="m (default 5)")
-    parser.add_argument("--lanes", type=int, default=6, help="number of lanes (default 6)")
-    parser.add_argument("--altitude", type=float, default=3.0,
-                        help="altitude above the seabed, m (default 3)")
+    parser.add_argument("--extent", type=float, nargs=2, default=(50.0, 30.0),
+                        metavar=("WIDTH", "LENGTH"),
+                        help="seabed size along x and y, m (default 50 30)")
+    parser.add_argument("--altitude", type=float, default=5.0,
+                        help="survey altitude Omega above the seabed, m (default 5: 5.2 m lanes)")
+    parser.add_argument("--aperture-deg", type=float, default=60.0,
+                        help="down-looking sensor aperture, degrees (default 60)")
+    parser.add_argument("--overlap", type=float, default=0.1,
+                        help="lane overlap fraction (default 0.1)")
     parser.add_argument("--relief", type=float, default=4.0,
                         help="seabed relief peak to peak, m (default 4)")
     parser.add_argument("--playback-speed", type=float, default=10.0,
