@@ -93,18 +93,10 @@ def test_handle_deepcopy_shares_the_map():
     assert copy.deepcopy(handle).map is handle.map
 
 
-def test_beam_stride_decimates():
-    d = _fan(n=480)
-    full, strided = OctreeMap(0.5), OctreeMap(0.5, beam_stride=4)
-    for omap in (full, strided):
-        omap.insert_scan(np.zeros(3), d, np.full(480, 12.0), 20.0)
-    assert 0 < len(strided.occupied_points()) < len(full.occupied_points())
-
-
 @pytest.mark.parametrize("kwargs, match", [
     ({"resolution": 0.0}, "resolution"), ({"resolution": np.nan}, "resolution"),
     ({"prob_hit": 0.4}, "prob_hit"), ({"prob_miss": 0.6}, "prob_miss"),
-    ({"clamp_min": 0.6}, "clamp_min"), ({"beam_stride": 0}, "beam_stride")])
+    ({"clamp_min": 0.6}, "clamp_min")])
 def test_bad_parameters_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):
         OctreeMap(**kwargs)

@@ -37,12 +37,10 @@ class OctreeMap:
         resolution: voxel edge, m, in (0.01, 10].
         prob_hit, prob_miss: sensor model probabilities (0.7, 0.4 in OctoMap).
         clamp_min, clamp_max: occupancy clamping thresholds (0.12, 0.97 in OctoMap).
-        beam_stride: insert every `beam_stride`-th beam of a scan (1: all), to bound the cost
-            of dense multibeam scans.
     """
 
     def __init__(self, resolution: float = 0.5, prob_hit: float = 0.7, prob_miss: float = 0.4,
-                 clamp_min: float = 0.12, clamp_max: float = 0.97, beam_stride: int = 1):
+                 clamp_min: float = 0.12, clamp_max: float = 0.97):
         if not (np.isfinite(resolution) and 0.01 < resolution <= 10.0):
             raise ValueError(f"resolution must be in (0.01, 10] m, got {resolution}")
         if not 0.5 < prob_hit < 1.0:
@@ -52,10 +50,7 @@ class OctreeMap:
         if not 0.0 < clamp_min < 0.5 < clamp_max < 1.0:
             raise ValueError(f"need 0 < clamp_min < 0.5 < clamp_max < 1, got "
                              f"{clamp_min}, {clamp_max}")
-        if int(beam_stride) != beam_stride or beam_stride < 1:
-            raise ValueError(f"beam_stride must be an integer >= 1, got {beam_stride}")
         self.resolution = float(resolution)
-        self.beam_stride = int(beam_stride)
         self.tree = octomap.OcTree(self.resolution)
         self.tree.setProbHit(prob_hit)
         self.tree.setProbMiss(prob_miss)
@@ -91,8 +86,6 @@ class OctreeMap:
             raise ValueError(f"max_range must be > 0 m, got {max_range}")
         if np.any(ranges < 0):
             raise ValueError("ranges must be >= 0 m or NaN for no return")
-        directions = directions[::self.beam_stride]
-        ranges = ranges[::self.beam_stride]
         valid = np.all(np.isfinite(directions), axis=1)
         directions, ranges = directions[valid], ranges[valid]
         if len(ranges) == 0:
