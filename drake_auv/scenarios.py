@@ -344,7 +344,7 @@ _SITES = {
         params=dict(omega=2.0, speed=0.3, profile_plane="vertical", prior_spacing=0.5,
                     max_range=20.0)),
     "breakwater": dict(
-        description="breakwater: 20 concrete blocks 5 m x 5 m, +2 m to the 10 m seabed, 0.5 m gaps",
+        description="a row of 20 concrete blocks 5 m x 5 m, +2 m to the 10 m seabed, 0.5 m gaps",
         geometry=_breakwater_geometry,
         start=lambda: _state(0.0, -14.0, -5.0, np.pi / 2),
         params=dict(omega=6.0, depth=5.0, speed=0.3, target_block=NUM_BLOCKS - 1,

@@ -184,3 +184,33 @@ def test_overrides_copies_and_bad_names():
         get_scenario("pool", omgea=1.0)
     with pytest.raises(ValueError, match="unknown scenario"):
         get_scenario("atlantis")
+
+
+def test_scenarios_command_lists_shows_and_exports(tmp_path, capsys):
+    import argparse
+
+    from drake_auv.commands import scenarios as command
+    from drake_auv.terrain.readers import read_bathymetry
+
+    parser = argparse.ArgumentParser()
+    command.add_parser(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["scenarios"])
+    assert args.func(args) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert [line.split()[0] for line in lines] == NAMES
+    prior = tmp_path / "pool.npz"
+    args = parser.parse_args(["scenarios", "pool", "--prior", str(prior), "--error", "1.5",
+                              "--world", str(tmp_path / "pool.ply")])
+    assert args.func(args) == 0
+    assert "target: " in capsys.readouterr().out
+    loaded = read_bathymetry(prior)
+    expected = get_scenario("pool").prior_map(1.5, seed=0)
+    np.testing.assert_allclose(loaded.origin, expected.origin)
+    np.testing.assert_array_equal(loaded.z, expected.z)
+    assert len(trimesh.load(tmp_path / "pool.ply").faces) == len(get_scenario("pool").world.faces)
+    with pytest.raises(ValueError, match="error_m"):
+        args = parser.parse_args(["scenarios", "pool", "--prior", str(prior), "--error", "7"])
+        args.func(args)
+    with pytest.raises(ValueError, match="need a site name"):
+        args = parser.parse_args(["scenarios", "--prior", str(prior)])
+        args.func(args)

@@ -1,0 +1,72 @@
+"""`drake-auv scenarios`: list the named sites, show one, export its prior map or world mesh.
+
+    drake-auv scenarios                       one line per site
+    drake-auv scenarios boulder               details: faces, target area, start, parameters
+    drake-auv scenarios boulder --prior out/boulder_prior.tif --error 3 --seed 1
+    drake-auv scenarios pool --world out/pool.ply
+"""
+
+from __future__ import annotations
+
+from pathlib import Path as FilePath
+
+import numpy as np
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser("scenarios", help="list the named sites, or show/export one",
+                                   description=__doc__.split("\n")[0])
+    parser.add_argument("name", nargs="?", help="a site to show (default: list them all)")
+    parser.add_argument("--prior", metavar="FILE",
+                        help="write the site's prior map: .npz keeps the world frame; a .tif "
+                             "GeoTIFF is re-based to its corner when read back")
+    parser.add_argument("--error", type=float, default=0.0,
+                        help="horizontal prior-map error, m, in [0, 5] (default 0)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the error's direction")
+    parser.add_argument("--world", metavar="FILE",
+                        help="write the true world mesh (.ply, .stl, .obj, .glb)")
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from drake_auv.scenarios import get_scenario, list_scenarios
+
+    if args.name is None:
+        if args.prior or args.world:
+            raise ValueError("--prior and --world need a site name")
+        width = max(len(name) for name, _ in list_scenarios())
+        for name, text in list_scenarios():
+            print(f"{name:<{width}}  {text}")
+        return 0
+    sc = get_scenario(args.name)
+    lo, hi = sc.world.bounds
+    x, y, z, _, _, yaw = sc.start_state[:6]
+    print(f"{sc.name}: {sc.description}")
+    print(f"  world: {len(sc.world.faces)} faces, x [{lo[0]:.1f}, {hi[0]:.1f}] "
+          f"y [{lo[1]:.1f}, {hi[1]:.1f}] z [{lo[2]:.1f}, {hi[2]:.1f}] m")
+    print(f"  target: {int(sc.target_faces.sum())} faces, {sc.target_area:.1f} m^2")
+    print(f"  start: ({x:.1f}, {y:.1f}, {z:.1f}) m, yaw {np.degrees(yaw):.0f} deg")
+    print("  params: " + ", ".join(f"{k}={v}" for k, v in sc.params.items()))
+    if args.prior:
+        _write_prior(sc.prior_map(error_m=args.error, seed=args.seed), FilePath(args.prior))
+        print(f"  wrote prior map to {args.prior}")
+    if args.world:
+        out = FilePath(args.world)
+        if out.suffix.lower() not in (".ply", ".stl", ".obj", ".glb"):
+            raise ValueError(f"--world: file must end in .ply, .stl, .obj or .glb, got {out.name}")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        sc.world.export(out)
+        print(f"  wrote world mesh to {out}")
+    return 0
+
+
+def _write_prior(bathy, out: FilePath) -> None:
+    suffix = out.suffix.lower()
+    if suffix not in (".tif", ".tiff", ".npz"):
+        raise ValueError(f"--prior: file must end in .tif or .npz, got {out.name}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if suffix == ".npz":
+        np.savez(out, z=bathy.z, spacing=np.array(bathy.spacing), origin=np.array(bathy.origin))
+    else:
+        from drake_auv.terrain.readers import write_geotiff
+        write_geotiff(bathy, out)
