@@ -35,8 +35,9 @@ class TerrainSurface:
         bathy: the grid.
         distance_resolution: largest spacing of the surface samples in the KD-tree used for
             distances, m (default: the cell size). A sampled surface overestimates the distance
-            to the true (bilinear) surface by at most delta^2 / (2 d), delta being half the
-            sample diagonal; `clearance_target` adds that margin.
+            to the true surface by at most delta^2 / (2 d), delta being half the diagonal of a
+            sample cell measured on the surface (plan-view diagonal times sqrt(1 + S_max^2));
+            `clearance_target` adds that margin.
     """
 
     def __init__(self, bathy: Bathymetry, distance_resolution: float | None = None):
@@ -92,7 +93,10 @@ class TerrainSurface:
         zz = self.elevation(xx, yy) if (fx > 1 or fy > 1) else self.z
         self._tree_points = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
         self._tree = cKDTree(self._tree_points, balanced_tree=False)
-        self._sample_half_diagonal = 0.5 * np.hypot(self.spacing[0] / fx, self.spacing[1] / fy)
+        # On the surface the samples are further apart than in plan view, by up to
+        # sqrt(1 + S_max^2) on the steepest slope.
+        stretch = np.sqrt(1.0 + float(np.max(self.gx ** 2 + self.gy ** 2)))
+        self._sample_half_diagonal = 0.5 * np.hypot(self.spacing[0] / fx, self.spacing[1] / fy) * stretch
 
     def distance(self, points, upper_bound: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
         """(N,) distance from each point to the surface, m, and (N, 3) the nearest surface sample.
@@ -116,10 +120,20 @@ class TerrainSurface:
             self._build_tree()
         return float(np.hypot(omega, self._sample_half_diagonal))
 
+    def clamp_to_grid(self, points: np.ndarray) -> np.ndarray:
+        """Points with x, y clamped to the grid's extent (cell centres): the path stays over
+        the mapped seabed."""
+        xmin, xmax, ymin, ymax = self.bathy.extent
+        out = np.array(points, dtype=float)
+        out[:, 0] = np.clip(out[:, 0], xmin, xmax)
+        out[:, 1] = np.clip(out[:, 1], ymin, ymax)
+        return out
+
     def enforce_clearance(self, points: np.ndarray, omega: float, iterations: int = 6) -> np.ndarray:
-        """Moves points closer than `omega` to the surface straight away from their nearest
-        surface sample until they are at `omega` (then lifts any stubborn one vertically)."""
-        points = np.array(points, dtype=float)
+        """Keeps points over the grid and at least `omega` from the surface: a point too close
+        moves straight away from its nearest surface sample (clamped back over the grid), and
+        any still too close is then lifted vertically."""
+        points = self.clamp_to_grid(points)
         target = self.clearance_target(omega)
         todo = np.arange(len(points))
         for _ in range(iterations):
@@ -133,7 +147,7 @@ class TerrainSurface:
             away = np.where(norm[:, None] > 1e-9, away / np.maximum(norm, 1e-12)[:, None],
                             np.array([0.0, 0.0, 1.0]))
             away[away[:, 2] < 0] *= -1.0  # a point under the height field goes out through the top
-            points[todo] = q + away * (target + 1e-6)
+            points[todo] = self.clamp_to_grid(q + away * (target + 1e-6))
         for _ in range(50):
             d, _ = self.distance(points[todo], upper_bound=target)
             close = d < target - 1e-9

@@ -1,0 +1,102 @@
+"""Slicing contours, surface queries (distance, clearance, rays) and viewing-angle geometry."""
+
+import numpy as np
+import pytest
+
+from drake_auv.planning.metrics import viewing_angles
+from drake_auv.planning.slicing import order_contours, slice_levels, slice_region
+from drake_auv.planning.surface import TerrainSurface
+from drake_auv.terrain.bathymetry import Bathymetry
+
+S = 0.7  # slope of the test plane z = S x
+
+
+def _plane(spacing=0.5):
+    x = np.arange(0, 40.0 + spacing / 2, spacing)
+    y = np.arange(0, 30.0 + spacing / 2, spacing)
+    xx, _ = np.meshgrid(x, y)
+    return Bathymetry(-60.0 + S * xx, (spacing, spacing))
+
+
+def test_distance_to_a_plane_is_the_perpendicular_distance():
+    surface = TerrainSurface(_plane(), distance_resolution=0.25)
+    rng = np.random.default_rng(3)
+    p = np.column_stack([rng.uniform(10, 30, 200), rng.uniform(10, 20, 200), np.zeros(200)])
+    h = rng.uniform(1.0, 4.0, 200)
+    p[:, 2] = -60.0 + S * p[:, 0] + h  # h above the plane, vertically
+    d, _ = surface.distance(p)
+    true = h / np.sqrt(1 + S ** 2)
+    # Sampled surface: overestimates by at most delta^2 / (2 d), delta = half the sample
+    # diagonal measured on the surface.
+    delta = 0.5 * np.hypot(0.25, 0.25) * np.hypot(1.0, S)
+    assert np.all(d >= true - 1e-9) and np.all(d <= true + delta ** 2 / (2 * true) + 1e-9)
+
+
+def test_enforce_clearance_pushes_out_along_the_normal():
+    surface = TerrainSurface(_plane())
+    p = np.array([[20.0, 15.0, -60.0 + S * 20.0 + 1.0], [22.0, 15.0, -60.0 + S * 22.0 + 5.0]])
+    out = surface.enforce_clearance(p, 2.0)
+    n = np.array([-S, 0.0, 1.0]) / np.hypot(S, 1.0)
+    d_true = (out - np.array([0.0, 0.0, -60.0])) @ n  # signed distance to the plane
+    assert d_true[0] >= 2.0 - 1e-9 and d_true[0] < 2.1
+    np.testing.assert_allclose(out[1], p[1])  # far enough already: untouched
+
+
+def test_raycast_hits_the_plane():
+    surface = TerrainSurface(_plane())
+    o = np.array([[20.0, 15.0, -60.0 + S * 20 + 3.0]])
+    r, hit = surface.raycast(o, np.array([[0.0, 0.0, -1.0]]), 10.0)
+    assert r[0] == pytest.approx(3.0, abs=1e-6)
+    r, _ = surface.raycast(o, np.array([[0.0, 0.0, 1.0]]), 10.0)
+    assert np.isnan(r[0])
+
+
+def test_slices_of_a_plane_are_straight_offset_lines_looking_square_on():
+    bathy = _plane()
+    surface = TerrainSurface(bathy)
+    region = np.ones(bathy.shape, dtype=bool)
+    slope = np.full(bathy.shape, S)
+    footprint = 2.0
+    levels = slice_levels(surface, region, slope, footprint)
+    dz = footprint * S / np.hypot(1, S)  # footprint measured along the wall
+    np.testing.assert_allclose(np.diff(levels), dz)
+    assert levels[0] >= bathy.z.min() and levels[-1] <= bathy.z.max()
+    per_level = slice_region(surface, region, 1, levels, omega=2.0, sample_spacing=0.5,
+                             min_length=2.0)
+    assert all(len(p) == 1 for p in per_level)
+    n = np.array([-S, 0.0, 1.0]) / np.hypot(S, 1.0)
+    for pieces in per_level:
+        c = pieces[0]
+        x_level = (c.level + 60.0) / S
+        np.testing.assert_allclose(c.surface[:, 0], x_level, atol=1e-6)
+        np.testing.assert_allclose(c.path - c.surface, np.tile(2.0 * n, (len(c.path), 1)), atol=1e-6)
+        np.testing.assert_allclose(c.sensor_dir, np.tile(-n, (len(c.path), 1)), atol=1e-9)
+        assert np.all(np.diff(c.path[:, 1]) <= 0.5 + 1e-9)
+    ordered = order_contours(per_level, start_xyz=per_level[0][0].path[-1])
+    assert [c.level for c in ordered] == sorted(c.level for c in ordered)
+    # Boustrophedon along the levels: each contour starts where the previous one ended.
+    for a, b in zip(ordered[:-1], ordered[1:]):
+        assert abs(a.path[-1, 1] - b.path[0, 1]) < 1.0
+    ang = np.degrees(viewing_angles(surface, ordered[3].path, ordered[3].sensor_dir, 4.0))
+    assert np.nanmax(ang) < 0.5
+    # The down-looking view of the same wall sees it at arctan(S).
+    down = np.tile([0.0, 0.0, -1.0], (len(ordered[3].path), 1))
+    np.testing.assert_allclose(viewing_angles(surface, ordered[3].path, down, 10.0),
+                               np.arctan(S), atol=1e-6)
+
+
+def test_a_cone_slices_into_closed_loops():
+    yy, xx = np.mgrid[0:81, 0:81] * 0.5
+    r = np.hypot(xx - 20.0, yy - 20.0)
+    bathy = Bathymetry(-60.0 + 0.8 * r, (0.5, 0.5))  # a pit, walls of slope 0.8
+    surface = TerrainSurface(bathy)
+    region = (r > 3) & (r < 15)
+    levels = slice_levels(surface, region, np.full(bathy.shape, 0.8), 2.0)
+    per_level = slice_region(surface, region, 1, levels, 2.0, 0.5, 2.0)
+    loops = [c for p in per_level for c in p]
+    assert loops and all(c.closed for c in loops)
+    for c in loops:
+        rad = np.hypot(c.surface[:, 0] - 20.0, c.surface[:, 1] - 20.0)
+        np.testing.assert_allclose(rad, (c.level + 60.0) / 0.8, atol=0.05)
+        # Offset into the pit's open water: the path circles inside the contour.
+        assert np.all(np.hypot(c.path[:, 0] - 20.0, c.path[:, 1] - 20.0) < rad)
