@@ -12,7 +12,7 @@ reference publishes only that they are behaviour-based):
   the profile stays on the right of the motion in the plane's (a, b) axes, i.e. clockwise) or
   +90 degrees (`side` = -1); the speed fades linearly to zero as |distance - offset| grows to
   `slow_band`, so the vehicle re-acquires the offset before it moves on;
-- face: the yaw reference, rate-limited to `yaw_rate`.
+- face: the yaw reference, moved towards its target with bounded rate and acceleration.
 
 `HorizontalFollower` circumnavigates at constant depth in the horizontal scan plane and faces
 the profile (heading = -normal). `VerticalFollower` follows the profile in the vertical plane of
@@ -46,6 +46,7 @@ class FollowingParams:
     max_correction: cap of the position correction along the normal, m.
     slow_band: distance error at which the advance speed has faded to zero, m.
     yaw_rate: maximum rate of the yaw reference, rad/s.
+    yaw_accel: maximum change of that rate, rad/s^2.
     plane_band: half-thickness of the map slice taken around the scan plane, m.
     search_speed: speed straight ahead while no profile is seen, m/s.
     turn_threshold: vertical mode, turn when the motion's horizontal component is below
@@ -64,6 +65,7 @@ class FollowingParams:
     max_correction: float = 1.0
     slow_band: float = 1.0
     yaw_rate: float = np.radians(15.0)
+    yaw_accel: float = np.radians(5.0)
     plane_band: float = 0.5
     search_speed: float = 0.3
     turn_threshold: float = 0.5
@@ -77,8 +79,8 @@ class FollowingParams:
     def __post_init__(self):
         if not (np.isfinite(self.min_depth) and self.min_depth >= 0):
             raise ValueError(f"FollowingParams.min_depth must be >= 0 m, got {self.min_depth}")
-        for name in ("offset", "speed", "max_correction", "slow_band", "yaw_rate", "plane_band",
-                     "max_age"):
+        for name in ("offset", "speed", "max_correction", "slow_band", "yaw_rate", "yaw_accel",
+                     "plane_band", "max_age"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"FollowingParams.{name} must be a finite number > 0, got {value}")
@@ -134,6 +136,7 @@ class _Follower:
         self.map = LocalProfileMap(params.max_age, params.max_points)
         self.rng = np.random.default_rng(seed)
         self.yaw_ref = None
+        self.yaw_rate_ref = 0.0
         self.time = None
         self.look = None
         self.normal = None
@@ -152,11 +155,22 @@ class _Follower:
         return state, dt
 
     def _steer_yaw(self, target, dt):
-        """Moves the yaw reference towards `target` at most yaw_rate * dt; returns the rate."""
-        step = np.clip(wrap_angle(target - self.yaw_ref), -self.params.yaw_rate * dt,
-                       self.params.yaw_rate * dt)
-        self.yaw_ref = float(wrap_angle(self.yaw_ref + step))
-        return float(step / dt) if dt > 0 else 0.0
+        """Moves the yaw reference towards `target` with a rate bounded by `yaw_rate` and
+        changed by at most `yaw_accel` * dt, braking in time to stop on the target (a smooth
+        reference the tracker can follow without overshoot); returns the reference's rate."""
+        if dt <= 0:
+            return self.yaw_rate_ref
+        p = self.params
+        error = float(wrap_angle(target - self.yaw_ref))
+        braking = np.sign(error) * np.sqrt(2.0 * p.yaw_accel * abs(error))
+        desired = np.clip(braking, -p.yaw_rate, p.yaw_rate)
+        rate = self.yaw_rate_ref + np.clip(desired - self.yaw_rate_ref, -p.yaw_accel * dt,
+                                           p.yaw_accel * dt)
+        if abs(rate * dt) > abs(error) and np.sign(rate) == np.sign(error):
+            rate = error / dt  # land on the target
+        self.yaw_ref = float(wrap_angle(self.yaw_ref + rate * dt))
+        self.yaw_rate_ref = float(rate)
+        return self.yaw_rate_ref
 
     def _estimate(self, points):
         estimate = estimate_profile(points, self.params.estimator, self.rng, self.look, self.normal)

@@ -19,6 +19,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem
 
+from drake_auv.sensors.returns import SonarReturns
 from drake_auv.perception.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
 from drake_auv.vehicle import STATE_SIZE
 
@@ -56,7 +57,8 @@ class ProfileFollowingController(LeafSystem):
             follower = HorizontalFollower(self.params, depth_z=depth_z, seed=seed)
         else:
             follower = VerticalFollower(self.params, plane_yaw=plane_yaw, seed=seed)
-        self.returns_input = self.DeclareAbstractInputPort("returns", AbstractValue.Make(None))
+        self.returns_input = self.DeclareAbstractInputPort(
+            "returns", AbstractValue.Make(SonarReturns.empty(20.0)))
         self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
         self._follower_index = self.DeclareAbstractState(AbstractValue.Make(follower))
         # reference (8), time of the update, sequence number of the last returns used, profile (7)
@@ -80,8 +82,7 @@ class ProfileFollowingController(LeafSystem):
         follower = state.get_mutable_abstract_state(self._follower_index).get_mutable_value()
         if follower.time is not None and t <= follower.time:
             return  # the initialization and the first periodic event share t = 0
-        returns = self.returns_input.EvalAbstract(context).get_value() \
-            if self.returns_input.HasValue(context) else None
+        returns = self.returns_input.Eval(context) if self.returns_input.HasValue(context) else None
         points, sequence = np.empty((0, 3)), x[9]
         if returns is not None and returns.sequence != sequence:  # each batch once
             points, sequence = returns.points_nav, returns.sequence

@@ -1,0 +1,175 @@
+"""Profile-following mission: the GIRONA 500 driven by its pencil-beam profiler.
+
+    true state ──> PencilBeamProfiler ──returns──> ProfileFollowingController ──reference──┐
+         ^              ^ estimated_state ─────────────────┘ ^                            v
+         └── dynamics <── allocation <── tracker <───────────┼────────────────────────────┘
+                                            ^ estimated_state┘
+The controller replaces the path source of the tracking diagram. The profiler scans the
+horizontal plane (horizontal following) or the body x-z plane (vertical following).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+from tqdm import tqdm
+from pydrake.systems.primitives import VectorLogSink
+
+from drake_auv.control import TrackingGains
+from drake_auv.diagrams.vehicle import VehicleSystems, add_girona500
+from drake_auv.geometry.raycast import RayCaster
+from drake_auv.navigation import NavigationParams
+from drake_auv.perception.behaviours import FollowingParams
+from drake_auv.sensors.noise import SonarNoise
+from drake_auv.systems.profile_following import PROFILE_SIZE, ProfileFollowingController
+from drake_auv.systems.profiler import PencilBeamProfiler
+from drake_auv.vehicle import STATE_SIZE
+from scipy.spatial import cKDTree
+
+# Profiler head set-up for following (our choice): a full circle at the SeaKing's coarse
+# 1.8 degree step and 30 pings/s, one revolution in 6.7 s, batched at 10 Hz.
+PROFILER_DEFAULTS = dict(sector_deg=(-180.0, 180.0), step_deg=1.8, ping_rate=30.0,
+                         update_rate=10.0, beam_width_deg=1.5, max_range=20.0)
+
+
+@dataclass
+class ProfileFollowingHandles:
+    """What `build_profile_following_diagram` returns beside the diagram."""
+
+    vehicle: VehicleSystems
+    profiler: PencilBeamProfiler
+    controller: ProfileFollowingController
+    state_log: VectorLogSink  # true state
+    estimated_state_log: VectorLogSink
+    reference_log: VectorLogSink
+    profile_log: VectorLogSink  # the controller's `profile` output
+    caster: RayCaster  # of the true world, for truth checks
+    visualizer: object = None
+
+
+def build_profile_following_diagram(world, initial_state, mode: str = "horizontal",
+                                    params: FollowingParams | None = None,
+                                    noise: SonarNoise | None = None,
+                                    navigation: NavigationParams | None = None,
+                                    profiler_options: dict | None = None,
+                                    depth_z: float | None = None,
+                                    plane_yaw: float | None = None, seed: int = 0,
+                                    gains: TrackingGains | None = None,
+                                    log_period: float = 0.1, scene=None):
+    """Wires vehicle, profiler and controller for profile following in `world`.
+
+    Args:
+        world: the true world (trimesh) or a `RayCaster` of it.
+        initial_state: 12-state at t = 0.
+        mode: "horizontal" or "vertical".
+        params: following behaviours (`FollowingParams`).
+        noise: profiler errors, e.g. `SonarNoise(spurious_prob=0.05)` (default: none).
+        navigation: navigation error model (default: exact).
+        profiler_options: overrides of `PROFILER_DEFAULTS` (keyword arguments of
+            `PencilBeamProfiler`).
+        depth_z, plane_yaw: see `ProfileFollowingController`.
+        seed: seeds the profiler noise and the estimator's RANSAC.
+        gains: tracker gains (default: `TrackingGains()`).
+        log_period: s, of the state, reference and profile logs.
+        scene: a `drake_auv.visualization.Scene` to draw the vehicle and its trail in.
+    Returns (diagram, ProfileFollowingHandles); exported outputs `state`, `estimated_state`,
+    `reference`, `profile`.
+    """
+    if mode not in ("horizontal", "vertical"):
+        raise ValueError(f"mode must be 'horizontal' or 'vertical', got {mode!r}")
+    if not (np.isfinite(log_period) and log_period > 0):
+        raise ValueError(f"log_period must be > 0 s, got {log_period}")
+    initial_state = np.asarray(initial_state, dtype=float)
+    if initial_state.shape != (STATE_SIZE,) or not np.all(np.isfinite(initial_state)):
+        raise ValueError(f"initial_state must be a finite 12-vector, got {initial_state!r}")
+    options = {**PROFILER_DEFAULTS, **(profiler_options or {})}
+    unknown = set(options) - set(PROFILER_DEFAULTS) - {"mount_position", "max_incidence_deg"}
+    if unknown:
+        raise ValueError(f"profiler_options: unknown option(s) {sorted(unknown)}; allowed: "
+                         f"{sorted(PROFILER_DEFAULTS) + ['max_incidence_deg', 'mount_position']}")
+    caster = world if isinstance(world, RayCaster) else RayCaster(world)
+
+    builder = DiagramBuilder()
+    vehicle = add_girona500(builder, navigation=navigation, initial_state=initial_state,
+                            gains=gains)
+    profiler = builder.AddNamedSystem("profiler", PencilBeamProfiler(
+        caster, scan_plane=mode, noise=noise, seed=seed, **options))
+    controller = builder.AddNamedSystem("profile_following", ProfileFollowingController(
+        mode, params, period=profiler.period, depth_z=depth_z, plane_yaw=plane_yaw, seed=seed))
+    builder.Connect(vehicle.dynamics.state_output, profiler.true_state_input)
+    builder.Connect(vehicle.navigation.estimated_state_output, profiler.estimated_state_input)
+    builder.Connect(profiler.returns_output, controller.returns_input)
+    builder.Connect(vehicle.navigation.estimated_state_output, controller.state_input)
+    builder.Connect(controller.reference_output, vehicle.tracker.reference_input)
+
+    logs = {}
+    for name, port, size in (("state_log", vehicle.dynamics.state_output, STATE_SIZE),
+                             ("estimated_state_log", vehicle.navigation.estimated_state_output,
+                              STATE_SIZE),
+                             ("reference_log", controller.reference_output, 8),
+                             ("profile_log", controller.profile_output, PROFILE_SIZE)):
+        logs[name] = builder.AddNamedSystem(name, VectorLogSink(size, log_period))
+        builder.Connect(port, logs[name].get_input_port())
+    builder.ExportOutput(vehicle.dynamics.state_output, "state")
+    builder.ExportOutput(vehicle.navigation.estimated_state_output, "estimated_state")
+    builder.ExportOutput(controller.reference_output, "reference")
+    builder.ExportOutput(controller.profile_output, "profile")
+    visualizer = None
+    if scene is not None:
+        visualizer = scene.add_vehicle_visualizer(builder, vehicle.dynamics.state_output)
+    diagram = builder.Build()
+    diagram.set_name(f"profile_following_{mode}")
+    return diagram, ProfileFollowingHandles(vehicle, profiler, controller, logs["state_log"],
+                                            logs["estimated_state_log"], logs["reference_log"],
+                                            logs["profile_log"], caster, visualizer)
+
+
+def true_clearance(mesh: trimesh.Trimesh, points, chunk: int = 256) -> np.ndarray:
+    """(n,) exact distance from each point (n, 3) to the mesh's surface, m.
+
+    The nearest triangle's centroid lies within d + r of the point, d being the true distance
+    (at most the distance to the nearest centroid) and r the largest centroid-to-vertex
+    distance of any triangle, so only the triangles in that ball are tested exactly.
+    """
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    if points.shape[1] != 3 or not np.all(np.isfinite(points)):
+        raise ValueError(f"true_clearance: points must be finite (n, 3), got {points.shape}")
+    triangles = np.asarray(mesh.triangles)
+    centroids = triangles.mean(axis=1)
+    reach = float(np.linalg.norm(triangles - centroids[:, None], axis=2).max())
+    tree = cKDTree(centroids)
+    nearest, _ = tree.query(points)
+    out = np.empty(len(points))
+    for start in range(0, len(points), chunk):
+        block = slice(start, start + chunk)
+        candidates = tree.query_ball_point(points[block], nearest[block] + reach)
+        owner = np.repeat(np.arange(len(candidates)), [len(c) for c in candidates])
+        faces = np.concatenate(candidates).astype(int)
+        closest = trimesh.triangles.closest_point(triangles[faces], points[block][owner])
+        dist = np.linalg.norm(closest - points[block][owner], axis=1)
+        out[block] = np.full(len(candidates), np.inf)
+        np.minimum.at(out[block], owner, dist)
+    return out
+
+
+def run_mission(diagram, duration: float, stop=None, chunk: float = 1.0, progress: bool = True,
+                label: str = "simulating"):
+    """Simulates `diagram` for up to `duration` s in chunks of `chunk` s, with a progress bar;
+    `stop(context)` returning True ends the run early (checked after every chunk). Returns
+    the Simulator."""
+    if not (np.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be > 0 s, got {duration}")
+    simulator = Simulator(diagram)
+    simulator.Initialize()
+    context = simulator.get_context()
+    steps = int(np.ceil(duration / chunk))
+    for k in tqdm(range(1, steps + 1), desc=label, unit="s sim", disable=not progress,
+                  unit_scale=chunk):
+        simulator.AdvanceTo(min(k * chunk, duration))
+        if stop is not None and stop(context):
+            break
+    return simulator
