@@ -7,7 +7,9 @@
 
 With `replanning=False` the tracker flies the nominal path as planned (a `TrajectorySource`
 of it at the survey speed) while the sonars and the mapper run unchanged, so the two runs
-differ only in who drives the tracker. True state, estimated state and reference are logged.
+differ only in who drives the tracker. True state, estimated state and reference are logged;
+two `CoverageRecorder`s measure, on the true world, what the side-looking payload camera and
+multibeam have seen.
 """
 
 from __future__ import annotations
@@ -23,11 +25,13 @@ from drake_auv.geometry.raycast import RayCaster
 from drake_auv.navigation import NavigationParams
 from drake_auv.planning.path import Path
 from drake_auv.planning.replanning import ReplanningParameters
+from drake_auv.systems.coverage_recorder import CoverageRecorder
 from drake_auv.systems.multibeam import MultibeamSonar
 from drake_auv.systems.octree_mapper import OctreeMapper
 from drake_auv.systems.profiler import PencilBeamProfiler
 from drake_auv.systems.replanner import Replanner
 from drake_auv.vehicle import STATE_SIZE
+from drake_auv.visualization.octree import OctreeVisualizer
 
 
 @dataclass
@@ -40,6 +44,8 @@ class ReplanningHandles:
     mapper: OctreeMapper
     replanner: Replanner | None  # None when replanning is off
     source: TrajectorySource | None  # the nominal path's source when replanning is off
+    camera_coverage: CoverageRecorder  # side-looking camera on the true world
+    multibeam_coverage: CoverageRecorder  # the payload multibeam's fan on the true world
     state_log: VectorLogSink  # true state
     estimated_log: VectorLogSink
     reference_log: VectorLogSink
@@ -53,7 +59,7 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
                              multibeam_mount: str = "port", multibeam_stride: int = 2,
                              heading_offset: float = 0.0, replanning_period: float = 1.0,
                              log_period: float = 0.1, seed: int = 0, scene=None,
-                             extra=None):
+                             target_faces=None, camera_range: float = 8.0):
     """Builds the mission Diagram; returns (diagram, ReplanningHandles).
 
     Args:
@@ -73,9 +79,11 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
         replanning_period: s.
         log_period: period of the state/reference logs, s.
         seed: seed of the sonars' noise and STOMP.
-        scene: an optional `drake_auv.visualization.scene.Scene` to draw the vehicle in.
-        extra: optional callable `extra(builder, handles)` to add more systems (e.g. a
-            coverage recorder) before the diagram is built.
+        scene: an optional `drake_auv.visualization.scene.Scene` to draw the vehicle and the
+            octree map (redrawn every 5 s) in.
+        target_faces: (F,) bool mask of the world's faces whose coverage is recorded.
+        camera_range: range of the payload camera (60 degrees, looking to the multibeam's
+            side), m: the water visibility.
     """
     if not (np.isfinite(log_period) and log_period > 0):
         raise ValueError(f"log_period must be > 0 s, got {log_period}")
@@ -109,6 +117,16 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
                                         TrajectorySource(nominal.to_trajectory(speed), 1))
         reference = source.get_output_port()
     builder.Connect(reference, vehicle.tracker.reference_input)
+    side = {"port": (0.0, 1.0, 0.0), "starboard": (0.0, -1.0, 0.0), "down": (0.0, 0.0, -1.0),
+            "forward": (1.0, 0.0, 0.0)}[multibeam_mount]
+    camera_coverage = builder.AddNamedSystem("camera_coverage", CoverageRecorder(
+        caster, target_faces, sensor="camera", aperture_deg=60.0, max_range=camera_range,
+        axis_body=side, rate=2.0))
+    multibeam_coverage = builder.AddNamedSystem("multibeam_coverage", CoverageRecorder(
+        caster, target_faces, sensor="multibeam", max_range=max_range, mount=multibeam_mount,
+        rate=2.0))
+    for recorder in (camera_coverage, multibeam_coverage):
+        builder.Connect(true_state, recorder.true_state_input)
     state_log = builder.AddNamedSystem("state_log", VectorLogSink(STATE_SIZE, log_period))
     builder.Connect(true_state, state_log.get_input_port())
     estimated_log = builder.AddNamedSystem("estimated_log", VectorLogSink(STATE_SIZE, log_period))
@@ -118,11 +136,15 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
     builder.ExportOutput(true_state, "state")
     builder.ExportOutput(estimated, "estimated_state")
     builder.ExportOutput(mapper.map_output, "map")
-    visualizer = scene.add_vehicle_visualizer(builder, true_state) if scene is not None else None
+    visualizer = None
+    if scene is not None:
+        visualizer = scene.add_vehicle_visualizer(builder, true_state)
+        octree_visualizer = builder.AddNamedSystem("octree_visualizer", OctreeVisualizer(
+            scene.meshcat, scene.path_of("octree"), period=5.0))
+        builder.Connect(mapper.map_output, octree_visualizer.map_input)
     handles = ReplanningHandles(vehicle, multibeam, profiler, mapper, replanner, source,
-                                state_log, estimated_log, reference_log, visualizer)
-    if extra is not None:
-        extra(builder, handles)
+                                camera_coverage, multibeam_coverage, state_log, estimated_log,
+                                reference_log, visualizer)
     diagram = builder.Build()
     diagram.set_name("replanning" if replanning else "nominal_only")
     return diagram, handles
