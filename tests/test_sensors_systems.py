@@ -174,3 +174,12 @@ def test_bad_input_raises():
         CoverageRecorder(box, sensor="lidar")
     with pytest.raises(ValueError, match="rate"):
         CoverageRecorder(box, rate=0.0)
+
+
+@pytest.mark.parametrize("sector", [(-180.0, 180.0), (-60.0, 30.0), (-50.0, 50.3)])
+def test_profiler_cached_beams_match_the_schedule(sector):
+    profiler = PencilBeamProfiler(trimesh.creation.box(), sector_deg=sector, ping_rate=30.0,
+                                  update_rate=7.0)
+    for n in list(range(0, 1500, 7)) * 2:  # second pass served from the cache
+        g = profiler.update_geometry(n)
+        np.testing.assert_allclose(g.angles, profiler.update_angles(n), atol=1e-9)

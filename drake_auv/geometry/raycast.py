@@ -97,17 +97,31 @@ class RayCaster:
                 np.isfinite(origins)):
             raise ValueError("origins must be finite and directions finite and non-zero")
         unit = directions / norms[:, None]
-        ranges = np.full(n, np.nan)
-        faces = np.full(n, -1, dtype=np.int64)
         points = np.full((n, 3), np.nan)
         if n == 0:
-            return RayHits(ranges, faces, points)
-        out = self._scene.run((origins - self._offset).astype(np.float32),
-                              unit.astype(np.float32),
-                              dists=max_range.astype(np.float32), output=1)
-        prim = np.asarray(out["primID"], dtype=np.int64)
-        hit = prim >= 0
-        faces[hit] = prim[hit]
-        ranges[hit] = np.asarray(out["tfar"], dtype=float)[hit]
+            return RayHits(np.full(0, np.nan), np.full(0, -1, dtype=np.int64), points)
+        ranges, faces = self.cast_unit(origins, unit, max_range)
+        hit = faces >= 0
         points[hit] = origins[hit] + ranges[hit, None] * unit[hit]
         return RayHits(ranges, faces, points)
+
+    def cast_unit(self, origins, unit_directions, max_range):
+        """The fast path of `cast` for trusted input (no checks, no points).
+
+        Args:
+            origins: (3,) or (n, 3) finite; unit_directions: (n, 3) unit vectors;
+            max_range: scalar or (n,) > 0.
+        Returns:
+            (ranges (n,) with NaN for no hit, faces (n,) with -1 for no hit).
+        """
+        n = len(unit_directions)
+        origins32 = np.asarray(origins - self._offset, dtype=np.float32)
+        if origins32.ndim == 1:
+            origins32 = np.tile(origins32, (n, 1))
+        dists = (np.full(n, max_range, dtype=np.float32) if np.ndim(max_range) == 0
+                 else np.asarray(max_range, dtype=np.float32))
+        out = self._scene.run(origins32, np.asarray(unit_directions, dtype=np.float32),
+                              dists=dists, output=1)
+        faces = np.asarray(out["primID"], dtype=np.int64)
+        ranges = np.where(faces >= 0, out["tfar"], np.nan)
+        return ranges, faces

@@ -9,7 +9,7 @@ import numpy as np
 
 @dataclass(frozen=True)
 class SonarReturns:
-    """Returns of n beams, placed with the estimated (navigation) state.
+    """Returns of n beams, placed with the estimated (navigation) state. Immutable.
 
     Attributes:
         time: time of the update, s.
@@ -33,6 +33,17 @@ class SonarReturns:
     points_body: np.ndarray
     max_range: float
     sequence: int = 0
+
+    def __post_init__(self):
+        for name in ("origin_nav", "angles", "ranges", "directions_nav", "points_nav",
+                     "points_body"):
+            value = np.array(getattr(self, name), dtype=float)
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+
+    def __deepcopy__(self, memo):
+        # Immutable (frozen, read-only arrays): Drake's state copies can share it.
+        return self
 
     @classmethod
     def empty(cls, max_range: float) -> "SonarReturns":

@@ -132,6 +132,30 @@ def _beam_rays(directions_s: np.ndarray, half_angle: float) -> np.ndarray:
     return np.concatenate([directions_s[:, None, :], ring], axis=1)
 
 
+@dataclass(frozen=True)
+class BeamGeometry:
+    """Beams of one update in the body frame, precomputable when the angles repeat.
+
+    angles (n,) rad; directions_body (n, 3) beam axes; rays_body (n * m, 3) the rays cast
+    (m per beam: the axis, plus the cone edge when the beam has a width).
+    """
+
+    angles: np.ndarray
+    directions_body: np.ndarray
+    rays_body: np.ndarray
+    rays_per_beam: int
+
+
+def beam_geometry(model: SonarModel, angles) -> BeamGeometry:
+    """The body-frame beams of `model` at `angles` (rad, in the scan plane)."""
+    angles = np.asarray(angles, dtype=float).ravel()
+    d_s = np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
+    rotation = model.mount.rotation
+    rays = _beam_rays(d_s, 0.5 * model.beam_width)
+    return BeamGeometry(angles, d_s @ rotation.T, rays.reshape(-1, 3) @ rotation.T,
+                        rays.shape[1])
+
+
 def pose(state) -> tuple[np.ndarray, np.ndarray]:
     """(position (3,), R_WB (3, 3)) of a 12-vector state."""
     state = np.asarray(state, dtype=float)
@@ -140,40 +164,33 @@ def pose(state) -> tuple[np.ndarray, np.ndarray]:
     return state[:3].copy(), rotation_world_body(*state[3:6])
 
 
-def scan(caster: RayCaster, model: SonarModel, angles: np.ndarray, true_state,
-         estimated_state, rng: np.random.Generator | None = None, time: float = 0.0,
-         sequence: int = 0) -> SonarReturns:
+def scan(caster: RayCaster, model: SonarModel, angles, true_state, estimated_state,
+         rng: np.random.Generator | None = None, time: float = 0.0, sequence: int = 0,
+         geometry: BeamGeometry | None = None) -> SonarReturns:
     """One update of a sonar: the beams at `angles` (rad, in the scan plane), cast from the
     true pose against the true world, expressed with the estimated pose.
 
     Args:
         caster: ray caster of the true world.
         model: mount, range, beam width, grazing limit and noise.
-        angles: (n,) beam angles, rad.
+        angles: (n,) beam angles, rad (ignored when `geometry` is given).
         true_state, estimated_state: 12-vectors.
         rng: generator for the noise (required if model.noise is enabled).
+        geometry: `beam_geometry(model, angles)`, precomputed by callers that repeat angles.
     """
-    angles = np.asarray(angles, dtype=float).ravel()
+    g = geometry if geometry is not None else beam_geometry(model, angles)
     p_wb, r_wb = pose(true_state)
     p_nb, r_nb = pose(estimated_state)
     mount = model.mount
-    d_s = np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
-    d_b = d_s @ mount.rotation.T
     origin_w = p_wb + r_wb @ mount.position
-    rays_b = _beam_rays(d_s, 0.5 * model.beam_width) @ mount.rotation.T  # (n, m, 3)
-    n, m = rays_b.shape[:2]
-    rays_w = (rays_b @ r_wb.T).reshape(-1, 3)
-    hits = caster.cast(origin_w, rays_w, model.max_range)
-    ranges = hits.ranges
-    hit = hits.faces >= 0
-    cos_inc = np.zeros(len(ranges))
-    cos_inc[hit] = np.abs(np.einsum("ij,ij->i", caster.face_normals[hits.faces[hit]],
-                                    rays_w[hit]))
-    ranges = np.where(cos_inc >= np.cos(model.max_incidence) - 1e-12, ranges, np.nan)
-    ranges = ranges.reshape(n, m)
-    with np.errstate(invalid="ignore"):
-        ranges = np.where(np.isnan(ranges).all(axis=1), np.nan,
-                          np.nanmin(np.where(np.isnan(ranges), np.inf, ranges), axis=1))
+    rays_w = g.rays_body @ r_wb.T
+    ranges, faces = caster.cast_unit(origin_w, rays_w, model.max_range)
+    # Grazing beams scatter away: no echo beyond max_incidence from the normal.
+    cos_inc = np.abs(np.einsum("ij,ij->i", caster.face_normals[np.maximum(faces, 0)], rays_w))
+    ranges[cos_inc < np.cos(model.max_incidence) - 1e-12] = np.nan
+    if g.rays_per_beam > 1:  # the nearest echo inside the beam (fmin skips NaN)
+        ranges = np.fmin.reduce(ranges.reshape(-1, g.rays_per_beam), axis=1)
+    d_b = g.directions_body
     if model.noise.enabled:
         if rng is None:
             raise ValueError("scan: a seeded rng is required when noise is enabled")
@@ -182,7 +199,7 @@ def scan(caster: RayCaster, model: SonarModel, angles: np.ndarray, true_state,
     return SonarReturns(
         time=float(time),
         origin_nav=p_nb + r_nb @ mount.position,
-        angles=angles,
+        angles=g.angles,
         ranges=ranges,
         directions_nav=d_b @ r_nb.T,
         points_nav=p_nb + points_b @ r_nb.T,

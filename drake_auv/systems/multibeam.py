@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_auv.sensors.noise import SonarNoise
-from drake_auv.sensors.sonar import SonarModel, SonarMount, fan_angles
+from drake_auv.sensors.sonar import SonarModel, SonarMount, beam_geometry, fan_angles
 from drake_auv.systems.sonar import RangeSonar
 
 
@@ -46,7 +46,11 @@ class MultibeamSonar(RangeSonar):
         model = SonarModel(mount, max_range=max_range, beam_width=np.radians(beam_width_deg),
                            max_incidence=np.radians(max_incidence_deg),
                            noise=noise if noise is not None else SonarNoise())
+        self._geometry = beam_geometry(model, self.angles)
         super().__init__(world, model, 1.0 / rate, seed)
 
     def update_angles(self, n: int) -> np.ndarray:
         return self.angles
+
+    def update_geometry(self, n: int):
+        return self._geometry

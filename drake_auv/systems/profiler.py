@@ -61,9 +61,29 @@ class PencilBeamProfiler(RangeSonar):
         self.sector = (np.radians(lo), np.radians(hi))
         self.step = np.radians(step_deg)
         self.pings_per_update = ping_rate / update_rate
+        # The head repeats after `cycle` pings (a turn, or there and back over a sector); the
+        # beams of a batch depend only on its first ping modulo the cycle, so cache them.
+        width = self.sector[1] - self.sector[0]
+        cycle = (2 * np.pi if width >= 2 * np.pi - 1e-9 else 2 * width) / self.step
+        self._cycle = int(round(cycle)) if abs(cycle - round(cycle)) < 1e-6 else None
+        self._geometry_cache = {}
         super().__init__(world, model, 1.0 / update_rate, seed)
 
-    def update_angles(self, n: int) -> np.ndarray:
+    def _ping_range(self, n: int) -> tuple[int, int]:
         first = int(np.floor(n * self.pings_per_update + 1e-9))
-        last = int(np.floor((n + 1) * self.pings_per_update + 1e-9))
+        return first, int(np.floor((n + 1) * self.pings_per_update + 1e-9))
+
+    def update_angles(self, n: int) -> np.ndarray:
+        first, last = self._ping_range(n)
         return head_angles(np.arange(first, last), self.sector, self.step)
+
+    def update_geometry(self, n: int):
+        if self._cycle is None:
+            return super().update_geometry(n)
+        first, last = self._ping_range(n)
+        key = (first % self._cycle, last - first)
+        geometry = self._geometry_cache.get(key)
+        if geometry is None:
+            geometry = super().update_geometry(n)
+            self._geometry_cache[key] = geometry
+        return geometry

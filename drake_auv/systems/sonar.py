@@ -16,7 +16,7 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.sensors.returns import SonarReturns
-from drake_auv.sensors.sonar import SonarModel, scan
+from drake_auv.sensors.sonar import BeamGeometry, SonarModel, beam_geometry, scan
 
 STATE_SIZE = 12
 
@@ -52,11 +52,15 @@ class RangeSonar(LeafSystem):
         """Beam angles (rad, scan plane) fired by update n."""
         raise NotImplementedError
 
+    def update_geometry(self, n: int) -> BeamGeometry:
+        """Body-frame beams of update n (subclasses with fixed beams cache this)."""
+        return beam_geometry(self.model, self.update_angles(n))
+
     def _update_returns(self, context, state):
         n = context.get_abstract_state(self._returns_index).get_value().sequence
         rng = np.random.default_rng([self.seed, n]) if self.model.noise.enabled else None
-        returns = scan(self.caster, self.model, self.update_angles(n),
-                       self.true_state_input.Eval(context),
-                       self.estimated_state_input.Eval(context),
-                       rng=rng, time=context.get_time(), sequence=n + 1)
+        returns = scan(self.caster, self.model, None, self.true_state_input.Eval(context),
+                       self.estimated_state_input.Eval(context), rng=rng,
+                       time=context.get_time(), sequence=n + 1,
+                       geometry=self.update_geometry(n))
         state.get_mutable_abstract_state(self._returns_index).set_value(returns)
