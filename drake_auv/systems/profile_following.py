@@ -73,7 +73,8 @@ class ProfileFollowingController(LeafSystem):
             "profile", PROFILE_SIZE, self._calc_profile, prerequisites_of_calc={self.xd_ticket()})
 
     def follower(self, context):
-        """The follower held in `context` (its map, turn count, ...), for inspection."""
+        """The follower (its map, turn count, ...) held in this system's own `context`
+        (from a diagram's context: `GetMyContextFromRoot`), for inspection."""
         return context.get_abstract_state(self._follower_index).get_value()
 
     def _update_reference(self, context, state):
