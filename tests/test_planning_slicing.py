@@ -11,9 +11,9 @@ from drake_auv.terrain.bathymetry import Bathymetry
 S = 0.7  # slope of the test plane z = S x
 
 
-def _plane(spacing=0.5):
-    x = np.arange(0, 40.0 + spacing / 2, spacing)
-    y = np.arange(0, 30.0 + spacing / 2, spacing)
+def _plane(spacing=0.5, scale=1.0):
+    x = np.arange(0, 40.0 * scale + spacing / 2, spacing)
+    y = np.arange(0, 30.0 * scale + spacing / 2, spacing)
     xx, _ = np.meshgrid(x, y)
     return Bathymetry(-60.0 + S * xx, (spacing, spacing))
 
@@ -32,14 +32,22 @@ def test_distance_to_a_plane_is_the_perpendicular_distance():
     assert np.all(d >= true - 1e-9) and np.all(d <= true + delta ** 2 / (2 * true) + 1e-9)
 
 
-def test_enforce_clearance_pushes_out_along_the_normal():
-    surface = TerrainSurface(_plane())
-    p = np.array([[20.0, 15.0, -60.0 + S * 20.0 + 1.0], [22.0, 15.0, -60.0 + S * 22.0 + 5.0]])
-    out = surface.enforce_clearance(p, 2.0)
+@pytest.mark.parametrize("spacing, omega", [(0.5, 2.0), (0.25, 2.0), (1.0, 1.0), (2.0, 20.0)])
+def test_enforce_clearance_lifts_just_enough(spacing, omega):
+    scale = max(1.0, omega / 2.0)  # keep the points a few omega from the grid's edges
+    surface = TerrainSurface(_plane(spacing, scale))
+    rng = np.random.default_rng(1)
+    p = np.column_stack([rng.uniform(15, 25, 300) * scale, rng.uniform(12, 18, 300) * scale,
+                         np.zeros(300)])
+    p[:, 2] = -60.0 + S * p[:, 0] + rng.uniform(0.0, 3.0 * omega, 300)
+    out = surface.enforce_clearance(p, omega)
     n = np.array([-S, 0.0, 1.0]) / np.hypot(S, 1.0)
-    d_true = (out - np.array([0.0, 0.0, -60.0])) @ n  # signed distance to the plane
-    assert d_true[0] >= 2.0 - 1e-9 and d_true[0] < 2.1
-    np.testing.assert_allclose(out[1], p[1])  # far enough already: untouched
+    d_true = (out - np.array([0.0, 0.0, -60.0])) @ n  # distance to the plane
+    assert d_true.min() >= omega - 1e-9
+    moved = np.any(out != p, axis=1)
+    np.testing.assert_array_equal(out[:, :2], p[:, :2])  # only lifted
+    # Conservative but not wasteful: a lifted point ends within 25 % of omega of the bound.
+    assert d_true[moved].max() <= 1.25 * omega
 
 
 def test_raycast_hits_the_plane():

@@ -32,7 +32,7 @@ class CoveragePlan:
     Attributes:
         bathy: the bathymetry the plan was made on (cropped to the ROI).
         path: combined path, labels "planar", "slice" and "transit".
-        lawnmower: the baseline, labels "lawnmower" and "transit".
+        lawnmower: the baseline, labels "lawnmower" and "transit" (None if not asked for).
         labels: the terrain classification.
         cells: boustrophedon decomposition of the planar area.
         contours: slicing contour pieces in visiting order.
@@ -44,7 +44,7 @@ class CoveragePlan:
 
     bathy: Bathymetry
     path: Path
-    lawnmower: Path
+    lawnmower: Path | None
     labels: TerrainLabels
     cells: Decomposition
     contours: list[Contour]
@@ -75,8 +75,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                   sweep_angle_deg: float | None = None, slice_spacing: float | None = None,
                   closing_radius: float | None = None, opening_radius: float | None = None,
                   min_area: float | None = None, sample_spacing: float | None = None,
-                  sensor_range: float | None = None, compute_metrics: bool = True,
-                  progress: bool = False) -> CoveragePlan:
+                  sensor_range: float | None = None, baseline: bool = True,
+                  compute_metrics: bool = True, progress: bool = False) -> CoveragePlan:
     """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) at offset `omega`.
 
     Args:
@@ -91,7 +91,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         closing_radius, opening_radius, min_area: classification clean-up (see `classify`).
         sample_spacing: largest distance between path samples, m (default Omega / 4).
         sensor_range: largest range at which the sensor sees, m (default 2 Omega), for metrics.
-        compute_metrics: compute `PlanMetrics` for the path and the lawnmower.
+        baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
+        compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
         progress: show a tqdm bar over the stages.
     """
     from tqdm import tqdm
@@ -158,8 +159,10 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
             contours_done.append(c)
     bar.update()
     path = route.build()
-    lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=aperture_deg, overlap=overlap,
-                          sample_spacing=ds, surface=surface)
+    lawn = None
+    if baseline:
+        lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=aperture_deg, overlap=overlap,
+                              sample_spacing=ds, surface=surface)
     bar.update()
     params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
                   slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
@@ -168,7 +171,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                         None, surface)
     bar.close()
-    if compute_metrics:
+    if compute_metrics and baseline:
         from drake_auv.planning.metrics import evaluate_plan
 
         plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,

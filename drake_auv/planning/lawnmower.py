@@ -4,8 +4,8 @@ Parallel lanes over every valid cell regardless of slope, at altitude Omega (ver
 DVL-altitude-keeping survey flies), down-looking sensor, the same lane spacing as the coverage
 planner. Lanes run along the direction with the fewest turns unless `sweep_angle_deg` is given.
 With `enforce_clearance` (default) samples closer than Omega to the surface (steep ground makes
-the perpendicular distance shorter than the altitude) are pushed out, as the vehicle's safety
-layer would.
+the perpendicular distance shorter than the altitude) are lifted, as the vehicle's safety layer
+would.
 """
 
 from __future__ import annotations

@@ -1,9 +1,10 @@
 """Assembling a `Path` from coverage pieces: terrain-following legs, transits, clearance.
 
 A transit is the straight line between two pieces, lifted where needed to at least Omega above
-the terrain below it; after assembly every sample closer than Omega to the surface (3D distance,
-not just altitude) is pushed away from it (`TerrainSurface.enforce_clearance`). Samples are at
-most `sample_spacing` apart, so the clearance holds along the segments to within that spacing.
+the terrain below it; after assembly every sample is kept over the grid and lifted where it is
+closer than Omega to the surface (3D distance, not just altitude:
+`TerrainSurface.enforce_clearance`). Samples are at most `sample_spacing` apart, so the clearance
+holds along the segments to within that spacing.
 """
 
 from __future__ import annotations

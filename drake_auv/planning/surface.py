@@ -60,6 +60,7 @@ class TerrainSurface:
             raise ValueError(f"distance_resolution must be > 0 m, got {distance_resolution}")
         self._tree = None
         self._tree_points = None
+        self._safe = {}
 
     # -- pointwise queries -------------------------------------------------------------------
     def elevation(self, x, y) -> np.ndarray:
@@ -84,13 +85,10 @@ class TerrainSurface:
 
     # -- distance ------------------------------------------------------------------------------
     def _build_tree(self):
-        ny, nx = self.z.shape
         fx = max(1, int(np.ceil(self.spacing[0] / self.distance_resolution)))
         fy = max(1, int(np.ceil(self.spacing[1] / self.distance_resolution)))
-        xs = self.origin[0] + self.spacing[0] * np.linspace(0, nx - 1, (nx - 1) * fx + 1)
-        ys = self.origin[1] + self.spacing[1] * np.linspace(0, ny - 1, (ny - 1) * fy + 1)
+        xs, ys, zz = self._dense_grid(fx, fy)
         xx, yy = np.meshgrid(xs, ys)
-        zz = self.elevation(xx, yy) if (fx > 1 or fy > 1) else self.z
         self._tree_points = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
         self._tree = cKDTree(self._tree_points, balanced_tree=False)
         # On the surface the samples are further apart than in plan view, by up to
@@ -129,32 +127,80 @@ class TerrainSurface:
         out[:, 1] = np.clip(out[:, 1], ymin, ymax)
         return out
 
-    def enforce_clearance(self, points: np.ndarray, omega: float, iterations: int = 6) -> np.ndarray:
-        """Keeps points over the grid and at least `omega` from the surface: a point too close
-        moves straight away from its nearest surface sample (clamped back over the grid), and
-        any still too close is then lifted vertically."""
+    def _dense_grid(self, factor_x: int, factor_y: int):
+        """The bilinear surface sampled `factor` times finer than the grid: (xs, ys, z)."""
+        ny, nx = self.z.shape
+        xs = self.origin[0] + self.spacing[0] * np.linspace(0, nx - 1, (nx - 1) * factor_x + 1)
+        ys = self.origin[1] + self.spacing[1] * np.linspace(0, ny - 1, (ny - 1) * factor_y + 1)
+        if factor_x == 1 and factor_y == 1:
+            return xs, ys, self.z
+        xx, yy = np.meshgrid(xs, ys)
+        return xs, ys, self.elevation(xx, yy)
+
+    def _clearance_samples(self, omega: float):
+        """Surface samples about every omega / 4 for clearance: bilinear refinement of a coarse
+        grid or block maxima (at block centres) of a fine one. Returns (z, origin, spacing,
+        block_radius, target): `block_radius` bounds how far a block's own samples lie from
+        its centre, `target` adds the sampled-versus-true surface margin to omega. Cached."""
+        key = float(omega)
+        if key in self._safe:
+            return self._safe[key]
+        h = omega / 4.0
+        dx, dy = self.spacing
+        ux, uy = max(1, int(np.ceil(dx / h))), max(1, int(np.ceil(dy / h)))
+        _, _, z = self._dense_grid(ux, uy)
+        sx, sy = dx / ux, dy / uy
+        f = max(1, int(np.floor(h / max(sx, sy))))
+        if f > 1:
+            pad = ((0, (-z.shape[0]) % f), (0, (-z.shape[1]) % f))
+            zp = np.pad(z, pad, mode="edge")
+            z = zp.reshape(zp.shape[0] // f, f, zp.shape[1] // f, f).max(axis=(1, 3))
+        stretch = np.sqrt(1.0 + float(np.max(self.gx ** 2 + self.gy ** 2)))
+        target = float(np.hypot(omega, 0.5 * np.hypot(sx, sy) * stretch))
+        origin = self.origin + 0.5 * (f - 1) * np.array([sx, sy])
+        block_radius = 0.5 * np.hypot((f - 1) * sx, (f - 1) * sy)
+        self._safe[key] = (z, origin, np.array([f * sx, f * sy]), block_radius, target)
+        return self._safe[key]
+
+    def safe_elevation_at(self, x, y, omega: float, chunk: int = 8192) -> np.ndarray:
+        """(N,) lowest elevation at which a point above (x, y) is at least `omega` from the
+        surface: the highest point of the hemispheres of radius omega (plus the sampling
+        margins) standing on the surface samples around it."""
+        z, origin, (cx, cy), block_radius, target = self._clearance_samples(omega)
+        reach = target + block_radius + 0.5 * np.hypot(cx, cy)
+        ni, nj = int(np.ceil(reach / cy)), int(np.ceil(reach / cx))
+        oi, oj = np.mgrid[-ni:ni + 1, -nj:nj + 1]
+        keep = np.hypot(oi * cy, oj * cx) <= reach
+        oi, oj = oi[keep], oj[keep]
+        zpad = np.pad(z, ((ni, ni), (nj, nj)), mode="edge")  # beyond the grid: its edge
+        flat_offsets = (oi * zpad.shape[1] + oj)[None, :]
+        off_x, off_y = (oj * cx)[None, :], (oi * cy)[None, :]
+        x = np.asarray(x, dtype=float)
+        y = np.asarray(y, dtype=float)
+        out = np.empty(len(x))
+        ny, nx = z.shape
+        for k in range(0, len(x), chunk):
+            fj = (x[k:k + chunk] - origin[0]) / cx
+            fi = (y[k:k + chunk] - origin[1]) / cy
+            j0 = np.clip(np.rint(fj).astype(int), 0, nx - 1)
+            i0 = np.clip(np.rint(fi).astype(int), 0, ny - 1)
+            ex = ((fj - j0) * cx)[:, None]  # offset of the point from its nearest node
+            ey = ((fi - i0) * cy)[:, None]
+            r2 = (ex - off_x) ** 2 + (ey - off_y) ** 2
+            if block_radius > 0:
+                r2 = np.maximum(np.sqrt(r2) - block_radius, 0.0) ** 2
+            left = target ** 2 - r2
+            height = np.where(left >= 0, np.sqrt(np.maximum(left, 0.0)), -np.inf)
+            base = ((i0 + ni) * zpad.shape[1] + (j0 + nj))[:, None]
+            out[k:k + chunk] = (np.take(zpad, base + flat_offsets) + height).max(axis=1)
+        return out
+
+    def enforce_clearance(self, points: np.ndarray, omega: float) -> np.ndarray:
+        """Points kept over the grid (x, y clamped to its extent) and lifted vertically where
+        needed to be at least `omega` from the surface (`safe_elevation_at`)."""
         points = self.clamp_to_grid(points)
-        target = self.clearance_target(omega)
-        todo = np.arange(len(points))
-        for _ in range(iterations):
-            d, q = self.distance(points[todo], upper_bound=target)
-            close = d < target - 1e-9
-            if not close.any():
-                return points
-            todo, d, q = todo[close], d[close], q[close]
-            away = points[todo] - q
-            norm = np.linalg.norm(away, axis=1)
-            away = np.where(norm[:, None] > 1e-9, away / np.maximum(norm, 1e-12)[:, None],
-                            np.array([0.0, 0.0, 1.0]))
-            away[away[:, 2] < 0] *= -1.0  # a point under the height field goes out through the top
-            points[todo] = self.clamp_to_grid(q + away * (target + 1e-6))
-        for _ in range(50):
-            d, _ = self.distance(points[todo], upper_bound=target)
-            close = d < target - 1e-9
-            if not close.any():
-                break
-            todo = todo[close]
-            points[todo, 2] += target - d[close] + 1e-3
+        points[:, 2] = np.maximum(points[:, 2],
+                                  self.safe_elevation_at(points[:, 0], points[:, 1], omega))
         return points
 
     # -- rays ----------------------------------------------------------------------------------
