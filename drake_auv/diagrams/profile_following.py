@@ -10,6 +10,7 @@ horizontal plane (horizontal following) or the body x-z plane (vertical followin
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -66,7 +67,8 @@ def build_profile_following_diagram(world, initial_state, mode: str = "horizonta
         world: the true world (trimesh) or a `RayCaster` of it.
         initial_state: 12-state at t = 0.
         mode: "horizontal" or "vertical".
-        params: following behaviours (`FollowingParams`).
+        params: following behaviours (`FollowingParams`); a zero `warmup` is replaced by the
+            time the profiler head takes to scan its sector once.
         noise: profiler errors, e.g. `SonarNoise(spurious_prob=0.05)` (default: none).
         navigation: navigation error model (default: exact).
         profiler_options: overrides of `PROFILER_DEFAULTS` (keyword arguments of
@@ -92,6 +94,11 @@ def build_profile_following_diagram(world, initial_state, mode: str = "horizonta
         raise ValueError(f"profiler_options: unknown option(s) {sorted(unknown)}; allowed: "
                          f"{sorted(PROFILER_DEFAULTS) + ['max_incidence_deg', 'mount_position']}")
     caster = world if isinstance(world, RayCaster) else RayCaster(world)
+    params = params if params is not None else FollowingParams()
+    if params.warmup == 0.0:  # hold still until the head has scanned its sector once
+        lo, hi = options["sector_deg"]
+        params = dataclasses.replace(
+            params, warmup=float(hi - lo) / options["step_deg"] / options["ping_rate"])
 
     builder = DiagramBuilder()
     vehicle = add_girona500(builder, navigation=navigation, initial_state=initial_state,

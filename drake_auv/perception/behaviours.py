@@ -49,6 +49,9 @@ class FollowingParams:
     yaw_accel: maximum change of that rate, rad/s^2.
     plane_band: half-thickness of the map slice taken around the scan plane, m.
     search_speed: speed straight ahead while no profile is seen, m/s.
+    warmup: s; while no profile is seen during the first `warmup` seconds the vehicle holds
+        still, so that it does not run into a profile the scanning head has not reached yet
+        (set it to the time of one scan of the head).
     turn_threshold: vertical mode, turn when the motion's horizontal component is below
         -turn_threshold times the heading (a cosine, in (0, 1)).
     turn_tolerance: vertical mode, the advance waits while the yaw error exceeds this, rad.
@@ -68,6 +71,7 @@ class FollowingParams:
     yaw_accel: float = np.radians(5.0)
     plane_band: float = 0.5
     search_speed: float = 0.3
+    warmup: float = 0.0
     turn_threshold: float = 0.5
     turn_tolerance: float = np.radians(20.0)
     corner_weight: float = 0.0
@@ -84,6 +88,8 @@ class FollowingParams:
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"FollowingParams.{name} must be a finite number > 0, got {value}")
+        if not (np.isfinite(self.warmup) and self.warmup >= 0):
+            raise ValueError(f"FollowingParams.warmup must be >= 0 s, got {self.warmup}")
         if not (np.isfinite(self.search_speed) and self.search_speed >= 0):
             raise ValueError(f"FollowingParams.search_speed must be >= 0 m/s, got {self.search_speed}")
         if self.side not in (1, -1):
@@ -138,6 +144,7 @@ class _Follower:
         self.yaw_ref = None
         self.yaw_rate_ref = 0.0
         self.time = None
+        self.start_time = None
         self.look = None
         self.normal = None
 
@@ -149,10 +156,16 @@ class _Follower:
         if dt < 0:
             raise ValueError(f"follower updates must go forward in time: {time} < {self.time}")
         self.time = time
+        if self.start_time is None:
+            self.start_time = time
         if self.yaw_ref is None:
             self.yaw_ref = float(state[5])
         self.map.add(points_nav, time)
         return state, dt
+
+    def _search_speed(self) -> float:
+        """Speed of the search behaviour: zero during the warm-up."""
+        return 0.0 if self.time - self.start_time < self.params.warmup else self.params.search_speed
 
     def _steer_yaw(self, target, dt):
         """Moves the yaw reference towards `target` with a rate bounded by `yaw_rate` and
@@ -210,7 +223,7 @@ class HorizontalFollower(_Follower):
         if estimate is None:
             heading = np.array([np.cos(self.yaw_ref), np.sin(self.yaw_ref)])
             reference[:2] = position[:2]
-            reference[4:6] = self.params.search_speed * heading
+            reference[4:6] = self._search_speed() * heading
             mode = "search"
             yaw_rate = self._steer_yaw(self.yaw_ref, dt)
         else:
@@ -266,7 +279,7 @@ class VerticalFollower(_Follower):
         correction = np.zeros(2)
         velocity = np.zeros(2)
         if estimate is None:
-            velocity = np.array([self.heading_sign * self.params.search_speed, 0.0])
+            velocity = np.array([self.heading_sign * self._search_speed(), 0.0])
             mode = "search"
         else:
             correction, velocity = follow_step(estimate, self.params)

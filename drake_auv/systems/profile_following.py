@@ -68,7 +68,8 @@ class ProfileFollowingController(LeafSystem):
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_reference)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_reference)
         self.reference_output = self.DeclareVectorOutputPort(
-            "reference", 8, self._calc_reference, prerequisites_of_calc={self.xd_ticket()})
+            "reference", 8, self._calc_reference,
+            prerequisites_of_calc={self.xd_ticket(), self.time_ticket()})
         self.profile_output = self.DeclareVectorOutputPort(
             "profile", PROFILE_SIZE, self._calc_profile, prerequisites_of_calc={self.xd_ticket()})
 
