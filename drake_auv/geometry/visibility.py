@@ -50,6 +50,17 @@ class FaceVisibility:
         self._slot = np.full(num_faces, -1, dtype=np.int64)
         self._slot[self.target_index] = np.arange(len(self.target_index))
 
+    def _cone_candidates(self, origin, axis, half: float, max_range: float) -> np.ndarray:
+        """Target slots whose centroid may lie in the cone (half angle `half`, length R): those
+        in its bounding ball, centred R/2 along the axis with radius R sqrt(1/4 + sin^2(half))
+        when half <= 45 deg (about a third of the range ball's volume), else the range ball."""
+        if half <= np.pi / 4:
+            centre = origin + 0.5 * max_range * axis
+            radius = max_range * np.sqrt(0.25 + np.sin(half) ** 2)
+        else:
+            centre, radius = origin, max_range
+        return np.asarray(self._tree.query_ball_point(centre, radius), dtype=np.int64)
+
     def camera(self, origin, axis, aperture: float, max_range: float):
         """Target faces a camera sees: (slots (k,) into the target faces, angles (k,) rad)."""
         origin = np.asarray(origin, dtype=float)
@@ -59,14 +70,15 @@ class FaceVisibility:
             raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
         if not (np.isfinite(max_range) and max_range > 0):
             raise ValueError(f"max_range must be > 0 m, got {max_range}")
-        slots = np.asarray(self._tree.query_ball_point(origin, max_range), dtype=np.int64)
+        slots = self._cone_candidates(origin, axis, 0.5 * aperture, max_range)
         if len(slots) == 0:
             return slots, np.zeros(0)
         v = self.centroids[slots] - origin
         dist = np.linalg.norm(v, axis=1)
         u = v / np.maximum(dist, 1e-12)[:, None]
         normals = self.normals[slots]
-        keep = (u @ axis >= np.cos(0.5 * aperture)) & (np.einsum("ij,ij->i", u, normals) < 0)
+        keep = ((u @ axis >= np.cos(0.5 * aperture)) & (dist <= max_range)
+                & (np.einsum("ij,ij->i", u, normals) < 0))
         slots, u, dist, normals = slots[keep], u[keep], dist[keep], normals[keep]
         if len(slots) == 0:
             return slots, np.zeros(0)

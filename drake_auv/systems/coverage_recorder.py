@@ -37,8 +37,8 @@ class CoverageRecorder(LeafSystem):
     """
 
     def __init__(self, world, target_faces=None, sensor: str = "camera",
-                 aperture_deg: float = 60.0, max_range: float = 10.0, axis_body=(0.0, 0.0, -1.0),
-                 position_body=(0.0, 0.0, 0.0), rate: float = 5.0, num_beams: int = 480,
+                 aperture_deg: float = 60.0, max_range: float = 8.0, axis_body=(0.0, 0.0, -1.0),
+                 position_body=(0.0, 0.0, 0.0), rate: float = 2.0, num_beams: int = 480,
                  fan_deg: float = 120.0, mount: str = "down"):
         super().__init__()
         if sensor not in ("camera", "multibeam"):

@@ -1,0 +1,148 @@
+"""Sensor speed: ray-casting throughput and the cost of the sonars in a 600 s mission.
+
+1. Rays per second of `RayCaster` against a ~100k-face seabed (target >= 1M rays/s).
+2. A 600 s lawnmower (the vehicle benchmark's path, 0.5 m/s, 4 m above a ~100k-face seabed)
+   simulated vehicle-only, with the multibeam (480 beams, 10 Hz) and the pencil-beam profiler
+   (30 pings/s in 10 Hz batches), and with the camera coverage recorder (2 Hz) on top; the
+   wall-time overhead of the sensors over the vehicle-only run (target <= 25 %). Runs are
+   interleaved and the median of RUNS is reported, as the machine is shared.
+3. The cost of one sensor update (pure `scan`), to see where the time goes.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+import timeit
+
+import numpy as np
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import TrajectorySource
+from tqdm import tqdm
+
+from drake_auv.diagrams.vehicle import add_girona500
+from drake_auv.geometry import RayCaster
+from drake_auv.planning import Path
+from drake_auv.sensors import SonarModel, SonarMount, fan_angles, scan
+from drake_auv.sensors.sonar import beam_geometry
+from drake_auv.systems.coverage_recorder import CoverageRecorder
+from drake_auv.systems.multibeam import MultibeamSonar
+from drake_auv.systems.profiler import PencilBeamProfiler
+from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.mesh import bathymetry_to_mesh
+
+SIM_SECONDS = 600.0
+RUNS = 3
+NUM_RAYS = 1_000_000
+
+
+def seabed(cell: float = 0.3) -> Bathymetry:
+    """80 m x 60 m of gentle relief around -14 m under the lawnmower (about 107k faces)."""
+    x = np.arange(-15.0, 65.0 + 1e-9, cell)
+    y = np.arange(-15.0, 45.0 + 1e-9, cell)
+    gx, gy = np.meshgrid(x, y)
+    return Bathymetry(-14.0 + np.sin(gx / 7.0) * np.cos(gy / 5.0), (cell, cell), (-15.0, -15.0))
+
+
+def lawnmower() -> Path:
+    """The vehicle benchmark's path: lanes of 50 m, 5 m apart, at -10 m."""
+    points = []
+    for i in range(7):
+        xs = (0.0, 50.0) if i % 2 == 0 else (50.0, 0.0)
+        points += [(xs[0], 5.0 * i, -10.0), (xs[1], 5.0 * i, -10.0)]
+    return Path(np.array(points), 0.0, (0.0, 0.0, -1.0)).resample(1.0)
+
+
+def ray_throughput(caster: RayCaster, bathy: Bathymetry) -> dict[str, float]:
+    rng = np.random.default_rng(0)
+    xmin, xmax, ymin, ymax = bathy.extent
+    xy = np.column_stack([rng.uniform(xmin, xmax, NUM_RAYS), rng.uniform(ymin, ymax, NUM_RAYS)])
+    origins = np.column_stack([xy, bathy.elevation_at(xy[:, 0], xy[:, 1])
+                               + rng.uniform(1.0, 15.0, NUM_RAYS)])
+    d = rng.normal(size=(NUM_RAYS, 3))
+    d[:, 2] = -np.abs(d[:, 2])
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    out = {}
+    for label, call in (("cast (checked, with points)", lambda: caster.cast(origins, d, 20.0)),
+                        ("cast_unit (fast path)", lambda: caster.cast_unit(origins, d, 20.0))):
+        best = min(timeit.repeat(call, number=1, repeat=3))
+        out[label] = NUM_RAYS / best
+    hits = caster.cast(origins, d, 20.0)
+    out["hit share"] = float(np.mean(hits.faces >= 0))
+    return out
+
+
+def mission_seconds(caster: RayCaster, sensors: tuple[str, ...]) -> float:
+    path = lawnmower()
+    builder = DiagramBuilder()
+    start = np.zeros(12)
+    start[:3] = path.points[0]
+    vehicle = add_girona500(builder, initial_state=start)
+    source = builder.AddNamedSystem("reference", TrajectorySource(path.to_trajectory(0.5), 1))
+    builder.Connect(source.get_output_port(), vehicle.tracker.reference_input)
+    true_state = vehicle.dynamics.state_output
+    estimated = vehicle.navigation.estimated_state_output
+    if "sonars" in sensors:
+        for name, sonar in (("multibeam", MultibeamSonar(caster)),
+                            ("profiler", PencilBeamProfiler(caster, scan_plane="vertical"))):
+            builder.AddNamedSystem(name, sonar)
+            builder.Connect(true_state, sonar.true_state_input)
+            builder.Connect(estimated, sonar.estimated_state_input)
+    if "camera" in sensors:
+        recorder = builder.AddNamedSystem("coverage", CoverageRecorder(caster))
+        builder.Connect(true_state, recorder.true_state_input)
+    simulator = Simulator(builder.Build())
+    simulator.Initialize()
+    start_time = time.perf_counter()
+    simulator.AdvanceTo(SIM_SECONDS)
+    return time.perf_counter() - start_time
+
+
+def update_costs(caster: RayCaster) -> dict[str, float]:
+    state = np.zeros(12)
+    state[:3] = 20.0, 10.0, -10.0
+    multibeam = SonarModel(SonarMount.named("down"))
+    mb_geometry = beam_geometry(multibeam, fan_angles(480, np.radians(120)))
+    profiler = PencilBeamProfiler(caster, scan_plane="vertical")
+    pr_geometry = profiler.update_geometry(5)
+    n = 2000
+    cost = {}
+    for label, call in (
+            ("multibeam scan (480 beams)",
+             lambda: scan(caster, multibeam, None, state, state, geometry=mb_geometry)),
+            ("  of which embree (480 rays)",
+             lambda: caster.cast_unit(state[:3], mb_geometry.rays_body, 20.0)),
+            ("profiler scan (3 pings x 7 rays)",
+             lambda: scan(caster, profiler.model, None, state, state, geometry=pr_geometry))):
+        cost[label] = min(timeit.repeat(call, number=n, repeat=3)) / n * 1e6
+    return cost
+
+
+def main() -> None:
+    bathy = seabed()
+    t0 = time.perf_counter()
+    world = bathymetry_to_mesh(bathy)
+    caster = RayCaster(world)
+    print(f"world: {len(world.faces)} faces; mesh + embree scene built in "
+          f"{time.perf_counter() - t0:.2f} s")
+    for label, value in ray_throughput(caster, bathy).items():
+        print(f"  {label}: {value:,.3f}" if label == "hit share" else
+              f"  {label}: {value / 1e6:.2f} M rays/s (target >= 1 M)")
+    configs = {"vehicle only": (), "+ multibeam + profiler": ("sonars",),
+               "+ sonars + camera coverage": ("sonars", "camera")}
+    times = {name: [] for name in configs}
+    for _ in tqdm(range(RUNS), desc="600 s missions"):
+        for name, sensors in configs.items():
+            times[name].append(mission_seconds(caster, sensors))
+    base = statistics.median(times["vehicle only"])
+    for name, values in times.items():
+        med = statistics.median(values)
+        print(f"  {name}: {med:.2f} s wall (min {min(values):.2f}, max {max(values):.2f}), "
+              f"{SIM_SECONDS / med:.0f}x real time, overhead {100 * (med / base - 1):+.0f} %")
+    for label, us in update_costs(caster).items():
+        print(f"  {label}: {us:.0f} us")
+
+
+if __name__ == "__main__":
+    main()
