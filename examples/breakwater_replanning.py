@@ -45,11 +45,12 @@ VEHICLE_RADIUS = 1.0  # m, GIRONA 500 half-length, the contact threshold
 
 
 def nominal_contour(prior, depth: float, omega: float, block_size: float, start,
-                    spacing: float = 1.0) -> Path:
+                    spacing: float = 1.0, overrun: float = 5.0) -> Path:
     """The nominal path planned on the prior map: the offset-Omega contour, at `depth`, of the
-    cross-section of the structure, kept around the right-most block (x beyond its west face),
-    flown counter-clockwise (structure to port) from the end nearest `start`, which is
-    prepended (the transit from the start)."""
+    cross-section of the structure, kept around the right-most block (x beyond its west face
+    less `overrun`, m: the largest expected map error, so both side faces are flown past their
+    ends wherever the error puts the block), flown counter-clockwise (structure to port),
+    with `start` prepended (the transit from the start)."""
     solid = np.nan_to_num(prior.z, nan=-np.inf) > -depth
     if not solid.any():
         raise ValueError(f"the prior map has no structure above {depth} m depth")
@@ -60,7 +61,7 @@ def nominal_contour(prior, depth: float, omega: float, block_size: float, start,
     line = max(lines, key=len)
     xs = prior.x[np.nonzero(solid.any(axis=0))[0]]
     west = xs.max() + 0.5 * cell - block_size  # the right-most block's west face
-    keep = line[:, 0] >= west - 1.0
+    keep = line[:, 0] >= west - overrun
     # The kept part is one arc of the loop: roll the loop so it is contiguous.
     if np.allclose(line[0], line[-1]):
         line = line[:-1]

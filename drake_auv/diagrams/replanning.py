@@ -44,8 +44,8 @@ class ReplanningHandles:
     mapper: OctreeMapper
     replanner: Replanner | None  # None when replanning is off
     source: TrajectorySource | None  # the nominal path's source when replanning is off
-    camera_coverage: CoverageRecorder  # side-looking camera on the true world
-    multibeam_coverage: CoverageRecorder  # the payload multibeam's fan on the true world
+    camera_coverage: CoverageRecorder | None  # side-looking camera on the true world
+    multibeam_coverage: CoverageRecorder | None  # the payload multibeam's fan, true world
     state_log: VectorLogSink  # true state
     estimated_log: VectorLogSink
     reference_log: VectorLogSink
@@ -59,7 +59,8 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
                              multibeam_mount: str = "port", multibeam_stride: int = 2,
                              heading_offset: float = 0.0, replanning_period: float = 1.0,
                              log_period: float = 0.1, seed: int = 0, scene=None,
-                             target_faces=None, camera_range: float = 8.0):
+                             coverage: bool = True, target_faces=None,
+                             camera_range: float = 8.0):
     """Builds the mission Diagram; returns (diagram, ReplanningHandles).
 
     Args:
@@ -81,6 +82,7 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
         seed: seed of the sonars' noise and STOMP.
         scene: an optional `drake_auv.visualization.scene.Scene` to draw the vehicle and the
             octree map (redrawn every 5 s) in.
+        coverage: add the coverage recorders (off for timing the mission without them).
         target_faces: (F,) bool mask of the world's faces whose coverage is recorded.
         camera_range: range of the payload camera (60 degrees, looking to the multibeam's
             side), m: the water visibility.
@@ -117,16 +119,18 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
                                         TrajectorySource(nominal.to_trajectory(speed), 1))
         reference = source.get_output_port()
     builder.Connect(reference, vehicle.tracker.reference_input)
-    side = {"port": (0.0, 1.0, 0.0), "starboard": (0.0, -1.0, 0.0), "down": (0.0, 0.0, -1.0),
-            "forward": (1.0, 0.0, 0.0)}[multibeam_mount]
-    camera_coverage = builder.AddNamedSystem("camera_coverage", CoverageRecorder(
-        caster, target_faces, sensor="camera", aperture_deg=60.0, max_range=camera_range,
-        axis_body=side, rate=2.0))
-    multibeam_coverage = builder.AddNamedSystem("multibeam_coverage", CoverageRecorder(
-        caster, target_faces, sensor="multibeam", max_range=max_range, mount=multibeam_mount,
-        rate=2.0))
-    for recorder in (camera_coverage, multibeam_coverage):
-        builder.Connect(true_state, recorder.true_state_input)
+    camera_coverage = multibeam_coverage = None
+    if coverage:
+        side = {"port": (0.0, 1.0, 0.0), "starboard": (0.0, -1.0, 0.0),
+                "down": (0.0, 0.0, -1.0), "forward": (1.0, 0.0, 0.0)}[multibeam_mount]
+        camera_coverage = builder.AddNamedSystem("camera_coverage", CoverageRecorder(
+            caster, target_faces, sensor="camera", aperture_deg=60.0, max_range=camera_range,
+            axis_body=side, rate=2.0))
+        multibeam_coverage = builder.AddNamedSystem("multibeam_coverage", CoverageRecorder(
+            caster, target_faces, sensor="multibeam", max_range=max_range,
+            mount=multibeam_mount, rate=2.0))
+        for recorder in (camera_coverage, multibeam_coverage):
+            builder.Connect(true_state, recorder.true_state_input)
     state_log = builder.AddNamedSystem("state_log", VectorLogSink(STATE_SIZE, log_period))
     builder.Connect(true_state, state_log.get_input_port())
     estimated_log = builder.AddNamedSystem("estimated_log", VectorLogSink(STATE_SIZE, log_period))

@@ -50,7 +50,8 @@ class ReplanningStep:
     """One entry of `Replanner.log`."""
 
     time: float
-    wall_time: float
+    wall_time: float  # s, the whole step: map query plus section and STOMP
+    query_time: float  # s, of which the map query (occupied voxels, rebuilt if changed)
     next_index: int
     plan: SectionPlan | None
 
@@ -118,10 +119,11 @@ class Replanner(LeafSystem):
         handle = self.map_input.Eval(context) if self.map_input.HasValue(context) else None
         start = time.perf_counter()
         occupied = handle.map.occupied_points() if handle is not None else np.zeros((0, 3))
+        query = time.perf_counter() - start
         plan = replan_section(x[:3], self.waypoints, next_index, occupied, self.params,
                               seed=self.seed + current.step)
         wall = time.perf_counter() - start
-        self.log.append(ReplanningStep(t, wall, next_index, plan))
+        self.log.append(ReplanningStep(t, wall, query, next_index, plan))
         if plan is None:  # every waypoint visited: hold the end of the last plan
             new = _ReplannerState(next_index, current.step + 1, None, current.start_time,
                                   current.times, current.samples)
