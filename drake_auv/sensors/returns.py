@@ -9,7 +9,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class SonarReturns:
-    """Returns of n beams, placed with the estimated (navigation) state. Immutable.
+    """Returns of n beams, placed with the estimated (navigation) state. Immutable: the
+    arrays are made read-only (views are copied first), so Drake's state copies share them.
 
     Attributes:
         time: time of the update, s.
@@ -37,7 +38,9 @@ class SonarReturns:
     def __post_init__(self):
         for name in ("origin_nav", "angles", "ranges", "directions_nav", "points_nav",
                      "points_body"):
-            value = np.array(getattr(self, name), dtype=float)
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.flags.writeable and value.base is not None:
+                value = value.copy()  # a view: do not freeze someone else's array
             value.setflags(write=False)
             object.__setattr__(self, name, value)
 
