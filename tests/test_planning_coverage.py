@@ -104,6 +104,30 @@ def test_flat_terrain_gives_a_planar_only_plan():
     assert plan.metrics.total.view_mean_deg == pytest.approx(0.0, abs=1e-6)
 
 
+def test_sweep_angle_parameter_sets_the_lane_direction():
+    bathy = Bathymetry(np.full((61, 41), -30.0), (0.5, 0.5))
+    for angle, axis in ((0.0, 0), (90.0, 1)):
+        plan = plan_coverage(bathy, omega=2.0, sweep_angle_deg=angle, compute_metrics=False)
+        step = np.abs(np.diff(plan.path.points[:, :2], axis=0))
+        along = step[:, axis].sum() / step.sum()
+        assert along > 0.85, (angle, along)
+        assert plan.parameters["sweep_angle_deg"] == pytest.approx(angle)
+
+
+def test_fixed_tilt_sensor_on_the_caldera_rim(caldera_plan):
+    plan = plan_coverage(caldera_site(), omega=2.0, slice_sensor="fixed-tilt")
+    sl = plan.path.labels == "slice"
+    tilt = np.arcsin(-plan.path.sensor_dir[sl, 2])
+    assert np.ptp(tilt) < 1e-9  # one tilt for the region
+    slope = plan.labels.slope[plan.labels.high]
+    assert tilt[0] == pytest.approx(np.pi / 2 - np.arctan(np.median(slope)))
+    m = plan.metrics
+    # Off the normal by the rim's slope variation only, so still far below the lawnmower's.
+    assert caldera_plan.metrics.high_slope.view_mean_deg < m.high_slope.view_mean_deg < 5.0
+    assert m.total.view_mean_deg <= 0.6 * m.lawnmower.view_mean_deg
+    assert m.high_slope.coverage >= 0.98 and m.total.min_clearance >= 1.8
+
+
 def test_steep_everywhere_gives_a_slicing_only_plan():
     yy, xx = np.mgrid[0:61, 0:81] * 0.5
     bathy = Bathymetry(-60.0 + 0.8 * xx + 0.1 * yy, (0.5, 0.5))
@@ -165,7 +189,7 @@ def test_monterey_tiles(tile):
     (dict(overlap=1.0), "overlap"), (dict(slope_threshold=0.0), "slope_threshold"),
     (dict(slope_threshold=-0.5), "slope_threshold"), (dict(slice_spacing=0.0), "slice_spacing"),
     (dict(roi=(1000.0, 1000.0, 1100.0, 1100.0)), "outside the grid"),
-    (dict(sweep_angle_deg=np.inf), "sweep_angle_deg")])
+    (dict(sweep_angle_deg=np.inf), "sweep_angle_deg"), (dict(slice_sensor="up"), "slice_sensor")])
 def test_bad_parameters_are_named(kwargs, match):
     bathy = random_seabed(0, (20, 20), 1.0, 2.0, 4.0)
     with pytest.raises(ValueError, match=match):

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from drake_auv.planning.metrics import viewing_angles
-from drake_auv.planning.slicing import order_contours, slice_levels, slice_region
+from drake_auv.planning.slicing import (fixed_depression, order_contours, sensor_axes,
+                                        slice_levels, slice_region)
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.terrain.bathymetry import Bathymetry
 
@@ -108,3 +109,23 @@ def test_a_cone_slices_into_closed_loops():
         np.testing.assert_allclose(rad, (c.level + 60.0) / 0.8, atol=0.05)
         # Offset into the pit's open water: the path circles inside the contour.
         assert np.all(np.hypot(c.path[:, 0] - 20.0, c.path[:, 1] - 20.0) < rad)
+
+
+def test_fixed_tilt_sensor_sees_a_plane_at_the_slope_mismatch():
+    bathy = _plane()
+    surface = TerrainSurface(bathy)
+    region = np.ones(bathy.shape, dtype=bool)
+    levels = slice_levels(surface, region, np.full(bathy.shape, S), 2.0)[2:4]
+    # Tilt matched to the plane: the axis is the inward normal again.
+    matched = fixed_depression(np.full(10, S))
+    assert matched == pytest.approx(np.pi / 2 - np.arctan(S))
+    n = surface.normal(np.array([20.0]), np.array([15.0]))
+    np.testing.assert_allclose(sensor_axes(n, matched), -n, atol=1e-12)
+    # Tilt matched to a slope of 0.5: seen at arctan(0.7) - arctan(0.5) off the normal, and
+    # from Omega back along the axis.
+    c = slice_region(surface, region, 1, levels, 2.0, 0.5, 2.0,
+                     depression=fixed_depression(np.array([0.5])))[0][0]
+    ang = viewing_angles(surface, c.path, c.sensor_dir, 6.0)
+    np.testing.assert_allclose(ang, np.arctan(S) - np.arctan(0.5), atol=1e-3)
+    np.testing.assert_allclose(np.linalg.norm(c.path - c.surface, axis=1), 2.0)
+    assert np.all(c.sensor_dir[:, 0] > 0)  # facing the wall, which rises towards +x

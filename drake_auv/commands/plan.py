@@ -33,6 +33,9 @@ def add_parser(subparsers) -> None:
                         help="lane direction, degrees from +x (default: fewest lanes)")
     parser.add_argument("--slice-spacing", type=float, default=None,
                         help="vertical spacing of the slicing planes, m (default: footprint)")
+    parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
+                        help="on high-slope regions look along the inward normal (default) or "
+                             "with one fixed tilt per region")
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     parser.add_argument("-o", "--outdir", required=True, help="output directory")
     parser.set_defaults(func=run)
@@ -55,6 +58,7 @@ def run(args) -> int:
     plan = plan_coverage(bathy, roi=roi, omega=args.omega, aperture_deg=args.aperture,
                          overlap=args.overlap, slope_threshold=args.slope_threshold,
                          sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
+                         slice_sensor=args.slice_sensor,
                          progress=True)
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True)
     print(table3_markdown(plan.metrics))

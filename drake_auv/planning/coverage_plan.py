@@ -18,7 +18,8 @@ from drake_auv.planning.boustrophedon import (Decomposition, best_sweep_angle,
 from drake_auv.planning.lawnmower import check_sensor_parameters, lane_spacing, plan_lawnmower
 from drake_auv.planning.path import Path
 from drake_auv.planning.route import RouteBuilder
-from drake_auv.planning.slicing import Contour, order_contours, slice_levels, slice_region
+from drake_auv.planning.slicing import (Contour, fixed_depression, order_contours, slice_levels,
+                                        slice_region)
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.roi import crop_to_roi
@@ -75,7 +76,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                   sweep_angle_deg: float | None = None, slice_spacing: float | None = None,
                   closing_radius: float | None = None, opening_radius: float | None = None,
                   min_area: float | None = None, sample_spacing: float | None = None,
-                  sensor_range: float | None = None, baseline: bool = True,
+                  sensor_range: float | None = None, slice_sensor: str = "normal",
+                  baseline: bool = True,
                   compute_metrics: bool = True, progress: bool = False) -> CoveragePlan:
     """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) at offset `omega`.
 
@@ -91,6 +93,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         closing_radius, opening_radius, min_area: classification clean-up (see `classify`).
         sample_spacing: largest distance between path samples, m (default Omega / 4).
         sensor_range: largest range at which the sensor sees, m (default 2 Omega), for metrics.
+        slice_sensor: on high-slope regions the sensor looks along the inward surface normal
+            ("normal") or keeps one tilt per region matched to its median slope ("fixed-tilt").
         baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
         compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
         progress: show a tqdm bar over the stages.
@@ -104,6 +108,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         raise ValueError(f"slice_spacing must be > 0 m, got {slice_spacing}")
     if sweep_angle_deg is not None and not np.isfinite(sweep_angle_deg):
         raise ValueError(f"sweep_angle_deg must be a finite angle in degrees, got {sweep_angle_deg}")
+    if slice_sensor not in ("normal", "fixed-tilt"):
+        raise ValueError(f"slice_sensor must be 'normal' or 'fixed-tilt', got {slice_sensor!r}")
     ds = omega / 4.0 if sample_spacing is None else float(sample_spacing)
     if not (np.isfinite(ds) and ds > 0):
         raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
@@ -152,7 +158,9 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         visit.append(("region", r))
         mask = labels.regions == r
         levels = slice_levels(surface, mask, labels.slope, spacing, slice_spacing)
-        per_level = slice_region(surface, mask, r, levels, omega, ds, min_length=spacing)
+        depression = fixed_depression(labels.slope[mask]) if slice_sensor == "fixed-tilt" else None
+        per_level = slice_region(surface, mask, r, levels, omega, ds, min_length=spacing,
+                                 depression=depression)
         start = here if here is not None else np.append(positions[node], surface.z[mask].min())
         for c in order_contours(per_level, start):
             route.add_oriented(c.path, c.sensor_dir, "slice")
@@ -167,7 +175,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
                   slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
                   slice_spacing=slice_spacing, lane_spacing=spacing, sample_spacing=ds,
-                  sensor_range=2.0 * omega if sensor_range is None else float(sensor_range))
+                  sensor_range=2.0 * omega if sensor_range is None else float(sensor_range),
+                  slice_sensor=slice_sensor)
     plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                         None, surface)
     bar.close()

@@ -3,8 +3,10 @@
 Horizontal planes z = const cut the region's surface in contours (marching squares, contourpy).
 The vehicle follows each contour at offset Omega along the local surface normal and its sensor
 looks back along the inward normal, so it sees the wall square-on (a tilted forward-looking
-sensor). Contours are swept level by level, bottom to top, each piece entered at its end nearest
-to the vehicle.
+sensor). Optionally the sensor keeps one fixed tilt per region (what a vehicle that is passively
+stable in roll and pitch can hold without a pan-tilt unit), matched to the region's median slope.
+Contours are swept level by level, bottom to top, each piece entered at its end nearest to the
+vehicle.
 
 Plane spacing: the reference spaces the planes by the sensor's footprint. A footprint of width
 w = 2 Omega tan(aperture / 2) (1 - overlap) measured along a wall of slope S spans
@@ -63,11 +65,35 @@ def slice_levels(surface: TerrainSurface, region_mask: np.ndarray, slope: np.nda
     return first + spacing * np.arange(n)
 
 
+def sensor_axes(normals: np.ndarray, depression: float | None = None) -> np.ndarray:
+    """(n, 3) sensor axes looking into the wall: the inward normal -n itself, or, with a fixed
+    `depression` angle below the horizontal (rad), the axis of a sensor rigidly tilted on a
+    vehicle that keeps roll and pitch level, turned to face the wall's horizontal normal."""
+    inward = -normals
+    if depression is None:
+        return inward
+    horiz = inward[:, :2]
+    norm = np.linalg.norm(horiz, axis=1, keepdims=True)
+    horiz = np.where(norm > 1e-9, horiz / np.maximum(norm, 1e-12), np.array([1.0, 0.0]))
+    return np.column_stack([np.cos(depression) * horiz,
+                            np.full(len(horiz), -np.sin(depression))])
+
+
+def fixed_depression(slope: np.ndarray) -> float:
+    """Depression angle (rad) of a fixed sensor that sees a wall of the median `slope` square-on:
+    the inward normal of a slope S points 90 deg - arctan(S) below the horizontal."""
+    return float(np.pi / 2 - np.arctan(np.nanmedian(slope)))
+
+
 def slice_region(surface: TerrainSurface, region_mask: np.ndarray, region: int,
                  levels: np.ndarray, omega: float, sample_spacing: float,
-                 min_length: float) -> list[list[Contour]]:
+                 min_length: float, depression: float | None = None) -> list[list[Contour]]:
     """Contours of one region per level (lowest level first); pieces shorter than
-    `min_length` (m) are dropped, the neighbouring levels' footprints cover them."""
+    `min_length` (m) are dropped, the neighbouring levels' footprints cover them.
+
+    The sensor looks along the inward normal (`depression` None) or is tilted at a fixed
+    `depression` (see `sensor_axes`); the path point is Omega back along the axis from the
+    contour, which for the normal is the offset Omega along the surface normal."""
     grown = ndimage.binary_dilation(region_mask, iterations=1)
     bathy = surface.bathy
     zm = np.ma.array(surface.z, mask=~grown)
@@ -81,8 +107,8 @@ def slice_region(surface: TerrainSurface, region_mask: np.ndarray, region: int,
             closed = bool(np.allclose(line[0], line[-1]))
             xy = resample(line, sample_spacing)
             q = np.column_stack([xy, np.full(len(xy), level)])
-            n = surface.normal(xy[:, 0], xy[:, 1])
-            pieces.append(Contour(region, float(level), q, q + omega * n, -n, closed))
+            axes = sensor_axes(surface.normal(xy[:, 0], xy[:, 1]), depression)
+            pieces.append(Contour(region, float(level), q, q - omega * axes, axes, closed))
         out.append(pieces)
     return out
 
