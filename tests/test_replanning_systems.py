@@ -100,3 +100,18 @@ def test_breakwater_replanning_keeps_the_offset_without_contact():
     assert abs(distance[near][100:].mean() - p["omega"]) < 1.0
     assert len(handles.mapper.octree_map.occupied_points()) > 500
     assert len(handles.replanner.log) == 90  # at initialisation, then at 1, 2, ..., 89 s
+
+
+def test_octree_is_drawn_as_one_point_cloud():
+    from pydrake.geometry import Meshcat, MeshcatParams
+
+    from drake_auv.visualization.octree import depth_colours, draw_octree
+
+    meshcat = Meshcat(MeshcatParams(host="localhost"))
+    omap = OctreeMap(0.5)
+    r = _wall_returns(1)
+    omap.insert_returns(r)
+    assert draw_octree(meshcat, "/drake_auv/octree", omap) == len(omap.occupied_points()) > 0
+    assert meshcat.HasPath("/drake_auv/octree")
+    colours = depth_colours(np.array([-10.0, -5.0, 0.0]))
+    assert colours.shape == (3, 3) and not np.array_equal(colours[0], colours[2])

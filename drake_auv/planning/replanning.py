@@ -28,6 +28,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.spatial import cKDTree
 
+from drake_auv.planning.polyline import length, resample
 from drake_auv.planning.stomp import StompMatrices, StompParameters, stomp
 
 
@@ -102,16 +103,13 @@ def collect_section(position, waypoints, next_index: int, radius: float,
 
 
 def resample_polyline(points, spacing: float) -> np.ndarray:
-    """(N, 3) points evenly spaced by about `spacing` along the polyline, ends kept, N >= 3."""
+    """(N, 3) points evenly spaced by at most `spacing` along the polyline, ends kept, N >= 3
+    (STOMP needs an interior point)."""
     points = np.asarray(points, dtype=float)
-    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    keep = np.concatenate([[True], seg > 1e-9])
-    points, s = points[keep], np.concatenate([[0.0], np.cumsum(seg[seg > 1e-9])])
-    n = max(3, int(np.ceil(s[-1] / spacing)) + 1)
-    if len(points) == 1:
-        return np.repeat(points, n, axis=0)
-    t = np.linspace(0.0, s[-1], n)
-    return np.stack([np.interp(t, s, points[:, d]) for d in range(3)], axis=1)
+    total = length(points)
+    if total <= 1e-9:
+        return np.repeat(points[:1], 3, axis=0)
+    return resample(points, min(spacing, total / 2.0))
 
 
 class SliceMap:
