@@ -112,50 +112,81 @@ def surface_area_weights(surface: TerrainSurface) -> np.ndarray:
     return np.where(surface.valid, w, 0.0)
 
 
-def evaluate_samples(path: Path, mask: np.ndarray, surface: TerrainSurface, aperture_deg: float,
-                     sensor_range: float, region: np.ndarray, weights: np.ndarray) -> SegmentMetrics:
-    """Metrics of the samples of `path` selected by `mask`; coverage is the seen share of the
-    surface area of the cells in `region` (bool grid), counting imaging samples only."""
-    seg = path.segment_lengths()
-    length = float(seg[mask[1:]].sum())
-    pts = path.points[mask]
-    dirs = path.sensor_dir[mask]
-    if len(pts) == 0:
+def clearance(surface: TerrainSurface, points: np.ndarray, omega: float) -> np.ndarray:
+    """(N,) distance of each point to the surface, m (inf beyond 4 omega when some point is
+    nearer; exact otherwise)."""
+    d, _ = surface.distance(points, upper_bound=4.0 * omega)
+    if not np.isfinite(d).any():
+        d, _ = surface.distance(points)
+    return d
+
+
+def _summary(path: Path, mask: np.ndarray, angles: np.ndarray, dist: np.ndarray, seen: np.ndarray,
+             region: np.ndarray, weights: np.ndarray) -> SegmentMetrics:
+    """Metrics of the samples selected by `mask` from per-sample angles (NaN for transit or
+    blind samples), distances and the cells they saw; coverage is over the cells of `region`."""
+    length = float(path.segment_lengths()[mask[1:]].sum())
+    n = int(mask.sum())
+    if n == 0:
         return SegmentMetrics(length, float("nan"), float("nan"), 0.0, float("nan"), 0, 0.0)
-    imaging = path.labels[mask] != "transit"
-    angles = viewing_angles(surface, pts[imaging], dirs[imaging], sensor_range)
-    finite = np.isfinite(angles)
-    deg = np.degrees(angles[finite])
-    seen = coverage_mask(surface, pts[imaging], dirs[imaging], aperture_deg, sensor_range)
+    imaging = mask & (path.labels != "transit")
+    a = angles[imaging]
+    deg = np.degrees(a[np.isfinite(a)])
     area = float(weights[region].sum())
-    coverage = float(weights[region & seen].sum() / area) if area > 0 else float("nan")
-    clearance, _ = surface.distance(pts)
     return SegmentMetrics(
         length=length,
         view_mean_deg=float(deg.mean()) if deg.size else float("nan"),
         view_sd_deg=float(deg.std()) if deg.size else float("nan"),
-        coverage=coverage,
-        min_clearance=float(clearance.min()),
-        samples=int(len(pts)),
-        blind_share=float(1.0 - finite.mean()) if finite.size else 0.0,
+        coverage=float(weights[region & seen].sum() / area) if area > 0 else float("nan"),
+        min_clearance=float(dist[mask].min()),
+        samples=n,
+        blind_share=float(1.0 - deg.size / a.size) if a.size else 0.0,
     )
+
+
+def evaluate_path(path: Path, surface: TerrainSurface, aperture_deg: float, sensor_range: float,
+                  omega: float, groups: dict[str, tuple[np.ndarray, np.ndarray]],
+                  weights: np.ndarray | None = None) -> dict[str, SegmentMetrics]:
+    """Metrics of groups of samples of one path, computing each per-sample quantity once.
+
+    `groups` maps a name to (sample mask, grid region whose coverage counts); a group's seen
+    cells are those seen by its own imaging samples.
+    """
+    weights = surface_area_weights(surface) if weights is None else weights
+    imaging = path.labels != "transit"
+    angles = np.full(len(path), np.nan)
+    angles[imaging] = viewing_angles(surface, path.points[imaging], path.sensor_dir[imaging],
+                                     sensor_range)
+    dist = clearance(surface, path.points, omega)
+    seen_by_label = {}
+    for lab in dict.fromkeys(path.labels[imaging].tolist()):
+        m = path.labels == lab
+        seen_by_label[lab] = coverage_mask(surface, path.points[m], path.sensor_dir[m],
+                                           aperture_deg, sensor_range)
+    out = {}
+    for name, (mask, region) in groups.items():
+        labels = set(path.labels[mask & imaging].tolist())
+        seen = np.zeros(surface.z.shape, dtype=bool)
+        for lab in labels:
+            seen |= seen_by_label[lab]
+        out[name] = _summary(path, mask, angles, dist, seen, region, weights)
+    return out
 
 
 def evaluate_plan(plan) -> PlanMetrics:
     """Table 3 for a `CoveragePlan`: per region, total, lawnmower."""
     surface = plan.surface
     p = plan.parameters
-    aperture, rng = p["aperture_deg"], p["sensor_range"]
+    aperture, rng, omega = p["aperture_deg"], p["sensor_range"], p["omega"]
     weights = surface_area_weights(surface)
     valid = surface.valid
     high = plan.labels.high
     path = plan.path
-    everything = np.ones(len(path), dtype=bool)
-    return PlanMetrics(
-        high_slope=evaluate_samples(path, path.labels == "slice", surface, aperture, rng, high, weights),
-        planar=evaluate_samples(path, path.labels == "planar", surface, aperture, rng,
-                                valid & ~high, weights),
-        total=evaluate_samples(path, everything, surface, aperture, rng, valid, weights),
-        lawnmower=evaluate_samples(plan.lawnmower, np.ones(len(plan.lawnmower), dtype=bool),
-                                   surface, aperture, rng, valid, weights),
-    )
+    m = evaluate_path(path, surface, aperture, rng, omega, {
+        "high_slope": (path.labels == "slice", high),
+        "planar": (path.labels == "planar", valid & ~high),
+        "total": (np.ones(len(path), dtype=bool), valid)}, weights)
+    lawn = plan.lawnmower
+    b = evaluate_path(lawn, surface, aperture, rng, omega,
+                      {"lawnmower": (np.ones(len(lawn), dtype=bool), valid)}, weights)
+    return PlanMetrics(m["high_slope"], m["planar"], m["total"], b["lawnmower"])
