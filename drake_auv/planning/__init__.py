@@ -1,7 +1,23 @@
-"""Off-line planners and optimisers, pure numpy/scipy (no Drake)."""
+"""Off-line planners and optimisers, pure numpy/scipy (no Drake).
 
-from drake_auv.planning.coverage_plan import CoveragePlan, plan_coverage
-from drake_auv.planning.lawnmower import plan_lawnmower
+`Path` is imported eagerly; the planners load on first use (they pull in scipy, contourpy and
+matplotlib.path, which modules that only need `Path` should not pay for).
+"""
+
 from drake_auv.planning.path import Path
 
+_LAZY = {
+    "CoveragePlan": "drake_auv.planning.coverage_plan",
+    "plan_coverage": "drake_auv.planning.coverage_plan",
+    "plan_lawnmower": "drake_auv.planning.lawnmower",
+}
+
 __all__ = ["CoveragePlan", "Path", "plan_coverage", "plan_lawnmower"]
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'drake_auv.planning' has no attribute {name!r}")
