@@ -161,3 +161,18 @@ def test_params_validation():
     follower = HorizontalFollower()
     with pytest.raises(ValueError, match="state"):
         follower.update(0.0, np.full(12, np.nan), np.empty((0, 3)))
+
+
+def test_follower_copy_is_independent_and_repeats_the_same_draws():
+    import copy
+
+    wall = np.column_stack([np.full(60, 2.5), np.linspace(-3, 3, 60), np.full(60, -4.0)])
+    state = np.zeros(12)
+    state[2] = -4.0
+    follower = HorizontalFollower(FollowingParams(), seed=4)
+    follower.update(0.0, state, wall)
+    clone = copy.deepcopy(follower)
+    a = clone.update(0.1, state, wall + [0.0, 0.0, 0.0])
+    assert len(clone.map) == 120 and len(follower.map) == 60  # the original is untouched
+    b = follower.update(0.1, state, wall)
+    assert np.array_equal(a.reference, b.reference)  # same RANSAC draws from the copied state

@@ -27,6 +27,7 @@ Reference: `[x, y, z, yaw, vx, vy, vz, yaw_rate]` in the world frame (architectu
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -147,6 +148,16 @@ class _Follower:
         self.start_time = None
         self.look = None
         self.normal = None
+
+    def __deepcopy__(self, memo):
+        # Drake copies abstract state at every update: share what is never modified in place
+        # (the frozen params, the map's arrays, which every update replaces) and copy the
+        # rest; the generator's state is copied so the copy draws the same numbers.
+        clone = copy.copy(self)
+        clone.map = copy.copy(self.map)
+        clone.rng = np.random.default_rng()
+        clone.rng.bit_generator.state = self.rng.bit_generator.state
+        return clone
 
     def _begin(self, time, state, points_nav):
         state = np.asarray(state, dtype=float)

@@ -27,6 +27,8 @@ class LocalProfileMap:
     Args:
         max_age: returns older than this many seconds are forgotten, s (> 0).
         max_points: at most this many returns are kept, the newest win (>= 10).
+
+    Its arrays are replaced, never modified in place, so a shallow copy is an independent map.
     """
 
     def __init__(self, max_age: float = 20.0, max_points: int = 4000):

@@ -248,5 +248,6 @@ def _extract_segment(pool: np.ndarray, params: EstimatorParams, rng):
 def _tls_line(points: np.ndarray):
     """Total least squares line: (centroid, unit principal direction)."""
     centre = points.mean(axis=0)
-    _, _, vt = np.linalg.svd(points - centre, full_matrices=False)
-    return centre, vt[0]
+    d = points - centre
+    _, vectors = np.linalg.eigh(d.T @ d)  # 2 x 2 scatter matrix, ascending eigenvalues
+    return centre, vectors[:, 1]
