@@ -109,7 +109,8 @@ def _patch(fn, nu: int, nv: int, normal_hint) -> tuple[np.ndarray, np.ndarray]:
     u, v = np.meshgrid(np.linspace(0, 1, nu + 1), np.linspace(0, 1, nv + 1), indexing="ij")
     vertices = np.asarray(fn(u.ravel(), v.ravel()), dtype=float)
     idx = np.arange((nu + 1) * (nv + 1)).reshape(nu + 1, nv + 1)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
     faces = np.vstack([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
     tri = vertices[faces]
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]).sum(axis=0)
@@ -326,19 +327,22 @@ def _state(x, y, z, yaw=0.0) -> np.ndarray:
 
 _SITES = {
     "caldera": dict(
-        description="Santorini-like caldera rim ROI, 100 m x 250 m, slopes up to 0.62; camera at 2 m",
+        description=("Santorini-like caldera rim ROI, 100 m x 250 m, slopes up to 0.62; "
+                     "camera at 2 m"),
         geometry=_caldera_geometry,
         start=lambda: _state(50.0, 5.0, -317.5, np.pi / 2),  # 2 m above the floor
         params=dict(omega=2.0, aperture_deg=60.0, slope_threshold=0.5, speed=0.5,
                     prior_spacing=1.0, max_range=20.0)),
     "pool": dict(
-        description="CIRS-like pool 16 m x 8 m: vertical walls, 90 degree corners, V bottom; 4 m depth",
+        description=("CIRS-like pool 16 m x 8 m: vertical walls, 90 degree corners, V bottom; "
+                     "4 m depth"),
         geometry=_pool_geometry,
         start=lambda: _state(-4.0, 0.0, -4.0, 0.0),
         params=dict(omega=2.0, depth=4.0, speed=0.3, laps=2, prior_spacing=0.25,
                     max_range=20.0)),
     "c_object": dict(
-        description="man-made object with a C-shaped vertical profile: floor, wall, ceiling overhang",
+        description=("man-made object with a C-shaped vertical profile: floor, wall, "
+                     "ceiling overhang"),
         geometry=_c_object_geometry,
         start=lambda: _state(-6.0, 0.0, -15.0, 0.0),
         params=dict(omega=2.0, speed=0.3, profile_plane="vertical", prior_spacing=0.5,
@@ -351,7 +355,8 @@ _SITES = {
                     block_size=BLOCK_SIZE, block_gap=BLOCK_GAP, prior_spacing=1.0,
                     max_range=20.0, replan_radius=5.0)),
     "boulder": dict(
-        description="l'Amarrador-like boulder, 40 m to 28 m depth, steep and overhanging; 0.4 m prior grid",
+        description=("l'Amarrador-like boulder, 40 m to 28 m depth, steep and overhanging; "
+                     "0.4 m prior grid"),
         geometry=_boulder_geometry,
         start=lambda: _state(-25.0, 0.0, -30.0, 0.0),
         params=dict(omega=10.0, contours=2, contour_spacing=2.0, speed=0.5,

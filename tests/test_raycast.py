@@ -21,7 +21,8 @@ def test_grid_mesh_has_two_triangles_per_cell_and_upward_normals():
     mesh = bathymetry_to_mesh(bathy)
     assert len(mesh.faces) == 2 * 20 * 10
     expected_n = np.array([-0.1, 0.05, 1.0]) / np.linalg.norm([-0.1, 0.05, 1.0])
-    np.testing.assert_allclose(mesh.face_normals, np.tile(expected_n, (len(mesh.faces), 1)), atol=1e-9)
+    np.testing.assert_allclose(mesh.face_normals, np.tile(expected_n, (len(mesh.faces), 1)),
+                               atol=1e-9)
     np.testing.assert_allclose(mesh.area, 20 * 20 * np.linalg.norm([-0.1, 0.05, 1.0]), rtol=1e-9)
 
 

@@ -77,10 +77,12 @@ def test_pool_walls_corners_and_v_bottom():
     dirs = np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
     hits = caster.cast([0.0, 0.0, -4.0], dirs, 50.0)
     assert np.all(hits.faces >= 0)  # a closed section at 4 m depth
-    on_wall = np.minimum(np.abs(np.abs(hits.points[:, 0]) - 8.0), np.abs(np.abs(hits.points[:, 1]) - 4.0))
+    x, y = np.abs(hits.points[:, 0]), np.abs(hits.points[:, 1])
+    on_wall = np.minimum(np.abs(x - 8.0), np.abs(y - 4.0))
     assert on_wall.max() < 1e-3  # the rectangle |x| = 8, |y| = 4: 90 degree corners
     assert np.all(sc.target_faces[hits.faces])
-    down = caster.cast(np.array([[0.0, 0, -1], [7.9, 0, -1], [-4.0, 2.0, -1]]), [[0, 0, -1]] * 3, 20.0)
+    down = caster.cast(np.array([[0.0, 0, -1], [7.9, 0, -1], [-4.0, 2.0, -1]]),
+                       [[0, 0, -1]] * 3, 20.0)
     np.testing.assert_allclose(down.points[:, 2], [-7.0, -5.0 - 2.0 * 0.1 / 8.0, -6.0], atol=1e-4)
     assert not sc.target_faces[down.faces].any()  # the bottom is not the target
 

@@ -48,7 +48,8 @@ def test_profiler_wall_distance_grazing_range_and_occlusion():
     post = trimesh.creation.box(extents=(0.4, 0.4, 4.0))
     post.apply_translation([2.0, 0.0, 0.0])
     both = RayCaster(trimesh.util.concatenate([_wall(4.0), post]))
-    np.testing.assert_allclose(scan(both, model, [0.0], _state(), _state()).ranges, [1.8], atol=1e-4)
+    ranges = scan(both, model, [0.0], _state(), _state()).ranges
+    np.testing.assert_allclose(ranges, [1.8], atol=1e-4)
 
 
 def test_pencil_beam_width_reports_the_nearest_echo_in_the_cone():
@@ -66,7 +67,8 @@ def test_multibeam_over_flat_seabed_returns_h_over_cos():
     angles = fan_angles(480, np.radians(120.0))
     assert len(angles) == 480 and abs(np.degrees(angles[-1] - angles[0]) - 120) < 1e-9
     model = SonarModel(SonarMount.named("down", position=(0.2, 0.0, -0.3)), max_range=20.0)
-    ret = scan(caster, model, angles, _state(3.0, -2.0, -21.7, yaw=0.8), _state(3.0, -2.0, -21.7, yaw=0.8))
+    s = _state(3.0, -2.0, -21.7, yaw=0.8)
+    ret = scan(caster, model, angles, s, s)
     h = 8.0  # sensor at -22.0
     np.testing.assert_allclose(ret.ranges, h / np.cos(angles), atol=1e-4)
     np.testing.assert_allclose(ret.points_nav[:, 2], -30.0, atol=1e-4)
@@ -109,7 +111,8 @@ def test_returns_land_on_the_true_mesh_for_arbitrary_poses(seed):
         d_s = np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
         np.testing.assert_allclose(ret.directions_nav, d_s @ (r_wb @ mount.rotation).T, atol=1e-12)
         np.testing.assert_allclose(ret.origin_nav, s[:3] + r_wb @ mount.position, atol=1e-12)
-        np.testing.assert_allclose(ret.points_nav, ret.origin_nav + ret.ranges[:, None] * ret.directions_nav,
+        np.testing.assert_allclose(ret.points_nav,
+                                   ret.origin_nav + ret.ranges[:, None] * ret.directions_nav,
                                    atol=1e-9)
         np.testing.assert_allclose(ret.points_nav, s[:3] + ret.points_body @ r_wb.T, atol=1e-9)
 

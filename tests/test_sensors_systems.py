@@ -51,7 +51,8 @@ def test_profiler_in_the_pool_steps_the_head_and_hits_the_walls():
     # Updates at t = 0, 0.1, ..., 0.9 (AdvanceTo leaves the one at t = 1 to the next step).
     assert returns.sequence == 10 and returns.time == pytest.approx(0.9)
     assert len(returns) == 3  # 30 pings/s in 10 batches
-    np.testing.assert_allclose(np.degrees(returns.angles), -180 + 0.9 * np.arange(27, 30), atol=1e-9)
+    np.testing.assert_allclose(np.degrees(returns.angles), -180 + 0.9 * np.arange(27, 30),
+                               atol=1e-9)
     # The pool's walls at |x| = 8, |y| = 4: every ping returns from one of them.
     p = returns.points_nav
     wall = np.minimum(np.abs(np.abs(p[:, 0]) - 8), np.abs(np.abs(p[:, 1]) - 4))
@@ -88,8 +89,8 @@ def test_system_output_equals_pure_scan_and_noise_is_seeded():
     s = _state(0.0, -8.5, -5.0, 0.02, -0.03, np.pi / 2)
     est = s + np.r_[0.4, -0.3, 0.1, 0, 0, 0.02, np.zeros(6)]
     clean = _run_sensor(MultibeamSonar(caster, mount="forward"), s, est, t_end=0.0)
-    pure = scan(caster, MultibeamSonar(caster, mount="forward").model, fan_angles(480, np.radians(120)),
-                s, est)
+    pure = scan(caster, MultibeamSonar(caster, mount="forward").model,
+                fan_angles(480, np.radians(120)), s, est)
     np.testing.assert_array_equal(clean.ranges, pure.ranges)
     np.testing.assert_allclose(clean.points_nav, pure.points_nav)
     noise = SonarNoise(range_sigma=0.1, dropout_prob=0.2)
@@ -145,7 +146,8 @@ def test_coverage_recorder_multibeam_mode_marks_a_swath():
     simulator.AdvanceTo(0.25)
     seen = np.isfinite(recorder.face_angles(context))
     centres = world.triangles_center[seen]
-    # The fan lies across track (body y): a thin line at x = 10 through the swath |y - 10| <= 5 tan 60.
+    # The fan lies across track (body y): a thin line at x = 10 through the swath
+    # |y - 10| <= 5 tan 60.
     assert np.abs(centres[:, 0] - 10.0).max() <= 0.5
     assert np.ptp(centres[:, 1]) > 15.0
 

@@ -57,7 +57,8 @@ class SonarMount:
         """One of MOUNT_ROTATIONS ('horizontal', 'vertical', 'down', 'port', 'starboard',
         'forward') at `position` in the body frame."""
         if name not in MOUNT_ROTATIONS:
-            raise ValueError(f"unknown sonar mount {name!r}; choose one of {sorted(MOUNT_ROTATIONS)}")
+            raise ValueError(f"unknown sonar mount {name!r}; choose one of "
+                             f"{sorted(MOUNT_ROTATIONS)}")
         return cls(np.asarray(position, dtype=float), MOUNT_ROTATIONS[name])
 
 
@@ -86,7 +87,8 @@ class SonarModel:
         if not (np.isfinite(self.max_range) and self.max_range > 0):
             raise ValueError(f"max_range must be > 0 m, got {self.max_range}")
         if not (np.isfinite(self.beam_width) and 0 <= self.beam_width <= np.pi / 6):
-            raise ValueError(f"beam_width must be in [0, 30] deg, got {np.degrees(self.beam_width)} deg")
+            raise ValueError(f"beam_width must be in [0, 30] deg, got "
+                             f"{np.degrees(self.beam_width)} deg")
         if not (np.isfinite(self.max_incidence) and 0 < self.max_incidence <= np.pi / 2):
             raise ValueError(f"max_incidence must be in (0, 90] deg, got "
                              f"{np.degrees(self.max_incidence)} deg")
