@@ -20,6 +20,23 @@ def test_slope_of_a_plane_uses_the_true_non_square_spacing():
     np.testing.assert_allclose(s, 0.5, atol=1e-12)
 
 
+def test_slope_next_to_no_data_uses_one_sided_differences():
+    z = _plane(0.3, -0.4).z.copy()
+    z[10:14, 20:30] = np.nan
+    z[0, 0] = np.nan
+    s = slope_map(Bathymetry(z, (0.5, 2.0)))
+    assert np.isnan(s[10:14, 20:30]).all()
+    np.testing.assert_allclose(s[np.isfinite(z)], 0.5, atol=1e-12)
+
+
+def test_small_planar_specks_inside_a_wall_become_high_slope():
+    z = _band(20.0).z.copy()
+    z[50:53, 100:103] = z[51, 101]  # a 1.5 m x 1.5 m flat step in the middle of the ramp
+    labels = classify(Bathymetry(z, (0.5, 0.5)), closing_radius=0.0, opening_radius=0.0,
+                      min_area=10.0)
+    assert labels.high[51, 101] and labels.n_regions == 1
+
+
 def test_flat_terrain_has_no_high_slope_region():
     labels = classify(_plane(0.0, 0.0))
     assert labels.n_regions == 0 and not labels.high.any() and labels.planar.all()

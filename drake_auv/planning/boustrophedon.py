@@ -190,6 +190,24 @@ def decompose(bathy: Bathymetry, free: np.ndarray, angle: float,
     return Decomposition(frame, cells, edges, label)
 
 
+def sliver_cells(dec: Decomposition, min_area: float) -> set[int]:
+    """Cells smaller than `min_area` (m^2) that touch a larger cell.
+
+    A boundary nearly parallel to the sweep line rasterises as a staircase, and every tooth
+    becomes a Morse cell of a few raster cells. They get no lanes of their own: they lie within
+    a raster cell or two of the larger cell's lanes, whose footprints reach them.
+    """
+    area = np.array([c.area_cells for c in dec.cells]) * dec.frame.resolution ** 2
+    small = area < min_area
+    out = set()
+    for i, j in dec.edges:
+        if small[i] and not small[j]:
+            out.add(int(i))
+        if small[j] and not small[i]:
+            out.add(int(j))
+    return out
+
+
 def lane_count(bathy: Bathymetry, free: np.ndarray, angle: float, lane_spacing: float) -> float:
     """Estimated number of lanes (so of turns) to sweep `free` with lanes along `angle`:
     free runs per sweep column, summed, times columns per lane. Uses a coarse raster."""

@@ -14,7 +14,7 @@ import numpy as np
 
 from drake_auv.planning.boustrophedon import (Decomposition, best_sweep_angle,
                                               boustrophedon_waypoints, cell_lanes, decompose,
-                                              exhaustive_walk, sweep_raster)
+                                              exhaustive_walk, sliver_cells, sweep_raster)
 from drake_auv.planning.lawnmower import check_sensor_parameters, lane_spacing, plan_lawnmower
 from drake_auv.planning.path import Path
 from drake_auv.planning.route import RouteBuilder
@@ -145,9 +145,12 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     route = RouteBuilder(surface, omega, ds)
     contours_done: list[Contour] = []
     visit = []
+    slivers = sliver_cells(dec, 0.5 * spacing ** 2)
     for node in order:
         here = route.position
         if node < n_cells:
+            if node in slivers:
+                continue
             visit.append(("cell", node))
             lanes = cell_lanes(dec.cells[node], dec.frame, spacing)
             route.add_terrain_following(

@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from drake_auv.planning.boustrophedon import (best_sweep_angle, boustrophedon_waypoints,
-                                              cell_lanes, decompose, exhaustive_walk)
+                                              cell_lanes, decompose, exhaustive_walk,
+                                              sliver_cells)
 from drake_auv.planning.path import Path
 from drake_auv.planning.route import RouteBuilder
 from drake_auv.planning.surface import TerrainSurface
@@ -62,7 +63,10 @@ def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float
     dec = decompose(bathy, valid, angle)
     centroids = np.array([c.centroid(dec.frame) for c in dec.cells])
     route = RouteBuilder(surface, omega, ds)
+    slivers = sliver_cells(dec, 0.5 * spacing ** 2)
     for k in exhaustive_walk(dec.adjacency(), centroids, 0):
+        if k in slivers:
+            continue
         here = route.position
         lanes = cell_lanes(dec.cells[k], dec.frame, spacing)
         route.add_terrain_following(

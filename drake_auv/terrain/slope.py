@@ -3,8 +3,10 @@
 S(x, y) = |grad z| (rise over run, dimensionless) with the true cell spacing. Cells with
 S > delta_s are high-slope; a morphological closing (joins fragments of one wall), then an
 opening (drops thin spurs), then removal of components smaller than a minimum area clean the
-mask. The reference fixes only delta_s = 0.5; the structuring sizes and the minimum area are
-ours (defaults below, in metres so they do not depend on the cell size).
+mask; planar specks smaller than the minimum area are given to the high-slope class (the slicing
+sweeps them with the wall around them). The reference fixes only delta_s = 0.5; the structuring
+sizes and the minimum area are ours (defaults below, in metres so they do not depend on the
+cell size).
 """
 
 from __future__ import annotations
@@ -17,14 +19,27 @@ from scipy import ndimage
 from drake_auv.terrain.bathymetry import Bathymetry
 
 
-def slope_map(bathy: Bathymetry) -> np.ndarray:
-    """(ny, nx) slope |grad z| with the true spacing; NaN where a neighbour is no-data.
+def _nan_gradient(z: np.ndarray, h: float, axis: int) -> np.ndarray:
+    """dz/d(axis): central differences where both neighbours hold data, one-sided next to
+    no-data or the grid's edge, 0 for a cell with no valid neighbour on that axis; NaN on
+    no-data cells."""
+    zp = np.pad(np.moveaxis(z, axis, 0), ((1, 1), (0, 0)), constant_values=np.nan)
+    forward = (zp[2:] - zp[1:-1]) / h
+    backward = (zp[1:-1] - zp[:-2]) / h
+    ok_f, ok_b = np.isfinite(forward), np.isfinite(backward)
+    g = np.where(ok_f & ok_b, 0.5 * (forward + backward),
+                 np.where(ok_f, forward, np.where(ok_b, backward, 0.0)))
+    g = np.moveaxis(g, 0, axis)
+    return np.where(np.isfinite(z), g, np.nan)
 
-    Central differences inside, one-sided at the grid's edges (np.gradient).
+
+def slope_map(bathy: Bathymetry) -> np.ndarray:
+    """(ny, nx) slope |grad z| with the true spacing, NaN on no-data cells.
+
+    Central differences inside; one-sided at the grid's edges and next to no-data.
     """
     dx, dy = bathy.spacing
-    gy, gx = np.gradient(bathy.z, dy, dx)
-    return np.hypot(gx, gy)
+    return np.hypot(_nan_gradient(bathy.z, dx, 1), _nan_gradient(bathy.z, dy, 0))
 
 
 def surface_gradient(bathy: Bathymetry, z: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -73,8 +88,8 @@ def classify(bathy: Bathymetry, slope_threshold: float = 0.5, closing_radius: fl
         slope_threshold: delta_s > 0; cells with S > delta_s are high-slope (0.5 is about 26.6 deg).
         closing_radius: radius of the disk for the closing, m (default 2 cells).
         opening_radius: radius of the disk for the opening, m (default 2 cells).
-        min_area: high-slope components smaller than this are dropped, m^2
-            (default 1 % of the valid area, at least 25 cells).
+        min_area: high-slope components smaller than this are dropped and planar ones smaller
+            than this become high-slope, m^2 (default 1 % of the valid area, at least 25 cells).
     """
     if not (np.isfinite(slope_threshold) and slope_threshold > 0):
         raise ValueError(f"slope_threshold (delta_s) must be > 0, got {slope_threshold}")
@@ -92,6 +107,12 @@ def classify(bathy: Bathymetry, slope_threshold: float = 0.5, closing_radius: fl
         raise ValueError(f"min_area must be >= 0 m^2, got {min_area}")
     slope = slope_map(bathy)
     high = np.nan_to_num(slope, nan=0.0) > slope_threshold
+    if not valid.all():
+        # Extend the mask into the holes (nearest valid cell) so the morphology neither
+        # erodes nor closes at their edges.
+        _, (ii, jj) = ndimage.distance_transform_edt(~valid, sampling=bathy.spacing[::-1],
+                                                     return_indices=True)
+        high = high[ii, jj]
     if closing_radius > 0:
         disk = _disk(closing_radius / dx, closing_radius / dy)
         pad = max(disk.shape)
@@ -103,6 +124,12 @@ def classify(bathy: Bathymetry, slope_threshold: float = 0.5, closing_radius: fl
         padded = np.pad(high, pad, mode="edge")
         high = ndimage.binary_opening(padded, structure=disk)[pad:-pad, pad:-pad]
     high &= valid
+    # Planar specks enclosed by steep ground are swept by the slicing; steep specks dropped.
+    planar, n_planar = ndimage.label(valid & ~high)
+    if n_planar:
+        areas = ndimage.sum_labels(np.ones_like(planar), planar, np.arange(1, n_planar + 1))
+        small = np.concatenate([[False], areas * cell_area < min_area])
+        high |= small[planar]
     regions, n = ndimage.label(high)
     if n:
         areas = ndimage.sum_labels(np.ones_like(regions), regions, np.arange(1, n + 1)) * cell_area
