@@ -165,9 +165,15 @@ def test_slice_spacing_override_gives_two_contours_two_metres_apart():
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2 ** 31 - 1), relief=st.floats(0.0, 15.0),
-       smoothness=st.floats(4.0, 10.0), omega=st.floats(1.5, 3.0))
-def test_random_seabeds_are_covered_safely(seed, relief, smoothness, omega):
+       smoothness=st.floats(4.0, 10.0), omega=st.floats(1.5, 3.0), hole=st.booleans())
+def test_random_seabeds_are_covered_safely(seed, relief, smoothness, omega, hole):
     bathy = random_seabed(seed, (40, 56), 1.0, relief, smoothness)
+    if hole:  # a no-data patch somewhere inside
+        rng = np.random.default_rng(seed)
+        i, j = rng.integers(5, 25), rng.integers(5, 40)
+        z = bathy.z.copy()
+        z[i:i + rng.integers(3, 10), j:j + rng.integers(3, 10)] = np.nan
+        bathy = Bathymetry(z, bathy.spacing)
     plan = plan_coverage(bathy, omega=omega)
     m = plan.metrics
     assert m.total.min_clearance >= 0.9 * omega

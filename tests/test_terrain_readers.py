@@ -160,3 +160,19 @@ def test_monterey_tile_quirks(tile):
 def test_bathymetry_small_method_contract():
     with pytest.raises(ValueError, match="at least 3 x 3"):
         Bathymetry(np.zeros((3, 2)))
+
+
+def test_rotated_geotransform_is_kept_in_to_crs(tmp_path):
+    # Columns step (2 cos 30, 2 sin 30), rows step (3 sin 30, -3 cos 30) in map metres.
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    transform = Affine(2.0 * c, 3.0 * s, 500.0, 2.0 * s, -3.0 * c, 800.0)
+    path = tmp_path / "rotated.tif"
+    _write(path, "GTiff", transform=transform)
+    bathy = read_bathymetry(path)
+    assert bathy.spacing == pytest.approx((2.0, 3.0))
+    np.testing.assert_array_equal(bathy.z, Z[::-1])  # determinant < 0: rows reversed
+    for row, col in ((0, 0), (3, 4), (1, 2)):
+        world = [[col * 2.0, (3 - row) * 3.0]]
+        expect = [transform.a * (col + 0.5) + transform.b * (row + 0.5) + transform.c,
+                  transform.d * (col + 0.5) + transform.e * (row + 0.5) + transform.f]
+        np.testing.assert_allclose(bathy.world_to_crs(world)[0], expect, atol=1e-9)
