@@ -4,11 +4,14 @@
    degree corners; the true frontal distance (a ray along the heading against the true pool)
    must stay within 1 m of the nominal 2 m after the first 20 s. PNG like Figure 84: frontal
    distance and slope against time.
-2. The same with the profiler's spurious returns and range noise on (seeded).
+2. The same with the profiler's spurious returns and range noise on (seeded), and again with
+   a drifting navigation (compass bias, DVL scale error, random walk; seeded): the returns are
+   placed with the estimated pose, as at sea.
 3. Vertical following of the V-shaped bottom from the shallow end to the far wall (the
    "cliff"), with the distance to the cliff against time like Figure 85.
 
-Writes out/profile_pool/: pool_horizontal.png, pool_horizontal_spurious.png, pool_vertical.png,
+Writes out/profile_pool/: pool_horizontal.png, pool_horizontal_spurious.png,
+pool_horizontal_drift.png, pool_vertical.png,
 pool_horizontal.html (Meshcat recording), summary.json. Run:
     MPLBACKEND=Agg .venv/bin/python examples/profile_pool.py [--out DIR] [--spurious 0.1]
 """
@@ -25,6 +28,7 @@ import numpy as np
 from drake_auv.control import TrackingGains, wrap_angle
 from drake_auv.diagrams.profile_following import (build_profile_following_diagram, run_mission,
                                                   true_clearance)
+from drake_auv.navigation import NavigationParams
 from drake_auv.perception import FollowingParams
 from drake_auv.scenarios import get_scenario
 from drake_auv.sensors.noise import SonarNoise
@@ -49,18 +53,19 @@ def _laps(handles, context) -> float:
     return abs(angle[-1] - angle[0]) / (2 * np.pi)
 
 
-def horizontal(scenario, noise=None, seed=0, scene=None, max_time=500.0):
+def horizontal(scenario, noise=None, navigation=None, seed=0, scene=None, max_time=500.0):
     """Two laps at the scenario depth; returns a dict of time series."""
     p = scenario.params
     params = FollowingParams(offset=p["omega"], speed=p["speed"], corner_weight=0.5)
     start = scenario.start_state.copy()
     start[2] = -p["depth"]
     diagram, handles = build_profile_following_diagram(
-        scenario.world, start, "horizontal", params, noise=noise, seed=seed, gains=GAINS,
-        scene=scene)
+        scenario.world, start, "horizontal", params, noise=noise, navigation=navigation,
+        seed=seed, gains=GAINS, scene=scene)
     simulator = run_mission(diagram, max_time,
                             stop=lambda c: _laps(handles, c) >= p["laps"],
-                            label="pool horizontal" + (" (spurious)" if noise else ""))
+                            label="pool horizontal" + (" (spurious)" if noise else "")
+                            + (" (drift)" if navigation else ""))
     t, x, profile = _logs(handles, simulator.get_context())
     heading = np.column_stack([np.cos(x[5]), np.sin(x[5]), np.zeros_like(x[5])])
     hits = handles.caster.cast(x[:3].T, heading, 20.0)
@@ -173,12 +178,20 @@ def main(argv=None):
     _horizontal_figure(noisy, f"With spurious returns (p = {args.spurious}) and 5 cm noise",
                        out / "pool_horizontal_spurious.png")
 
+    navigation = NavigationParams(heading_bias=np.radians(3.0), scale_error=0.03,
+                                  random_walk=0.05, seed=args.seed)
+    drift = horizontal(scenario, navigation=navigation)
+    _horizontal_figure(drift, "With navigation drift (3 deg compass bias, 3 % DVL scale)",
+                       out / "pool_horizontal_drift.png")
+
     v = vertical(scenario)
     _vertical_figure(v, scenario, out / "pool_vertical.png")
 
     summary = dict(horizontal=_summary(clean),
                    horizontal_spurious=dict(_summary(noisy), spurious_prob=args.spurious,
                                             range_sigma_m=0.05, seed=args.seed),
+                   horizontal_drift=dict(_summary(drift), heading_bias_deg=3.0, scale_error=0.03,
+                                         random_walk=0.05, seed=args.seed),
                    vertical=dict(duration_s=float(v["t"][-1]),
                                  min_clearance_m=float(v["clearance"].min()),
                                  final_cliff_distance_m=float(v["cliff"][-1]),

@@ -59,7 +59,10 @@ class FollowingParams:
     corner_weight: weight in [0, 1] of the range along the normal in the controlled distance.
     min_depth: the reference never rises above z = -min_depth (a wall can lead to the
         surface), m, >= 0.
-    max_age, max_points: forgetting of the local map.
+    max_age, max_points: forgetting of the local map; max_age None takes the mode's default:
+        10 s horizontal (1.5 head revolutions: the profile is re-scanned all the time, and a
+        short memory limits the smear of navigation drift), 20 s vertical (the map must bridge
+        the 180 degree turn, about 15 s, while the head's plane is turned away).
     estimator: `EstimatorParams`.
     """
 
@@ -77,15 +80,17 @@ class FollowingParams:
     turn_tolerance: float = np.radians(20.0)
     corner_weight: float = 0.0
     min_depth: float = 1.0
-    max_age: float = 20.0
+    max_age: float | None = None
     max_points: int = 4000
     estimator: EstimatorParams = field(default_factory=EstimatorParams)
 
     def __post_init__(self):
         if not (np.isfinite(self.min_depth) and self.min_depth >= 0):
             raise ValueError(f"FollowingParams.min_depth must be >= 0 m, got {self.min_depth}")
+        if self.max_age is not None and not (np.isfinite(self.max_age) and self.max_age > 0):
+            raise ValueError(f"FollowingParams.max_age must be None or > 0 s, got {self.max_age}")
         for name in ("offset", "speed", "max_correction", "slow_band", "yaw_rate", "yaw_accel",
-                     "plane_band", "max_age"):
+                     "plane_band"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"FollowingParams.{name} must be a finite number > 0, got {value}")
@@ -138,9 +143,11 @@ class FollowerOutput:
 class _Follower:
     """Common part: local map, seeded RANSAC generator, rate-limited yaw reference."""
 
+    DEFAULT_MAX_AGE = 20.0  # s
+
     def __init__(self, params: FollowingParams, seed: int):
         self.params = params
-        self.map = LocalProfileMap(params.max_age, params.max_points)
+        self.map = LocalProfileMap(params.max_age or self.DEFAULT_MAX_AGE, params.max_points)
         self.rng = np.random.default_rng(seed)
         self.yaw_ref = None
         self.yaw_rate_ref = 0.0
@@ -212,6 +219,8 @@ class HorizontalFollower(_Follower):
             first update.
         seed: seed of the RANSAC generator.
     """
+
+    DEFAULT_MAX_AGE = 10.0  # s
 
     def __init__(self, params: FollowingParams = FollowingParams(), depth_z=None, seed: int = 0):
         super().__init__(params, seed)
