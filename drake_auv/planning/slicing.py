@@ -95,9 +95,13 @@ def slice_region(surface: TerrainSurface, region_mask: np.ndarray, region: int,
     `depression` (see `sensor_axes`); the path point is Omega back along the axis from the
     contour, which for the normal is the offset Omega along the surface normal."""
     grown = ndimage.binary_dilation(region_mask, iterations=1)
+    rows = np.flatnonzero(grown.any(axis=1))
+    cols = np.flatnonzero(grown.any(axis=0))
+    box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))  # contour the region's box
     bathy = surface.bathy
-    zm = np.ma.array(surface.z, mask=~grown)
-    gen = contourpy.contour_generator(bathy.x, bathy.y, zm, line_type=contourpy.LineType.Separate)
+    zm = np.ma.array(surface.z[box], mask=~grown[box])
+    gen = contourpy.contour_generator(bathy.x[box[1]], bathy.y[box[0]], zm,
+                                      line_type=contourpy.LineType.Separate)
     out = []
     for level, lines in zip(levels, gen.multi_lines(levels)):
         pieces = []

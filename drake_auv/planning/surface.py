@@ -172,9 +172,12 @@ class TerrainSurface:
         oi, oj = np.mgrid[-ni:ni + 1, -nj:nj + 1]
         keep = np.hypot(oi * cy, oj * cx) <= reach
         oi, oj = oi[keep], oj[keep]
-        zpad = np.pad(z, ((ni, ni), (nj, nj)), mode="edge")  # beyond the grid: its edge
+        # float32 inside the stencil (halves the memory traffic; elevations keep ~0.1 mm), with
+        # the margin below covering its rounding.
+        zpad = np.pad(z, ((ni, ni), (nj, nj)), mode="edge").astype(np.float32)
         flat_offsets = (oi * zpad.shape[1] + oj)[None, :]
-        off_x, off_y = (oj * cx)[None, :], (oi * cy)[None, :]
+        off_x, off_y = (oj * cx).astype(np.float32)[None, :], (oi * cy).astype(np.float32)[None, :]
+        t2 = np.float32(target ** 2)
         x = np.asarray(x, dtype=float)
         y = np.asarray(y, dtype=float)
         out = np.empty(len(x))
@@ -184,16 +187,16 @@ class TerrainSurface:
             fi = (y[k:k + chunk] - origin[1]) / cy
             j0 = np.clip(np.rint(fj).astype(int), 0, nx - 1)
             i0 = np.clip(np.rint(fi).astype(int), 0, ny - 1)
-            ex = ((fj - j0) * cx)[:, None]  # offset of the point from its nearest node
-            ey = ((fi - i0) * cy)[:, None]
+            ex = ((fj - j0) * cx).astype(np.float32)[:, None]  # offset from the nearest node
+            ey = ((fi - i0) * cy).astype(np.float32)[:, None]
             r2 = (ex - off_x) ** 2 + (ey - off_y) ** 2
             if block_radius > 0:
-                r2 = np.maximum(np.sqrt(r2) - block_radius, 0.0) ** 2
-            left = target ** 2 - r2
-            height = np.where(left >= 0, np.sqrt(np.maximum(left, 0.0)), -np.inf)
+                r2 = np.maximum(np.sqrt(r2) - np.float32(block_radius), np.float32(0.0)) ** 2
+            left = t2 - r2
+            height = np.where(left >= 0, np.sqrt(np.maximum(left, np.float32(0.0))), -np.inf)
             base = ((i0 + ni) * zpad.shape[1] + (j0 + nj))[:, None]
             out[k:k + chunk] = (np.take(zpad, base + flat_offsets) + height).max(axis=1)
-        return out
+        return out + 1e-3  # 1 mm over the float32 rounding
 
     def enforce_clearance(self, points: np.ndarray, omega: float) -> np.ndarray:
         """Points kept over the grid (x, y clamped to its extent) and lifted vertically where
