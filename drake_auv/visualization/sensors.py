@@ -103,7 +103,7 @@ class SonarVisualizer(LeafSystem):
         self._last_sequence = returns.sequence
         points = returns.points_nav[returns.hit]
         if self.beams:
-            # Beams without return are drawn to max range, fainter: free space seen.
+            # Beams without return are drawn to max range: the free space they saw.
             ends = np.where(returns.hit[:, None], returns.points_nav,
                             returns.origin_nav + returns.max_range * returns.directions_nav)
             starts = np.tile(returns.origin_nav, (len(ends), 1))
