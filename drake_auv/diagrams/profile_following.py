@@ -1,5 +1,8 @@
 """Profile-following mission: the GIRONA 500 driven by its pencil-beam profiler.
 
+Also `run_mission` (simulate with a progress bar and a stop condition) and `true_clearance`
+(exact distance to the true mesh, for the no-contact checks of the examples and tests).
+
     true state ──> PencilBeamProfiler ──returns──> ProfileFollowingController ──reference──┐
          ^              ^ estimated_state ─────────────────┘ ^                            v
          └── dynamics <── allocation <── tracker <───────────┼────────────────────────────┘
@@ -17,8 +20,9 @@ import numpy as np
 import trimesh
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
-from tqdm import tqdm
 from pydrake.systems.primitives import VectorLogSink
+from scipy.spatial import cKDTree
+from tqdm import tqdm
 
 from drake_auv.control import TrackingGains
 from drake_auv.diagrams.vehicle import VehicleSystems, add_girona500
@@ -29,7 +33,6 @@ from drake_auv.sensors.noise import SonarNoise
 from drake_auv.systems.profile_following import PROFILE_SIZE, ProfileFollowingController
 from drake_auv.systems.profiler import PencilBeamProfiler
 from drake_auv.vehicle import STATE_SIZE
-from scipy.spatial import cKDTree
 
 # Profiler head set-up for following (our choice): a full circle at the SeaKing's coarse
 # 1.8 degree step and 30 pings/s, one revolution in 6.7 s, batched at 10 Hz.

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drake_auv.control import wrap_angle
 from drake_auv.perception.local_map import LocalProfileMap
 from drake_auv.perception.profile_estimation import (EstimatorParams, ProfileEstimate,
                                                      estimate_profile)
@@ -124,19 +125,13 @@ def follow_step(estimate: ProfileEstimate, params: FollowingParams):
     return correction, fade * params.speed * tangent
 
 
-def wrap_angle(angle):
-    """Angle(s) wrapped to [-pi, pi)."""
-    return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi
-
-
 @dataclass
 class FollowerOutput:
-    """One update: the tracker reference (8,), the estimate (None if no profile is seen), the
-    scan-plane points it used, and the behaviour's mode ("search", "follow" or "turn")."""
+    """One update: the tracker reference (8,), the estimate (None if no profile is seen) and
+    the behaviour's mode ("search", "follow" or "turn")."""
 
     reference: np.ndarray
     estimate: ProfileEstimate | None
-    points: np.ndarray
     mode: str
 
 
@@ -257,7 +252,7 @@ class HorizontalFollower(_Follower):
         reference[2] = self.depth_z
         reference[3] = self.yaw_ref
         reference[7] = yaw_rate
-        return FollowerOutput(reference, estimate, points, mode)
+        return FollowerOutput(reference, estimate, mode)
 
 
 class VerticalFollower(_Follower):
@@ -323,4 +318,4 @@ class VerticalFollower(_Follower):
         if reference[2] >= -self.params.min_depth:  # depth limit: hold below it
             reference[2] = -self.params.min_depth
             reference[6] = min(reference[6], 0.0)
-        return FollowerOutput(reference, estimate, points, mode)
+        return FollowerOutput(reference, estimate, mode)

@@ -19,8 +19,8 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from drake_auv.sensors.returns import SonarReturns
 from drake_auv.perception.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
+from drake_auv.sensors.returns import SonarReturns
 from drake_auv.vehicle import STATE_SIZE
 
 MODES = ("search", "follow", "turn")
