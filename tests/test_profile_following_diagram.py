@@ -99,3 +99,27 @@ def test_ceiling_turn_inside_the_c_in_vertical_mode():
     assert x[2, -1] == pytest.approx(-11.0, abs=0.25)  # 2 m under the ceiling (z = -9)
     assert x[0, -1] < 5.0  # moving along the ceiling towards the opening
     assert true_clearance(scenario.world, x[:3].T).min() > 1.5
+
+
+def test_true_clearance_is_exact_on_a_box():
+    import trimesh
+
+    box = trimesh.creation.box(extents=(2.0, 2.0, 2.0))
+    q = np.random.default_rng(0).uniform(-3, 3, (500, 3))
+    outside = np.linalg.norm(np.maximum(np.abs(q) - 1.0, 0.0), axis=1)
+    inside = np.all(np.abs(q) < 1.0, axis=1)
+    expected = np.where(inside, 1.0 - np.abs(q).max(axis=1), outside)
+    np.testing.assert_allclose(true_clearance(box, q), expected, atol=1e-9)
+    with pytest.raises(ValueError, match="points"):
+        true_clearance(box, [[0.0, np.nan, 0.0]])
+
+
+def test_diagram_rejects_bad_options():
+    world = get_scenario("pool").world
+    start = np.zeros(12)
+    with pytest.raises(ValueError, match="mode"):
+        build_profile_following_diagram(world, start, "sideways")
+    with pytest.raises(ValueError, match="profiler_options"):
+        build_profile_following_diagram(world, start, profiler_options={"beams": 3})
+    with pytest.raises(ValueError, match="initial_state"):
+        build_profile_following_diagram(world, np.zeros(6))
