@@ -209,7 +209,8 @@ def test_monterey_tiles(tile):
     (dict(overlap=1.0), "overlap"), (dict(slope_threshold=0.0), "slope_threshold"),
     (dict(slope_threshold=-0.5), "slope_threshold"), (dict(slice_spacing=0.0), "slice_spacing"),
     (dict(roi=(1000.0, 1000.0, 1100.0, 1100.0)), "outside the grid"),
-    (dict(sweep_angle_deg=np.inf), "sweep_angle_deg"), (dict(slice_sensor="up"), "slice_sensor")])
+    (dict(sweep_angle_deg=np.inf), "sweep_angle_deg"), (dict(slice_sensor="up"), "slice_sensor"),
+    (dict(sensor_range=0.0), "sensor_range"), (dict(sample_spacing=-1.0), "sample_spacing")])
 def test_bad_parameters_are_named(kwargs, match):
     bathy = random_seabed(0, (20, 20), 1.0, 2.0, 4.0)
     with pytest.raises(ValueError, match=match):

@@ -113,7 +113,9 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     ds = omega / 4.0 if sample_spacing is None else float(sample_spacing)
     if not (np.isfinite(ds) and ds > 0):
         raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
-    bar = tqdm(total=5, desc="plan", disable=not progress, leave=False)
+    if sensor_range is not None and not (np.isfinite(sensor_range) and sensor_range > 0):
+        raise ValueError(f"sensor_range must be > 0 m, got {sensor_range}")
+    bar = tqdm(total=6, desc="plan", disable=not progress, leave=False)
     if roi is not None:
         bathy = crop_to_roi(bathy, roi)
     labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
@@ -182,10 +184,11 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                   slice_sensor=slice_sensor)
     plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                         None, surface)
-    bar.close()
     if compute_metrics and baseline:
         from drake_auv.planning.metrics import evaluate_plan
 
         plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                             evaluate_plan(plan), surface)
+    bar.update()
+    bar.close()
     return plan
