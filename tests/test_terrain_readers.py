@@ -176,3 +176,23 @@ def test_rotated_geotransform_is_kept_in_to_crs(tmp_path):
         expect = [transform.a * (col + 0.5) + transform.b * (row + 0.5) + transform.c,
                   transform.d * (col + 0.5) + transform.e * (row + 0.5) + transform.f]
         np.testing.assert_allclose(bathy.world_to_crs(world)[0], expect, atol=1e-9)
+
+
+def test_netcdf_with_several_variables_picks_the_elevation(tmp_path):
+    path = tmp_path / "multi.nc"
+    with netcdf_file(path, "w") as f:
+        f.createDimension("x", 5)
+        f.createDimension("y", 4)
+        f.createVariable("x", "f8", ("x",))[:] = np.arange(5.0)
+        f.createVariable("y", "f8", ("y",))[:] = np.arange(4.0)
+        f.createVariable("uncertainty", "f4", ("y", "x"))[:] = np.ones((4, 5))
+        f.createVariable("elevation", "f4", ("y", "x"))[:] = Z
+    np.testing.assert_array_equal(read_bathymetry(path).z, Z)
+    path = tmp_path / "ambiguous.nc"
+    with netcdf_file(path, "w") as f:
+        f.createDimension("x", 5)
+        f.createDimension("y", 4)
+        f.createVariable("a", "f4", ("y", "x"))[:] = Z
+        f.createVariable("b", "f4", ("y", "x"))[:] = Z
+    with pytest.raises(ValueError, match="named like an elevation"):
+        read_bathymetry(path)

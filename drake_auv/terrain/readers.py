@@ -80,6 +80,22 @@ def _degree_axes(tags: dict) -> bool:
     return any(k.endswith("#units") and "degree" in str(v).lower() for k, v in tags.items())
 
 
+_ELEVATION_NAMES = ("z", "elevation", "band1", "height", "topo", "bathymetry")
+
+
+def _elevation_subdataset(path: FilePath, subdatasets: list[str]) -> str:
+    """The elevation variable of a multi-variable container (netCDF, HDF5)."""
+    by_name = {sd.rsplit(":", 1)[-1].lower(): sd for sd in subdatasets}
+    for name in _ELEVATION_NAMES:
+        if name in by_name:
+            return by_name[name]
+    if len(subdatasets) == 1:
+        return subdatasets[0]
+    raise ValueError(f"{path}: no band, and none of its variables "
+                     f"{[sd.rsplit(':', 1)[-1] for sd in subdatasets]} is named like an "
+                     f"elevation {list(_ELEVATION_NAMES)}")
+
+
 def _read_raster(path: FilePath) -> Bathymetry:
     import warnings
 
@@ -90,9 +106,11 @@ def _read_raster(path: FilePath) -> Bathymetry:
         with warnings.catch_warnings():
             # A grid without georeferencing is read in its own units, taken as metres.
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
+            source = path
             with rasterio.open(path) as ds:
                 if ds.count < 1:
-                    raise ValueError(f"{path}: the raster has no band")
+                    source = _elevation_subdataset(path, ds.subdatasets)
+            with rasterio.open(source) as ds:
                 band = ds.read(1, masked=True).astype(float)
                 transform = ds.transform
                 crs = ds.crs
