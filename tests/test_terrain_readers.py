@@ -183,8 +183,10 @@ def test_netcdf_with_several_variables_picks_the_elevation(tmp_path):
     with netcdf_file(path, "w") as f:
         f.createDimension("x", 5)
         f.createDimension("y", 4)
-        f.createVariable("x", "f8", ("x",))[:] = np.arange(5.0)
-        f.createVariable("y", "f8", ("y",))[:] = np.arange(4.0)
+        for name, n in (("x", 5), ("y", 4)):
+            v = f.createVariable(name, "f8", (name,))
+            v[:] = np.arange(float(n))
+            v.units, v.standard_name = "m", f"projection_{name}_coordinate"
         f.createVariable("uncertainty", "f4", ("y", "x"))[:] = np.ones((4, 5))
         f.createVariable("elevation", "f4", ("y", "x"))[:] = Z
     np.testing.assert_array_equal(read_bathymetry(path).z, Z)
