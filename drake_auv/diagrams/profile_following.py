@@ -80,7 +80,8 @@ def build_profile_following_diagram(world, initial_state, mode: str = "horizonta
         seed: seeds the profiler noise and the estimator's RANSAC.
         gains: tracker gains (default: `TrackingGains()`).
         log_period: s, of the state, reference and profile logs.
-        scene: a `drake_auv.visualization.Scene` to draw the vehicle and its trail in.
+        scene: a `drake_auv.visualization.Scene` to draw the vehicle, its trail and the
+            profiler's recent returns in.
     Returns (diagram, ProfileFollowingHandles); exported outputs `state`, `estimated_state`,
     `reference`, `profile`.
     """
@@ -130,7 +131,14 @@ def build_profile_following_diagram(world, initial_state, mode: str = "horizonta
     builder.ExportOutput(controller.profile_output, "profile")
     visualizer = None
     if scene is not None:
+        from drake_auv.visualization.sensors import SonarVisualizer
+
         visualizer = scene.add_vehicle_visualizer(builder, vehicle.dynamics.state_output)
+        # the head's returns of the last ~20 s (a local map's worth) as points, beams live
+        returns_view = builder.AddNamedSystem("profiler_visualizer", SonarVisualizer(
+            scene.meshcat, scene.path_of("profiler"), period=profiler.period, history=200,
+            point_size=0.06))
+        builder.Connect(profiler.returns_output, returns_view.returns_input)
     diagram = builder.Build()
     diagram.set_name(f"profile_following_{mode}")
     return diagram, ProfileFollowingHandles(vehicle, profiler, controller, logs["state_log"],
