@@ -36,8 +36,7 @@ class TerrainSurface:
         distance_resolution: largest spacing of the surface samples in the KD-tree used for
             distances, m (default: the cell size). A sampled surface overestimates the distance
             to the true surface by at most delta^2 / (2 d), delta being half the diagonal of a
-            sample cell measured on the surface (plan-view diagonal times sqrt(1 + S_max^2));
-            `clearance_target` adds that margin.
+            sample cell measured on the surface (plan-view diagonal times sqrt(1 + S_max^2)).
     """
 
     def __init__(self, bathy: Bathymetry, distance_resolution: float | None = None):
@@ -91,10 +90,6 @@ class TerrainSurface:
         xx, yy = np.meshgrid(xs, ys)
         self._tree_points = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
         self._tree = cKDTree(self._tree_points, balanced_tree=False)
-        # On the surface the samples are further apart than in plan view, by up to
-        # sqrt(1 + S_max^2) on the steepest slope.
-        stretch = np.sqrt(1.0 + float(np.max(self.gx ** 2 + self.gy ** 2)))
-        self._sample_half_diagonal = 0.5 * np.hypot(self.spacing[0] / fx, self.spacing[1] / fy) * stretch
 
     def distance(self, points, upper_bound: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
         """(N,) distance from each point to the surface, m, and (N, 3) the nearest surface sample.
@@ -111,12 +106,6 @@ class TerrainSurface:
         nearest = np.full((len(d), 3), np.nan)
         nearest[found] = self._tree_points[idx[found]]
         return d, nearest
-
-    def clearance_target(self, omega: float) -> float:
-        """Distance to the sampled surface that guarantees at least `omega` to the true one."""
-        if self._tree is None:
-            self._build_tree()
-        return float(np.hypot(omega, self._sample_half_diagonal))
 
     def clamp_to_grid(self, points: np.ndarray) -> np.ndarray:
         """Points with x, y clamped to the grid's extent (cell centres): the path stays over
