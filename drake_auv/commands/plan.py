@@ -20,7 +20,8 @@ def add_parser(subparsers) -> None:
                         help="GeoTIFF, ESRI ASCII (.asc), XYZ grid, netCDF/GMT (.nc, .grd), BAG, "
                              ".npz (z, spacing, origin), or 'caldera' for the synthetic site")
     parser.add_argument("--roi", help="region of interest in map coordinates: "
-                                      "'xmin,ymin,xmax,ymax' or a polygon 'x1,y1;x2,y2;x3,y3;...'")
+                                      "'xmin,ymin,xmax,ymax' or a polygon 'x1,y1;x2,y2;x3,y3;...' "
+                                      "(write --roi=-123,... when it starts with a minus sign)")
     parser.add_argument("--omega", type=float, default=2.0,
                         help="offset to the terrain, m, > 0 (default 2)")
     parser.add_argument("--slope-threshold", type=float, default=0.5,
