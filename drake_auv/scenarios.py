@@ -50,6 +50,7 @@ class Scenario:
     target_faces: np.ndarray = field(repr=False)
     start_state: np.ndarray
     params: dict
+    _top_surfaces: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def target_area(self) -> float:
@@ -62,7 +63,8 @@ class Scenario:
 
         The world is sampled by vertical rays from above on a grid of `spacing` (default
         `params["prior_spacing"]`): the top surface, NaN where nothing is below. The grid is then
-        shifted horizontally by `error_m` in a direction drawn from `seed`.
+        shifted horizontally by `error_m` in a direction drawn from `seed`. The survey is
+        computed once per spacing and kept: change `world` before the first call, not after.
 
         Args:
             error_m: horizontal map error, m, in [0, 5].
@@ -75,17 +77,21 @@ class Scenario:
         spacing = float(self.params["prior_spacing"] if spacing is None else spacing)
         if not (np.isfinite(spacing) and spacing > 0):
             raise ValueError(f"prior_map: spacing must be > 0 m, got {spacing}")
-        bathy = _top_surface(self.world, spacing, self.params.get("prior_bounds"))
+        bathy = self._top_surfaces.get(spacing)
+        if bathy is None:  # the survey of the world, once per spacing
+            bathy = _top_surface(self.world, spacing)
+            self._top_surfaces[spacing] = bathy
         theta = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi)
         offset = error_m * np.array([np.cos(theta), np.sin(theta)])
         return Bathymetry(bathy.z, bathy.spacing, tuple(np.add(bathy.origin, offset)),
                           bathy.crs, None)
 
 
-def _top_surface(world: trimesh.Trimesh, spacing: float, bounds=None) -> Bathymetry:
-    """Samples the first surface seen from above on a regular grid (NaN where no hit)."""
+def _top_surface(world: trimesh.Trimesh, spacing: float) -> Bathymetry:
+    """Samples the first surface seen from above on a regular grid over the world's bounds
+    (NaN where nothing lies below)."""
     lo, hi = world.bounds
-    xmin, xmax, ymin, ymax = bounds if bounds is not None else (lo[0], hi[0], lo[1], hi[1])
+    xmin, xmax, ymin, ymax = lo[0], hi[0], lo[1], hi[1]
     nx = int(np.floor((xmax - xmin) / spacing)) + 1
     ny = int(np.floor((ymax - ymin) / spacing)) + 1
     if nx < 3 or ny < 3:
