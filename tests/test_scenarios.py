@@ -216,3 +216,17 @@ def test_scenarios_command_lists_shows_and_exports(tmp_path, capsys):
     with pytest.raises(ValueError, match="need a site name"):
         args = parser.parse_args(["scenarios", "--prior", str(prior)])
         args.func(args)
+
+
+def test_scenarios_command_rejects_unknown_file_types_before_work(tmp_path, capsys):
+    import argparse
+
+    from drake_auv.commands import scenarios as command
+
+    parser = argparse.ArgumentParser()
+    command.add_parser(parser.add_subparsers(dest="command"))
+    for option, name in (("--prior", "map.csv"), ("--world", "world.dae")):
+        args = parser.parse_args(["scenarios", "pool", option, str(tmp_path / name)])
+        with pytest.raises(ValueError, match=option):
+            args.func(args)
+    assert capsys.readouterr().out == "" and not any(tmp_path.iterdir())

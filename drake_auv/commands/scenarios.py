@@ -38,6 +38,10 @@ def run(args) -> int:
         for name, text in list_scenarios():
             print(f"{name:<{width}}  {text}")
         return 0
+    if args.prior and FilePath(args.prior).suffix.lower() not in (".tif", ".tiff", ".npz"):
+        raise ValueError(f"--prior: file must end in .tif or .npz, got {args.prior}")
+    if args.world and FilePath(args.world).suffix.lower() not in (".ply", ".stl", ".obj", ".glb"):
+        raise ValueError(f"--world: file must end in .ply, .stl, .obj or .glb, got {args.world}")
     sc = get_scenario(args.name)
     lo, hi = sc.world.bounds
     x, y, z, _, _, yaw = sc.start_state[:6]
@@ -52,8 +56,6 @@ def run(args) -> int:
         print(f"  wrote prior map to {args.prior}")
     if args.world:
         out = FilePath(args.world)
-        if out.suffix.lower() not in (".ply", ".stl", ".obj", ".glb"):
-            raise ValueError(f"--world: file must end in .ply, .stl, .obj or .glb, got {out.name}")
         out.parent.mkdir(parents=True, exist_ok=True)
         sc.world.export(out)
         print(f"  wrote world mesh to {out}")
@@ -61,11 +63,8 @@ def run(args) -> int:
 
 
 def _write_prior(bathy, out: FilePath) -> None:
-    suffix = out.suffix.lower()
-    if suffix not in (".tif", ".tiff", ".npz"):
-        raise ValueError(f"--prior: file must end in .tif or .npz, got {out.name}")
     out.parent.mkdir(parents=True, exist_ok=True)
-    if suffix == ".npz":
+    if out.suffix.lower() == ".npz":
         np.savez(out, z=bathy.z, spacing=np.array(bathy.spacing), origin=np.array(bathy.origin))
     else:
         from drake_auv.terrain.readers import write_geotiff
