@@ -395,8 +395,10 @@ def get_scenario(name: str, **overrides) -> Scenario:
     params = {**site["params"], **overrides}
     if site["start"] is not None:
         start = site["start"]()
-    else:  # above the deepest point of the tile, at the survey offset
+    else:  # above the centre of the tile at the survey offset omega
         lo, hi = world.bounds
         centre = 0.5 * (lo + hi)
-        start = _state(centre[0], centre[1], hi[2] + 5.0)
+        top = np.array([centre[0], centre[1], hi[2] + 1.0])
+        seabed = RayCaster(world).cast(top, [[0.0, 0.0, -1.0]], hi[2] - lo[2] + 2.0)
+        start = _state(centre[0], centre[1], seabed.points[0, 2] + params["omega"])
     return Scenario(name, site["description"], world, target.copy(), start, params)

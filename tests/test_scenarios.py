@@ -174,6 +174,8 @@ def test_monterey_is_the_real_tile():
     grid = read_bathymetry(DATA_DIR / "monterey" / MONTEREY_TILE)
     assert len(sc.world.faces) == 2 * np.prod(np.subtract(grid.shape, 1))
     assert abs(sc.world.bounds[0, 2] - np.nanmin(grid.z)) < 1e-6
+    below = RayCaster(sc.world).cast(sc.start_state[:3], [[0.0, 0.0, -1.0]], 500.0)
+    assert below.ranges[0] == pytest.approx(sc.params["omega"], abs=1e-3)  # survey offset
 
 
 def test_overrides_copies_and_bad_names():
