@@ -163,6 +163,22 @@ def test_slice_spacing_override_gives_two_contours_two_metres_apart():
     assert len(levels) == 2 and levels[1] - levels[0] == pytest.approx(2.0)
 
 
+def test_slice_count_fixes_the_number_of_contours_centred_on_the_wall():
+    # A 12 m high wall: six planes at 2 m spacing, or exactly two when slice_count = 2.
+    x = np.arange(0, 80.5, 0.5)
+    z1 = np.clip(x - 34.0, 0.0, 12.0) - 40.0
+    bathy = Bathymetry(np.tile(z1, (81, 1)), (0.5, 0.5))
+    all_levels = sorted({c.level for c in plan_coverage(
+        bathy, omega=10.0, slice_spacing=2.0, compute_metrics=False).contours})
+    two = sorted({c.level for c in plan_coverage(
+        bathy, omega=10.0, slice_spacing=2.0, slice_count=2, compute_metrics=False).contours})
+    assert len(all_levels) >= 5
+    assert len(two) == 2 and two[1] - two[0] == pytest.approx(2.0)
+    assert np.mean(two) == pytest.approx(np.mean(all_levels), abs=0.5)
+    with pytest.raises(ValueError, match="slice_count"):
+        plan_coverage(bathy, omega=10.0, slice_count=0)
+
+
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2 ** 31 - 1), relief=st.floats(0.0, 15.0),
        smoothness=st.floats(4.0, 10.0), omega=st.floats(1.5, 3.0), hole=st.booleans())

@@ -34,6 +34,9 @@ def add_parser(subparsers) -> None:
                         help="lane direction, degrees from +x (default: fewest lanes)")
     parser.add_argument("--slice-spacing", type=float, default=None,
                         help="vertical spacing of the slicing planes, m (default: footprint)")
+    parser.add_argument("--slice-count", type=int, default=None,
+                        help="slicing planes per high-slope region, centred on it (default: "
+                             "as many as cover it)")
     parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
                         help="on high-slope regions look along the inward normal (default) or "
                              "with one fixed tilt per region")
@@ -59,7 +62,7 @@ def run(args) -> int:
     plan = plan_coverage(bathy, roi=roi, omega=args.omega, aperture_deg=args.aperture,
                          overlap=args.overlap, slope_threshold=args.slope_threshold,
                          sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
-                         slice_sensor=args.slice_sensor,
+                         slice_count=args.slice_count, slice_sensor=args.slice_sensor,
                          progress=True)
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True)
     print(table3_markdown(plan.metrics))

@@ -74,6 +74,7 @@ def _region_adjacency(dec: Decomposition, bathy: Bathymetry, regions: np.ndarray
 def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_deg: float = 60.0,
                   overlap: float = 0.1, slope_threshold: float = 0.5,
                   sweep_angle_deg: float | None = None, slice_spacing: float | None = None,
+                  slice_count: int | None = None,
                   closing_radius: float | None = None, opening_radius: float | None = None,
                   min_area: float | None = None, sample_spacing: float | None = None,
                   sensor_range: float | None = None, slice_sensor: str = "normal",
@@ -90,6 +91,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         slope_threshold: delta_s > 0 of the classification.
         sweep_angle_deg: lane direction of the planar cells, degrees from +x (None: fewest lanes).
         slice_spacing: vertical spacing of the slicing planes, m (None: from the footprint).
+        slice_count: number of slicing planes per high-slope region, centred on its elevation
+            range (None: as many as cover the region at `slice_spacing`).
         closing_radius, opening_radius, min_area: classification clean-up (see `classify`).
         sample_spacing: largest distance between path samples, m (default Omega / 4).
         sensor_range: largest range at which the sensor sees, m (default 2 Omega), for metrics.
@@ -106,6 +109,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         raise ValueError(f"plan_coverage needs a Bathymetry, got {type(bathy).__name__}")
     if slice_spacing is not None and not (np.isfinite(slice_spacing) and slice_spacing > 0):
         raise ValueError(f"slice_spacing must be > 0 m, got {slice_spacing}")
+    if slice_count is not None and not (int(slice_count) == slice_count and slice_count >= 1):
+        raise ValueError(f"slice_count must be a whole number >= 1, got {slice_count}")
     if sweep_angle_deg is not None and not np.isfinite(sweep_angle_deg):
         raise ValueError(f"sweep_angle_deg must be a finite angle in degrees, got {sweep_angle_deg}")
     if slice_sensor not in ("normal", "fixed-tilt"):
@@ -162,7 +167,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         r = node - n_cells + 1
         visit.append(("region", r))
         mask = labels.regions == r
-        levels = slice_levels(surface, mask, labels.slope, spacing, slice_spacing)
+        levels = slice_levels(surface, mask, labels.slope, spacing, slice_spacing, slice_count)
         depression = fixed_depression(labels.slope[mask]) if slice_sensor == "fixed-tilt" else None
         per_level = slice_region(surface, mask, r, levels, omega, ds, min_length=spacing,
                                  depression=depression)
@@ -179,7 +184,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     bar.update()
     params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
                   slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
-                  slice_spacing=slice_spacing, lane_spacing=spacing, sample_spacing=ds,
+                  slice_spacing=slice_spacing, slice_count=slice_count, lane_spacing=spacing,
+                  sample_spacing=ds,
                   sensor_range=2.0 * omega if sensor_range is None else float(sensor_range),
                   slice_sensor=slice_sensor)
     plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,

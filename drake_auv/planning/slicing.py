@@ -52,15 +52,19 @@ class Contour:
 
 
 def slice_levels(surface: TerrainSurface, region_mask: np.ndarray, slope: np.ndarray,
-                 footprint: float, spacing: float | None = None) -> np.ndarray:
-    """Elevations of the slicing planes across one region, m (at least one)."""
+                 footprint: float, spacing: float | None = None,
+                 count: int | None = None) -> np.ndarray:
+    """Elevations of the slicing planes across one region, m (at least one).
+
+    With `count`, exactly that many planes `spacing` apart, centred on the region's elevation
+    range (the reference's deliberately redundant plan of two contours 2 m apart)."""
     z = surface.z[region_mask]
     zmin, zmax = float(z.min()), float(z.max())
     if spacing is None:
         s_low = float(np.nanquantile(slope[region_mask], 0.1))
         s_low = max(s_low, 0.05)
         spacing = footprint * s_low / np.sqrt(1.0 + s_low ** 2)
-    n = max(1, int(np.ceil((zmax - zmin) / spacing - 1e-9)))
+    n = max(1, int(np.ceil((zmax - zmin) / spacing - 1e-9))) if count is None else int(count)
     first = zmin + 0.5 * ((zmax - zmin) - (n - 1) * spacing)
     return first + spacing * np.arange(n)
 
