@@ -45,12 +45,12 @@ VEHICLE_RADIUS = 1.0  # m, GIRONA 500 half-length, the contact threshold
 
 
 def nominal_contour(prior, depth: float, omega: float, block_size: float, start,
-                    spacing: float = 1.0, overrun: float = 5.0) -> Path:
+                    spacing: float = 1.0, overrun: float = 7.0) -> Path:
     """The nominal path planned on the prior map: the offset-Omega contour, at `depth`, of the
     cross-section of the structure, kept around the right-most block (x beyond its west face
-    less `overrun`, m: the largest expected map error, so both side faces are flown past their
-    ends wherever the error puts the block), flown counter-clockwise (structure to port),
-    with `start` prepended (the transit from the start)."""
+    less `overrun`, m: the largest expected map error plus 2 m, so both side faces are flown
+    past their ends wherever the error puts the block), flown counter-clockwise (structure to
+    port), with `start` prepended (the transit from the start)."""
     solid = np.nan_to_num(prior.z, nan=-np.inf) > -depth
     if not solid.any():
         raise ValueError(f"the prior map has no structure above {depth} m depth")
@@ -171,7 +171,8 @@ def figure(scenario, runs: list[tuple[str, dict, dict]], nominal: Path, filename
         occ = occ[np.all(np.abs(occ[:, :2]) < 25.0, axis=1) & (np.abs(occ[:, 2] + depth) < 3.0)]
         order = np.argsort(occ[:, 2])
         ax.scatter(occ[order, 0], occ[order, 1], s=4, marker="s", zorder=2,
-                   c=depth_colours(occ[order, 2]) / 255.0, label="occupied voxels within 3 m of the depth")
+                   c=depth_colours(occ[order, 2]) / 255.0,
+                   label="occupied voxels within 3 m of the depth")
         ax.plot(nominal.points[:, 0], nominal.points[:, 1], ":", color="tab:blue", lw=2,
                 zorder=3, label="nominal path (prior map)")
         xyz = m["xyz"]

@@ -110,3 +110,20 @@ def test_bad_scan_raises():
         omap.insert_scan(np.zeros(3), np.ones((2, 3)), np.ones(3), 20.0)
     with pytest.raises(ValueError, match="max_range"):
         omap.insert_scan(np.zeros(3), np.ones((2, 3)), np.ones(2), -1.0)
+
+
+def test_box_query_matches_the_whole_map_and_sees_clearing():
+    omap = OctreeMap(resolution=0.5)
+    d = _fan(n=121, aperture=np.radians(90.0))
+    omap.insert_scan(np.zeros(3), d, np.full(len(d), 10.0), 20.0)
+    lo, hi = np.array([0.0, -3.0, -1.0]), np.array([20.0, 3.0, 1.0])
+    boxed = omap.occupied_points(lo, hi)  # while the map is dirty: checks the box only
+    every = omap.occupied_points()
+    inside = every[np.all((every >= lo) & (every <= hi), axis=1)]
+    assert 0 < len(boxed) < len(every)
+    assert sorted(map(tuple, boxed)) == sorted(map(tuple, inside))
+    assert np.array_equal(omap.occupied_points(lo, hi), inside)  # from the clean cache
+    for _ in range(4):  # clear the wall with beams that return nothing
+        omap.insert_scan(np.zeros(3), d, np.full(len(d), np.nan), 20.0)
+    assert len(omap.occupied_points(lo, hi)) == 0
+    assert len(omap.occupied_points()) == 0

@@ -56,7 +56,7 @@ def test_resample_polyline_is_even_and_keeps_ends():
 
 
 def test_initial_trajectory_moves_waypoints_onto_the_offset():
-    slice_map = SliceMap(_wall(), (-5.0, -5.0), depth_band=1.5)
+    slice_map = SliceMap(_wall(), (-5.0, -5.0), depth_band=1.5, clearance=3.0)
     x = np.array([3.0, 0.0, -5.0])
     waypoints = np.array([[3.0, 2.0, -5.0], [3.0, 4.0, -5.0]])  # prior map 3 m off
     traj, fraction = initial_trajectory(x, waypoints, slice_map, omega=6.0, spacing=0.5)
@@ -64,7 +64,7 @@ def test_initial_trajectory_moves_waypoints_onto_the_offset():
     assert np.allclose(traj[-1], [6.0, 4.0, -5.0])
     assert np.all(np.diff(fraction) > 0) and fraction[-1] == pytest.approx(1.0)
     # Nothing mapped near: the waypoints stay where they are.
-    empty = SliceMap(np.zeros((0, 3)), (-5.0, -5.0), 1.5)
+    empty = SliceMap(np.zeros((0, 3)), (-5.0, -5.0), 1.5, 3.0)
     traj, _ = initial_trajectory(x, waypoints, empty, omega=6.0, spacing=0.5)
     assert np.allclose(traj[-1], waypoints[-1])
 
@@ -93,3 +93,16 @@ def test_replan_section_is_deterministic_and_none_when_done():
     b = replan_section([4.0, 0.0, -5.0], WAYPOINTS + [3, 0, 0], 0, _wall(), seed=5)
     assert np.array_equal(a.trajectory, b.trajectory)
     assert replan_section([0, 19, -5.0], WAYPOINTS, 20, _wall()) is None
+
+
+def test_slice_map_clearance_is_the_exact_3d_distance_within_the_bound():
+    rng = np.random.default_rng(4)
+    occupied = np.vstack([_wall(), rng.uniform([-3, -5, -12], [12, 25, 3], (30, 3))])
+    slice_map = SliceMap(occupied, (-5.0, -5.0), depth_band=1.5, clearance=3.0)
+    points = rng.uniform([-2, 0, -6], [14, 20, -4], (500, 3))
+    exact = np.linalg.norm(points[:, None] - occupied[None], axis=2).min(axis=1)
+    got = slice_map.clearance(points, 3.0)
+    within = exact < 3.0
+    assert within.sum() > 50 and (~within).sum() > 50
+    assert np.allclose(got[within], exact[within])
+    assert np.all(np.isinf(got[~within]))

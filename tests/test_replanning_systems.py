@@ -91,8 +91,12 @@ def test_breakwater_replanning_keeps_the_offset_without_contact():
     simulator.AdvanceTo(90.0)
     context = simulator.get_context()
     xyz = handles.state_log.FindLog(context).data()[:3].T
-    q = np.abs(xyz[:, :2]) - p["block_size"] / 2  # the target block is centred on the origin
-    distance = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+    # Horizontal distance to the row of blocks (the right-most centred on the origin).
+    pitch = p["block_size"] + p["block_gap"]
+    centres = -pitch * np.arange(20)
+    q = np.abs(np.stack([xyz[:, None, 0] - centres, np.broadcast_to(xyz[:, None, 1],
+                                                                    (len(xyz), 20))], axis=2))
+    distance = np.linalg.norm(np.maximum(q - p["block_size"] / 2, 0.0), axis=2).min(axis=1)
     assert distance.min() > 1.0 + 2.0  # vehicle radius plus a margin
     # Once at the block (after the transit from the start), the offset Omega is kept.
     near = distance < 12.0

@@ -125,10 +125,30 @@ class OctreeMap:
         self._kdtree = cKDTree(self._occupied) if len(self._occupied) else None
         self._dirty = False
 
-    def occupied_points(self) -> np.ndarray:
-        """(m, 3) centres of the occupied voxels (finest resolution), m."""
-        self._refresh()
-        return self._occupied
+    def occupied_points(self, lo=None, hi=None) -> np.ndarray:
+        """(m, 3) centres of the occupied voxels (finest resolution), m.
+
+        With a box (`lo`, `hi`: (3,) corners, m), only the voxels inside it, and only those
+        are checked against the octree: a local query (the replanner's) costs what the box
+        holds, not what the whole map holds (a seabed of thousands of voxels, say).
+        """
+        if lo is None and hi is None:
+            self._refresh()
+            return self._occupied
+        lo = np.full(3, -np.inf) if lo is None else np.asarray(lo, dtype=float)
+        hi = np.full(3, np.inf) if hi is None else np.asarray(hi, dtype=float)
+        if not self._dirty:
+            inside = np.all((self._occupied >= lo) & (self._occupied <= hi), axis=1)
+            return self._occupied[inside]
+        if not self._candidates:
+            return np.zeros((0, 3))
+        codes = np.fromiter(self._candidates, dtype=np.int64, count=len(self._candidates))
+        centres = (_decode(codes) + 0.5) * self.resolution
+        inside = np.all((centres >= lo) & (centres <= hi), axis=1)
+        codes, centres = codes[inside], centres[inside]
+        occupied = self.tree.getLabels(centres) == 1 if len(centres) else np.zeros(0, bool)
+        self._candidates.difference_update(codes[~occupied].tolist())
+        return centres[occupied]
 
     @property
     def kdtree(self) -> cKDTree | None:

@@ -22,6 +22,7 @@ term keeps the nominal depth.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -112,26 +113,42 @@ def resample_polyline(points, spacing: float) -> np.ndarray:
     return resample(points, min(spacing, total / 2.0))
 
 
+DEPTH_MARGIN = 1.0  # m, how far rollouts may stray from the section's depths (see SliceMap)
+
+
 class SliceMap:
     """Occupied voxels of the on-line map near a section, queried for the replanning cost.
 
-    Built once per replanning step: `all_tree` (3D, every occupied voxel, for clearance) and
-    `band_tree` (2D, voxels within `depth_band` of the section's depths, for the offset).
+    Built once per replanning step from the voxels within reach of the section:
+    - `band_tree` (2D): voxels within `depth_band` of the section's depths, for the offset;
+    - the clearance slab: voxels within `clearance + margin` of the section's depths, the only
+      ones that can be nearer than `clearance` to a point of the section (rollouts stay within
+      `margin` of its depths: the depth cost holds them). A 2D KD-tree of the slab rules most
+      points out (horizontal distance >= clearance), a 3D one measures the rest exactly.
     """
 
-    def __init__(self, occupied: np.ndarray, z_range: tuple[float, float], depth_band: float):
+    def __init__(self, occupied: np.ndarray, z_range: tuple[float, float], depth_band: float,
+                 clearance: float, margin: float = DEPTH_MARGIN):
         occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)
-        self.all_tree = cKDTree(occupied) if len(occupied) else None
-        in_band = ((occupied[:, 2] >= z_range[0] - depth_band)
-                   & (occupied[:, 2] <= z_range[1] + depth_band))
+        z = occupied[:, 2]
+        in_band = (z >= z_range[0] - depth_band) & (z <= z_range[1] + depth_band)
         self.band_points = occupied[in_band, :2]
         self.band_tree = cKDTree(self.band_points) if len(self.band_points) else None
+        reach = clearance + margin
+        slab = occupied[(z >= z_range[0] - reach) & (z <= z_range[1] + reach)]
+        self.slab_tree_2d = cKDTree(slab[:, :2]) if len(slab) else None
+        self.slab_tree_3d = cKDTree(slab) if len(slab) else None
 
     def clearance(self, points: np.ndarray, upper_bound: float) -> np.ndarray:
         """3D distance to the nearest occupied voxel centre, inf beyond `upper_bound`, m."""
-        if self.all_tree is None:
-            return np.full(points.shape[:-1], np.inf)
-        d, _ = self.all_tree.query(points.reshape(-1, 3), distance_upper_bound=upper_bound)
+        flat = points.reshape(-1, 3)
+        d = np.full(len(flat), np.inf)
+        if self.slab_tree_2d is None:
+            return d.reshape(points.shape[:-1])
+        d_h, _ = self.slab_tree_2d.query(flat[:, :2], distance_upper_bound=upper_bound)
+        near = np.isfinite(d_h)  # the 3D distance is at least the horizontal one
+        if near.any():
+            d[near], _ = self.slab_tree_3d.query(flat[near], distance_upper_bound=upper_bound)
         return d.reshape(points.shape[:-1])
 
     def offset(self, points: np.ndarray, upper_bound: float):
@@ -222,6 +239,7 @@ class SectionPlan:
         initial, trajectory: (N, 3) initial and optimised trajectories, from the vehicle.
         waypoint_arclength: (len(indices),) where each waypoint falls along `trajectory`, m.
         initial_cost, cost, iterations: STOMP's.
+        query_time: wall time of the map query (occupied voxels in the section's box), s.
     """
 
     indices: np.ndarray
@@ -231,6 +249,7 @@ class SectionPlan:
     initial_cost: float
     cost: float
     iterations: int
+    query_time: float = 0.0
 
     def next_index(self, travelled: float, capture_radius: float = 0.5) -> int:
         """The first waypoint not passed after flying `travelled` metres of the trajectory.
@@ -242,13 +261,14 @@ class SectionPlan:
         return int(self.indices[passed][-1] + 1) if passed.any() else int(self.indices[0])
 
 
-def replan_section(position, waypoints, next_index: int, occupied: np.ndarray,
+def replan_section(position, waypoints, next_index: int, occupied,
                    params: ReplanningParameters = ReplanningParameters(),
                    seed: int = 0) -> SectionPlan | None:
     """One replanning step: section, initial trajectory, STOMP against the occupied voxels.
 
-    `occupied` (m, 3) are the occupied voxel centres of the on-line map; only those within
-    reach of the section are used. Returns None when every waypoint was visited.
+    `occupied` is the on-line map (an `OctreeMap`, queried in the section's box only) or the
+    (m, 3) centres of its occupied voxels; only those within reach of the section are used.
+    Returns None when every waypoint was visited.
     """
     x = _check_position(position)
     waypoints = np.asarray(waypoints, dtype=float)
@@ -257,11 +277,21 @@ def replan_section(position, waypoints, next_index: int, occupied: np.ndarray,
         return None
     section = waypoints[idx]
     pts = np.vstack([x, section])
+    # Within reach: the offset's horizontal range (2 Omega) plus the clearance, and the depths
+    # of the offset band and of the clearance slab.
     reach = 2.0 * params.omega + params.clearance
-    lo, hi = pts.min(axis=0) - reach, pts.max(axis=0) + reach
-    occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)
-    local = occupied[np.all((occupied >= lo) & (occupied <= hi), axis=1)]
-    slice_map = SliceMap(local, (pts[:, 2].min(), pts[:, 2].max()), params.depth_band)
+    z_reach = max(params.depth_band, params.clearance + DEPTH_MARGIN)
+    lo = pts.min(axis=0) - [reach, reach, z_reach]
+    hi = pts.max(axis=0) + [reach, reach, z_reach]
+    start = time.perf_counter()
+    if hasattr(occupied, "occupied_points"):
+        local = occupied.occupied_points(lo, hi)
+    else:
+        occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)
+        local = occupied[np.all((occupied >= lo) & (occupied <= hi), axis=1)]
+    query_time = time.perf_counter() - start
+    slice_map = SliceMap(local, (pts[:, 2].min(), pts[:, 2].max()), params.depth_band,
+                         params.clearance)
     theta0, fraction = initial_trajectory(x, section, slice_map, params.omega, params.spacing)
     # The nominal depth of each point: the polyline's, before any offset correction.
     z_ref = resample_polyline(pts, params.spacing)
@@ -274,4 +304,4 @@ def replan_section(position, waypoints, next_index: int, occupied: np.ndarray,
     s_opt = _arclength(result.trajectory)
     at = np.interp(fraction, np.linspace(0.0, 1.0, len(s_opt)), s_opt)
     return SectionPlan(idx, theta0, result.trajectory, at, result.initial_cost, result.cost,
-                       result.iterations)
+                       result.iterations, query_time)

@@ -8,8 +8,8 @@ Between steps it outputs the reference along that plan; after the last waypoint 
 end of the last plan.
 
 The plan is abstract state (a few dozen points: cheap to copy). `log` keeps, per step, the
-time, the wall-clock time of the step (map query plus STOMP, s) and the optimised section, for
-the mission's report; it is a diagnostic written by the update, not part of the state.
+time, the wall-clock and CPU time of the step (map query plus STOMP, s) and the optimised
+section, for the mission's report; it is a diagnostic written by the update, not state.
 
 Ports: inputs `estimated_state` (12), `map` (abstract `OctreeMapHandle`); output
 `reference` (8, world: `[x, y, z, yaw, vx, vy, vz, yaw_rate]`).
@@ -51,7 +51,8 @@ class ReplanningStep:
 
     time: float
     wall_time: float  # s, the whole step: map query plus section and STOMP
-    query_time: float  # s, of which the map query (occupied voxels, rebuilt if changed)
+    query_time: float  # s (wall), of which the map query (occupied voxels in the section's box)
+    cpu_time: float  # s, the step's CPU time on its thread (what load on the machine hides)
     next_index: int
     plan: SectionPlan | None
 
@@ -117,13 +118,13 @@ class Replanner(LeafSystem):
             travelled = np.interp(t - current.start_time, current.times, arc)
             next_index = current.plan.next_index(travelled)
         handle = self.map_input.Eval(context) if self.map_input.HasValue(context) else None
-        start = time.perf_counter()
-        occupied = handle.map.occupied_points() if handle is not None else np.zeros((0, 3))
-        query = time.perf_counter() - start
+        start, start_cpu = time.perf_counter(), time.thread_time()
+        occupied = handle.map if handle is not None else np.zeros((0, 3))
         plan = replan_section(x[:3], self.waypoints, next_index, occupied, self.params,
                               seed=self.seed + current.step)
-        wall = time.perf_counter() - start
-        self.log.append(ReplanningStep(t, wall, query, next_index, plan))
+        wall, cpu = time.perf_counter() - start, time.thread_time() - start_cpu
+        query = plan.query_time if plan is not None else 0.0
+        self.log.append(ReplanningStep(t, wall, query, cpu, next_index, plan))
         if plan is None:  # every waypoint visited: hold the end of the last plan
             new = _ReplannerState(next_index, current.step + 1, None, current.start_time,
                                   current.times, current.samples)
