@@ -63,7 +63,7 @@ def build_profile_following_diagram(world, initial_state, mode: str = "horizonta
                                     depth_z: float | None = None,
                                     plane_yaw: float | None = None, seed: int = 0,
                                     gains: TrackingGains | None = None,
-                                    log_period: float = 0.1, scene=None):
+                                    log_period: float = 0.1, scene=None, extra=None):
     """Wires vehicle, profiler and controller for profile following in `world`.
 
     Args:
@@ -139,6 +139,8 @@ def build_profile_following_diagram(world, initial_state, mode: str = "horizonta
             scene.meshcat, scene.path_of("profiler"), period=profiler.period, history=200,
             point_size=0.06))
         builder.Connect(profiler.returns_output, returns_view.returns_input)
+    if extra is not None:
+        extra(builder, vehicle)
     diagram = builder.Build()
     diagram.set_name(f"profile_following_{mode}")
     return diagram, ProfileFollowingHandles(vehicle, profiler, controller, logs["state_log"],

@@ -46,10 +46,18 @@ class Scene:
         self.root = "/" + root.strip("/")
         self.recording = False
         self.playback_speed = 1.0
+        self.time_offset = 0.0  # s of mission time before this diagram's t = 0 (multi-phase)
+        self._trails = 0
 
     def path_of(self, name: str) -> str:
         """The scene-tree path of a named layer."""
         return f"{self.root}/{name.strip('/')}"
+
+    def new_trail_path(self, name: str) -> str:
+        """A fresh scene-tree path for one visualizer's trail, so that the trails of the
+        phases of a mission (one diagram each) all stay in the recording."""
+        self._trails += 1
+        return self.path_of(f"{name}_trail/{self._trails - 1}")
 
     def add_mesh(self, name: str, mesh, rgba=(0.55, 0.5, 0.42, 1.0), wireframe: bool = False) -> str:
         """Draws a `trimesh.Trimesh` (world frame) at `name`; returns its scene path."""
@@ -98,8 +106,9 @@ class Scene:
         self.recording = True
 
     def recording_time(self, sim_time: float) -> float:
-        """Time in the animation of a simulated time, s."""
-        return sim_time / self.playback_speed
+        """Time in the animation of a simulated time, s; a mission of several diagrams sets
+        `time_offset` to the phase's start so the phases play one after the other."""
+        return (self.time_offset + sim_time) / self.playback_speed
 
     def write_html(self, filename) -> FilePath:
         """Publishes the recording (if any) and writes the scene as one standalone HTML file."""
@@ -127,7 +136,7 @@ class VehicleVisualizer(LeafSystem):
             raise ValueError(f"visualizer period must be in [0.001, 10] s, got {period}")
         self.scene = scene
         self.vehicle_path = scene.path_of(name)
-        self.trail_path = scene.path_of(f"{name}_trail")
+        self.trail_path = scene.new_trail_path(name)
         self.trail = trail
         self.trail_piece = int(trail_piece)
         self._trail_points: list[np.ndarray] = []
