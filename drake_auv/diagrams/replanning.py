@@ -76,7 +76,9 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
         max_range: range of both sonars, m.
         multibeam_mount: "port", "starboard", "down" or "forward" (the payload multibeam).
         multibeam_stride: the mapper inserts every n-th multibeam beam.
-        heading_offset: yaw relative to the direction of motion along the replanned path, rad.
+        heading_offset: yaw relative to the direction of motion along the replanned path where
+            no structure is mapped near (the yaw turns a side-looking multibeam to the
+            mapped structure where it is), rad.
         replanning_period: s.
         log_period: period of the state/reference logs, s.
         seed: seed of the sonars' noise and STOMP.
@@ -110,6 +112,7 @@ def build_replanning_diagram(world, nominal: Path, start_state, replanning: bool
     if replanning:
         replanner = builder.AddNamedSystem("replanner", Replanner(
             nominal, params, speed=speed, period=replanning_period,
+            sensor_azimuth={"port": np.pi / 2, "starboard": -np.pi / 2}.get(multibeam_mount),
             heading_offset=heading_offset, seed=seed))
         builder.Connect(estimated, replanner.state_input)
         builder.Connect(mapper.map_output, replanner.map_input)

@@ -240,6 +240,8 @@ class SectionPlan:
         waypoint_arclength: (len(indices),) where each waypoint falls along `trajectory`, m.
         initial_cost, cost, iterations: STOMP's.
         query_time: wall time of the map query (occupied voxels in the section's box), s.
+        facing: (N,) yaw of the horizontal direction from each trajectory point to its nearest
+            mapped voxel of the depth band, rad; NaN where none lies within 2 Omega.
     """
 
     indices: np.ndarray
@@ -250,6 +252,7 @@ class SectionPlan:
     cost: float
     iterations: int
     query_time: float = 0.0
+    facing: np.ndarray | None = None
 
     def next_index(self, travelled: float, capture_radius: float = 0.5) -> int:
         """The first waypoint not passed after flying `travelled` metres of the trajectory.
@@ -303,5 +306,11 @@ def replan_section(position, waypoints, next_index: int, occupied,
     # maps to the same fraction of the optimised trajectory's points.
     s_opt = _arclength(result.trajectory)
     at = np.interp(fraction, np.linspace(0.0, 1.0, len(s_opt)), s_opt)
+    d_h, nearest = slice_map.offset(result.trajectory, 2.0 * params.omega)
+    facing = np.full(len(d_h), np.nan)
+    seen = np.isfinite(d_h) & (d_h > 1e-6)
+    if seen.any():
+        to = slice_map.band_points[nearest[seen]] - result.trajectory[seen, :2]
+        facing[seen] = np.arctan2(to[:, 1], to[:, 0])
     return SectionPlan(idx, theta0, result.trajectory, at, result.initial_cost, result.cost,
-                       result.iterations, query_time)
+                       result.iterations, query_time, facing)

@@ -66,14 +66,18 @@ class Replanner(LeafSystem):
         params: `ReplanningParameters` (R, K, Omega, clearance, STOMP's rollouts/iterations).
         speed: survey speed along the plans, m/s, > 0.
         period: replanning period, s, in [0.05, 30].
-        heading_offset: vehicle yaw relative to the direction of motion, rad (0: the port side
-            faces the structure on a counter-clockwise contour).
+        sensor_azimuth: azimuth of the payload sensor's axis in the body frame, rad (pi/2: a
+            port-looking sensor); the yaw turns it to the nearest mapped structure of the
+            section's depth band. None: the yaw follows the direction of motion.
+        heading_offset: yaw relative to the direction of motion where no structure is mapped
+            within 2 Omega (or always, with `sensor_azimuth` None), rad.
         yaw_rate: largest commanded yaw rate, rad/s, > 0.
         seed: seed of STOMP's rollouts (step k uses seed + k).
     """
 
     def __init__(self, waypoints, params: ReplanningParameters | None = None,
-                 speed: float = 0.3, period: float = 1.0, heading_offset: float = 0.0,
+                 speed: float = 0.3, period: float = 1.0,
+                 sensor_azimuth: float | None = np.pi / 2, heading_offset: float = 0.0,
                  yaw_rate: float = np.radians(15.0), seed: int = 0):
         super().__init__()
         points = waypoints.points if isinstance(waypoints, Path) else waypoints
@@ -91,6 +95,7 @@ class Replanner(LeafSystem):
         self.waypoints = points
         self.params = params if params is not None else ReplanningParameters()
         self.speed, self.period = float(speed), float(period)
+        self.sensor_azimuth = None if sensor_azimuth is None else float(sensor_azimuth)
         self.heading_offset, self.yaw_rate = float(heading_offset), float(yaw_rate)
         self.seed = int(seed)
         self.log: list[ReplanningStep] = []
@@ -135,6 +140,9 @@ class Replanner(LeafSystem):
         else:
             pts = plan.trajectory
             heading = motion_heading(pts, fallback=x[5]) + self.heading_offset
+            if self.sensor_azimuth is not None:
+                facing = plan.facing - self.sensor_azimuth
+                heading = np.where(np.isfinite(facing), facing, heading)
             heading = x[5] + np.angle(np.exp(1j * (heading - x[5])))  # nearest turn first
             path = Path(pts, heading, np.column_stack([np.cos(heading), np.sin(heading),
                                                        np.zeros(len(pts))]))
