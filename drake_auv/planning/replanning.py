@@ -251,8 +251,8 @@ class SectionPlan:
     initial_cost: float
     cost: float
     iterations: int
-    query_time: float = 0.0
-    facing: np.ndarray | None = None
+    query_time: float
+    facing: np.ndarray
 
     def next_index(self, travelled: float, capture_radius: float = 0.5) -> int:
         """The first waypoint not passed after flying `travelled` metres of the trajectory.
