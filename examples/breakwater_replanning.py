@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 from pathlib import Path as FilePath
 
 import contourpy
@@ -116,13 +117,14 @@ def mission_faces(scenario):
 
 def run_mission(scenario, nominal: Path, seed: int, replanning: bool, speed: float,
                 navigation: NavigationParams | None, params: ReplanningParameters,
-                scene: Scene | None = None) -> dict:
-    """Flies one mission; returns the diagram handles, the root context and timings."""
+                resolution: float = 0.5, scene: Scene | None = None) -> dict:
+    """Flies one mission (octree voxels of `resolution` m); returns the diagram handles, the
+    root context and timings."""
     targeted, _, _ = mission_faces(scenario)
     diagram, handles = build_replanning_diagram(
         scenario.world, nominal, scenario.start_state, replanning=replanning, params=params,
-        speed=speed, navigation=navigation, max_range=scenario.params["max_range"], seed=seed,
-        scene=scene, target_faces=targeted)
+        speed=speed, navigation=navigation, resolution=resolution,
+        max_range=scenario.params["max_range"], seed=seed, scene=scene, target_faces=targeted)
     simulator = Simulator(diagram)
     duration = 1.25 * nominal.times(speed)[-1] + 20.0
     start = time.perf_counter()
@@ -207,7 +209,7 @@ def figure(scenario, runs: list[tuple[str, dict, dict]], nominal: Path, filename
 
 
 def write_html(scenario, nominal: Path, seed: int, speed: float, navigation, params,
-               filename) -> None:
+               resolution: float, filename) -> None:
     """Meshcat recording of one replanning run: world, nominal path, vehicle, octree."""
     _, _, near = mission_faces(scenario)
     scene = Scene()
@@ -215,7 +217,8 @@ def write_html(scenario, nominal: Path, seed: int, speed: float, navigation, par
                    rgba=(0.6, 0.6, 0.6, 1.0))
     scene.add_path("nominal", nominal, rgba=(0.1, 0.3, 1.0, 1.0))
     scene.start_recording(playback_speed=10.0)
-    run = run_mission(scenario, nominal, seed, True, speed, navigation, params, scene)
+    run = run_mission(scenario, nominal, seed, True, speed, navigation, params, resolution,
+                      scene)
     draw_octree(scene.meshcat, scene.path_of("octree"), run["handles"].mapper.octree_map)
     xyz = run["handles"].state_log.FindLog(run["context"]).data()[:3].T
     scene.add_path("executed", xyz, rgba=(1.0, 1.0, 1.0, 1.0))
@@ -230,6 +233,12 @@ def main(argv=None):
     parser.add_argument("--no-drift", action="store_true",
                         help="exact navigation (default: DVL-like drift)")
     parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
+    parser.add_argument("--radius", type=float, default=None,
+                        help="replanning range R, m (default: the scenario's, 5)")
+    parser.add_argument("--max-waypoints", type=int, default=10, help="K (10)")
+    parser.add_argument("--rollouts", type=int, default=10, help="STOMP rollouts (10)")
+    parser.add_argument("--iterations", type=int, default=40, help="STOMP iteration cap (40)")
+    parser.add_argument("--voxel", type=float, default=0.5, help="octree voxel edge, m (0.5)")
     parser.add_argument("--out", type=FilePath, default=FilePath("out/breakwater"))
     args = parser.parse_args(argv)
     if args.seeds < 1:
@@ -238,7 +247,11 @@ def main(argv=None):
     scenario = get_scenario("breakwater")
     p = scenario.params
     speed, omega = p["speed"], p["omega"]
-    params = ReplanningParameters(radius=p["replan_radius"], omega=omega)
+    stomp = ReplanningParameters().stomp
+    params = ReplanningParameters(
+        radius=p["replan_radius"] if args.radius is None else args.radius,
+        max_waypoints=args.max_waypoints, omega=omega,
+        stomp=replace(stomp, num_rollouts=args.rollouts, max_iterations=args.iterations))
     _, structure, near = mission_faces(scenario)
     to_target = SurfaceDistance(scenario.world, scenario.target_faces)
     to_structure = SurfaceDistance(scenario.world, structure)
@@ -251,7 +264,8 @@ def main(argv=None):
         nominal = nominal_contour(prior, p["depth"], omega, p["block_size"],
                                   scenario.start_state[:3])
         for mode, replanning in (("replanning", True), ("nominal only", False)):
-            run = run_mission(scenario, nominal, seed, replanning, speed, navigation, params)
+            run = run_mission(scenario, nominal, seed, replanning, speed, navigation, params,
+                              args.voxel)
             m = mission_metrics(run, nominal, speed, omega, to_target, to_structure, to_world)
             rows.append((mode, seed, m))
             if seed == 0:
@@ -259,7 +273,7 @@ def main(argv=None):
         if seed == 0:
             figure(scenario, figure_runs, nominal, args.out / "breakwater_replanning.png")
             if not args.no_html:
-                write_html(scenario, nominal, seed, speed, navigation, params,
+                write_html(scenario, nominal, seed, speed, navigation, params, args.voxel,
                            args.out / "breakwater_replanning.html")
     table = report(rows, args, omega)
     (args.out / "breakwater_replanning.md").write_text(table)
@@ -276,7 +290,9 @@ def report(rows, args, omega: float) -> str:
             "camera cov. | multibeam cov. | step median (ms) | step p95 (ms) | RTF |\n"
             "|---|---|---|---|---|---|---|---|---|---|---|---|\n")
     lines = [f"# Breakwater replanning: {args.seeds} seeds, prior-map error {args.error} m, "
-             f"navigation drift {'off' if args.no_drift else 'on'}, Omega {omega} m\n",
+             f"navigation drift {'off' if args.no_drift else 'on'}, Omega {omega} m, "
+             f"K {args.max_waypoints}, {args.rollouts} rollouts, {args.iterations} iterations, "
+             f"voxel {args.voxel} m\n",
              "d: true distance to the breakwater (its blocks) over the survey; clearance: to any "
              f"structure or the seabed over the whole run; contact: clearance <= "
              f"{VEHICLE_RADIUS} m (vehicle radius); coverage: share of the three targeted "
