@@ -108,3 +108,38 @@ def test_slice_map_clearance_is_the_exact_3d_distance_within_the_bound():
     assert within.sum() > 50 and (~within).sum() > 50
     assert np.allclose(got[within], exact[within])
     assert np.all(np.isinf(got[~within]))
+
+
+def test_only_waypoints_marked_keep_offset_are_moved():
+    slice_map = SliceMap(_wall(), (-5.0, -5.0), depth_band=1.5, clearance=3.0)
+    x = np.array([3.0, 0.0, -5.0])
+    waypoints = np.array([[3.0, 2.0, -5.0], [3.0, 4.0, -5.0]])
+    traj, _ = initial_trajectory(x, waypoints, slice_map, omega=6.0, spacing=0.5,
+                                 keep_offset=[True, False])
+    assert np.allclose(traj[-1], waypoints[-1])  # a lane or transit waypoint is not moved
+    assert traj[:, 0].max() == pytest.approx(6.0, abs=0.3)  # the contour one is, to x = 6
+
+
+def _slope():
+    """Occupied voxel centres of a 45 degree face z = -x (x in [-10, 10]), y in [-5, 25]."""
+    xs, ys = np.meshgrid(np.arange(-10.0, 10.0, 0.5), np.arange(-5.0, 25.0, 0.5))
+    return np.stack([xs.ravel(), ys.ravel(), -xs.ravel()], axis=1)
+
+
+def test_3d_offset_metric_keeps_omega_along_the_normal_of_a_sloping_face():
+    omega = 6.0
+    # A contour planned on a prior map 3 m off: 3 m from the face along its normal (1, 0, 1).
+    n = np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)
+    nominal = np.stack([np.zeros(20), np.arange(20.0), np.zeros(20)], axis=1) + 3.0 * n
+    params = ReplanningParameters(omega=omega, offset_metric="3d", radius=8.0)
+    x = nominal[0] + [0.0, -1.0, 0.0]
+    plan = replan_section(x, nominal, 0, _slope(), params, seed=1)
+    end = plan.trajectory[-1]
+    # Distance to the plane x + z = 0 is (x + z) / sqrt(2); voxel centres are 0.5 m apart.
+    assert (end[0] + end[2]) / np.sqrt(2.0) == pytest.approx(omega, abs=0.3)
+    horizontal = replan_section(x, nominal, 0, _slope(),
+                                ReplanningParameters(omega=omega, radius=8.0), seed=1)
+    assert abs((horizontal.trajectory[-1][0] + horizontal.trajectory[-1][2]) / np.sqrt(2.0)
+               - omega) > 0.5  # the horizontal metric misreads a sloping face
+    with pytest.raises(ValueError, match="offset_metric"):
+        ReplanningParameters(offset_metric="vertical")

@@ -43,6 +43,10 @@ class ReplanningParameters:
         omega: offset to keep from the mapped structure, m (> 0).
         clearance: distance to any occupied voxel under which the obstacle cost rises, m (> 0).
         depth_band: half-height of the band of voxels the offset is measured against, m (> 0).
+        offset_metric: "horizontal": the offset is the horizontal distance to the band's
+            voxels (walls with the seabed closer than Omega below, as at the breakwater);
+            "3d": the 3D distance to any voxel, the offset along the surface normal of the
+            slicing planner (sloping faces, as on the boulder).
         spacing: distance between trajectory points, m (> 0).
         offset_weight, obstacle_weight, depth_weight: cost weights (>= 0).
         stomp: `StompParameters` (rollouts, iterations, noise, smoothness weight).
@@ -53,6 +57,7 @@ class ReplanningParameters:
     omega: float = 6.0
     clearance: float = 3.0
     depth_band: float = 1.5
+    offset_metric: str = "horizontal"
     spacing: float = 0.5
     offset_weight: float = 1.0
     obstacle_weight: float = 50.0
@@ -70,6 +75,9 @@ class ReplanningParameters:
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be >= 0, got {value}")
+        if self.offset_metric not in ("horizontal", "3d"):
+            raise ValueError(f"offset_metric must be 'horizontal' or '3d', got "
+                             f"{self.offset_metric!r}")
         if int(self.max_waypoints) != self.max_waypoints or self.max_waypoints < 1:
             raise ValueError(f"max_waypoints must be an integer >= 1, got {self.max_waypoints}")
 
@@ -120,7 +128,8 @@ class SliceMap:
     """Occupied voxels of the on-line map near a section, queried for the replanning cost.
 
     Built once per replanning step from the voxels within reach of the section:
-    - `band_tree` (2D): voxels within `depth_band` of the section's depths, for the offset;
+    - `band_tree`: for the offset, voxels within `depth_band` of the section's depths in 2D
+      (metric "horizontal"), or every voxel in 3D (metric "3d"); `dims` says which;
     - the clearance slab: voxels within `clearance + margin` of the section's depths, the only
       ones that can be nearer than `clearance` to a point of the section (rollouts stay within
       `margin` of its depths: the depth cost holds them). A 2D KD-tree of the slab rules most
@@ -128,11 +137,16 @@ class SliceMap:
     """
 
     def __init__(self, occupied: np.ndarray, z_range: tuple[float, float], depth_band: float,
-                 clearance: float, margin: float = DEPTH_MARGIN):
+                 clearance: float, margin: float = DEPTH_MARGIN, metric: str = "horizontal"):
         occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)
         z = occupied[:, 2]
-        in_band = (z >= z_range[0] - depth_band) & (z <= z_range[1] + depth_band)
-        self.band_points = occupied[in_band, :2]
+        if metric == "3d":
+            self.dims = 3
+            self.band_points = occupied
+        else:
+            self.dims = 2
+            in_band = (z >= z_range[0] - depth_band) & (z <= z_range[1] + depth_band)
+            self.band_points = occupied[in_band, :2]
         self.band_tree = cKDTree(self.band_points) if len(self.band_points) else None
         reach = clearance + margin
         slab = occupied[(z >= z_range[0] - reach) & (z <= z_range[1] + reach)]
@@ -152,11 +166,11 @@ class SliceMap:
         return d.reshape(points.shape[:-1])
 
     def offset(self, points: np.ndarray, upper_bound: float):
-        """Horizontal distance to, and index of, the nearest voxel of the band, m."""
+        """Distance to, and index of, the nearest voxel of the band (horizontal or 3D), m."""
         if self.band_tree is None:
             shape = points.shape[:-1]
             return np.full(shape, np.inf), np.full(shape, -1)
-        d, i = self.band_tree.query(points[..., :2].reshape(-1, 2),
+        d, i = self.band_tree.query(points[..., :self.dims].reshape(-1, self.dims),
                                     distance_upper_bound=upper_bound)
         return d.reshape(points.shape[:-1]), i.reshape(points.shape[:-1])
 
@@ -169,10 +183,16 @@ class ReplanningCost:
     (saturated so that an unmapped area pulls nowhere) and d the 3D distance to any voxel.
     """
 
-    def __init__(self, slice_map: SliceMap, z_ref: np.ndarray, params: ReplanningParameters):
+    def __init__(self, slice_map: SliceMap, z_ref: np.ndarray, params: ReplanningParameters,
+                 keep_offset: np.ndarray | None = None):
         self.slice_map = slice_map
         self.z_ref = np.asarray(z_ref, dtype=float)
         self.params = params
+        # Per trajectory point: weight of the offset term (0 where the plan does not follow
+        # a wall, e.g. a terrain-following lane or a transit).
+        self.offset_weight = params.offset_weight * (
+            np.ones(len(self.z_ref)) if keep_offset is None
+            else np.asarray(keep_offset, dtype=float))
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
         p = self.params
@@ -181,11 +201,12 @@ class ReplanningCost:
         d = self.slice_map.clearance(trajectories, p.clearance)
         obstacle = np.maximum(0.0, p.clearance - d) ** 2
         depth = (trajectories[..., 2] - self.z_ref) ** 2
-        return p.offset_weight * offset + p.obstacle_weight * obstacle + p.depth_weight * depth
+        return self.offset_weight * offset + p.obstacle_weight * obstacle + p.depth_weight * depth
 
 
 def project_to_offset(point, slice_map: SliceMap, omega: float) -> np.ndarray:
-    """`point` moved horizontally onto the offset `omega` from the nearest band voxel.
+    """`point` moved onto the offset `omega` from the nearest band voxel (horizontally, or in
+    3D with the "3d" metric).
 
     Unchanged when no band voxel lies within 2 * omega (nothing mapped there yet).
     """
@@ -193,19 +214,22 @@ def project_to_offset(point, slice_map: SliceMap, omega: float) -> np.ndarray:
     d, i = slice_map.offset(point[None], 2.0 * omega)
     if not np.isfinite(d[0]) or d[0] < 1e-6:
         return point
-    q = slice_map.band_points[i[0]]
-    point[:2] = q + (point[:2] - q) * (omega / d[0])
+    q, k = slice_map.band_points[i[0]], slice_map.dims
+    point[:k] = q + (point[:k] - q) * (omega / d[0])
     return point
 
 
 def initial_trajectory(position, section_points, slice_map: SliceMap | None, omega: float,
-                       spacing: float) -> tuple[np.ndarray, np.ndarray]:
+                       spacing: float, keep_offset=None) -> tuple[np.ndarray, np.ndarray]:
     """Polyline from the vehicle through the section's waypoints, resampled every `spacing`.
 
     The waypoints were placed on the prior map, which may be wrong by metres: each is first
     moved onto the offset from the on-line map where that map sees structure near it, so the
     polyline does not lead the vehicle back to a wrong waypoint, and the end point (fixed
     during optimisation) is not left inside the clearance margin.
+
+    `keep_offset` (one bool per waypoint, default all True) says which waypoints follow a
+    wall at the offset; the others (terrain-following lanes, transits) are not moved.
 
     Returns the (N, 3) trajectory and, per waypoint, its fraction of the polyline's length.
     """
@@ -214,8 +238,9 @@ def initial_trajectory(position, section_points, slice_map: SliceMap | None, ome
     if len(section_points) == 0:
         raise ValueError("a section needs at least one waypoint")
     points = np.vstack([x, section_points])
+    keep = np.ones(len(section_points), bool) if keep_offset is None else np.asarray(keep_offset)
     if slice_map is not None:
-        for i in range(1, len(points)):
+        for i in np.flatnonzero(keep) + 1:
             points[i] = project_to_offset(points[i], slice_map, omega)
     s = _arclength(points)
     return resample_polyline(points, spacing), s[1:] / max(s[-1], 1e-9)
@@ -266,12 +291,15 @@ class SectionPlan:
 
 def replan_section(position, waypoints, next_index: int, occupied,
                    params: ReplanningParameters = ReplanningParameters(),
-                   seed: int = 0) -> SectionPlan | None:
+                   seed: int = 0, keep_offset=None) -> SectionPlan | None:
     """One replanning step: section, initial trajectory, STOMP against the occupied voxels.
 
     `occupied` is the on-line map (an `OctreeMap`, queried in the section's box only) or the
     (m, 3) centres of its occupied voxels; only those within reach of the section are used.
-    Returns None when every waypoint was visited.
+    `keep_offset` (one bool per waypoint, default all True) marks the waypoints that follow a
+    wall at Omega (slicing contours); elsewhere (lanes, transits) only clearance and depth
+    shape the trajectory, and the yaw follows the motion. Returns None when every waypoint
+    was visited.
     """
     x = _check_position(position)
     waypoints = np.asarray(waypoints, dtype=float)
@@ -284,6 +312,8 @@ def replan_section(position, waypoints, next_index: int, occupied,
     # of the offset band and of the clearance slab.
     reach = 2.0 * params.omega + params.clearance
     z_reach = max(params.depth_band, params.clearance + DEPTH_MARGIN)
+    if params.offset_metric == "3d":
+        z_reach = max(z_reach, 2.0 * params.omega)
     lo = pts.min(axis=0) - [reach, reach, z_reach]
     hi = pts.max(axis=0) + [reach, reach, z_reach]
     start = time.perf_counter()
@@ -294,13 +324,23 @@ def replan_section(position, waypoints, next_index: int, occupied,
         local = occupied[np.all((occupied >= lo) & (occupied <= hi), axis=1)]
     query_time = time.perf_counter() - start
     slice_map = SliceMap(local, (pts[:, 2].min(), pts[:, 2].max()), params.depth_band,
-                         params.clearance)
-    theta0, fraction = initial_trajectory(x, section, slice_map, params.omega, params.spacing)
-    # The nominal depth of each point: the polyline's, before any offset correction.
-    z_ref = resample_polyline(pts, params.spacing)
-    z_ref = np.interp(np.linspace(0, 1, len(theta0)), np.linspace(0, 1, len(z_ref)),
-                      z_ref[:, 2])
-    cost = ReplanningCost(slice_map, z_ref, params)
+                         params.clearance, metric=params.offset_metric)
+    keep = (np.ones(len(waypoints), bool) if keep_offset is None
+            else np.asarray(keep_offset, dtype=bool))[idx]
+    theta0, fraction = initial_trajectory(x, section, slice_map, params.omega, params.spacing,
+                                          keep)
+    # A trajectory point keeps the offset when the waypoint it leads to does.
+    keep_points = keep[np.minimum(np.searchsorted(fraction, np.linspace(0.0, 1.0, len(theta0))),
+                                  len(keep) - 1)]
+    # The depth to hold: the nominal polyline's before any offset correction (horizontal
+    # metric: the slice plane), or the corrected one (3D metric: the offset moves depth too).
+    if params.offset_metric == "3d":
+        z_ref = theta0[:, 2]
+    else:
+        z_ref = resample_polyline(pts, params.spacing)
+        z_ref = np.interp(np.linspace(0, 1, len(theta0)), np.linspace(0, 1, len(z_ref)),
+                          z_ref[:, 2])
+    cost = ReplanningCost(slice_map, z_ref, params, keep_points)
     result = stomp(theta0, cost, params.stomp, seed=seed, matrices=_matrices(len(theta0)))
     # Trajectory points are evenly spaced along the polyline, so a waypoint's fraction of it
     # maps to the same fraction of the optimised trajectory's points.
@@ -308,9 +348,9 @@ def replan_section(position, waypoints, next_index: int, occupied,
     at = np.interp(fraction, np.linspace(0.0, 1.0, len(s_opt)), s_opt)
     d_h, nearest = slice_map.offset(result.trajectory, 2.0 * params.omega)
     facing = np.full(len(d_h), np.nan)
-    seen = np.isfinite(d_h) & (d_h > 1e-6)
+    seen = np.isfinite(d_h) & (d_h > 1e-6) & keep_points
     if seen.any():
-        to = slice_map.band_points[nearest[seen]] - result.trajectory[seen, :2]
+        to = slice_map.band_points[nearest[seen], :2] - result.trajectory[seen, :2]
         facing[seen] = np.arctan2(to[:, 1], to[:, 0])
     return SectionPlan(idx, theta0, result.trajectory, at, result.initial_cost, result.cost,
                        result.iterations, query_time, facing)

@@ -63,6 +63,9 @@ class Replanner(LeafSystem):
     Args:
         waypoints: (n, 3) nominal waypoints in the navigation frame (e.g. a `Path`'s points,
             planned off-line on the prior map), or a `Path`.
+        offset_labels: with a `Path`, the labels of the samples that follow a wall at Omega
+            (default: "slice"); the other samples (lanes, transits) keep only clearance and
+            depth. With an array every waypoint keeps the offset.
         params: `ReplanningParameters` (R, K, Omega, clearance, STOMP's rollouts/iterations).
         speed: survey speed along the plans, m/s, > 0.
         period: replanning period, s, in [0.05, 30].
@@ -78,10 +81,13 @@ class Replanner(LeafSystem):
     def __init__(self, waypoints, params: ReplanningParameters | None = None,
                  speed: float = 0.3, period: float = 1.0,
                  sensor_azimuth: float | None = np.pi / 2, heading_offset: float = 0.0,
-                 yaw_rate: float = np.radians(15.0), seed: int = 0):
+                 yaw_rate: float = np.radians(15.0), seed: int = 0,
+                 offset_labels=("slice",)):
         super().__init__()
         points = waypoints.points if isinstance(waypoints, Path) else waypoints
         points = np.asarray(points, dtype=float)
+        self.keep_offset = (np.isin(waypoints.labels, list(offset_labels))
+                            if isinstance(waypoints, Path) else None)
         if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
             raise ValueError(f"waypoints must have shape (n >= 1, 3), got {points.shape}")
         if not np.all(np.isfinite(points)):
@@ -126,7 +132,7 @@ class Replanner(LeafSystem):
         start, start_cpu = time.perf_counter(), time.thread_time()
         occupied = handle.map if handle is not None else np.zeros((0, 3))
         plan = replan_section(x[:3], self.waypoints, next_index, occupied, self.params,
-                              seed=self.seed + current.step)
+                              seed=self.seed + current.step, keep_offset=self.keep_offset)
         wall, cpu = time.perf_counter() - start, time.thread_time() - start_cpu
         query = plan.query_time if plan is not None else 0.0
         self.log.append(ReplanningStep(t, wall, query, cpu, next_index, plan))
