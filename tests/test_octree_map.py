@@ -127,3 +127,33 @@ def test_box_query_matches_the_whole_map_and_sees_clearing():
         omap.insert_scan(np.zeros(3), d, np.full(len(d), np.nan), 20.0)
     assert len(omap.occupied_points(lo, hi)) == 0
     assert len(omap.occupied_points()) == 0
+
+
+def test_lazy_insertion_labels_match_eager_octomap_and_the_file_is_complete(tmp_path):
+    import octomap
+
+    block = trimesh.creation.box(extents=(5.0, 5.0, 12.0))
+    block.apply_translation((0.0, 0.0, -4.0))
+    omap = OctreeMap(resolution=0.5)
+    eager = octomap.OcTree(0.5)  # OctoMap's own eager insertion, same sensor model
+    eager.setProbHit(0.7), eager.setProbMiss(0.4)
+    eager.setClampingThresMin(0.12), eager.setClampingThresMax(0.97)
+    for angle in np.linspace(0, 2 * np.pi, 16, endpoint=False):
+        origin = np.array([8.5 * np.cos(angle), 8.5 * np.sin(angle), -5.0])
+        c, s = np.cos(angle + np.pi), np.sin(angle + np.pi)
+        d = _fan(n=240, tilt=0.3) @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
+        r = _cast(block, origin, d, 20.0)
+        omap.insert_scan(origin, d, r, 20.0)
+        eager.insertPointCloud(origin + d * np.where(np.isfinite(r), r, 21.0)[:, None], origin,
+                               maxrange=20.0)
+    probe = np.random.default_rng(5).uniform([-22, -22, -25], [22, 22, 12], (50000, 3))
+    surface = trimesh.sample.sample_surface(block, 2000, seed=6)[0]
+    probe = np.vstack([probe, surface])
+    labels = omap.labels(probe)
+    assert np.array_equal(labels, np.asarray(eager.getLabels(probe)))
+    assert (labels == 1).sum() > 100 and (labels == 0).sum() > 1000
+    # The written file carries the inner nodes too: read back, it answers the same.
+    omap.write(tmp_path / "map.bt")
+    back = octomap.OcTree(0.5)
+    assert back.readBinary(str(tmp_path / "map.bt").encode())
+    assert np.array_equal(np.asarray(back.getLabels(probe)), labels)
