@@ -6,7 +6,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("plan", "scenarios", "simulate", "demo")
+COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "demo")
 
 
 def build_parser() -> argparse.ArgumentParser:

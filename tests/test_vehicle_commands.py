@@ -1,4 +1,4 @@
-"""`drake-auv demo` and `drake-auv simulate` write their recordings, plots and logs."""
+"""`drake-auv lawnmower` and `drake-auv simulate` write their recordings, plots and logs."""
 
 import argparse
 import base64
@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from drake_auv.commands import demo, simulate
+from drake_auv.commands import lawnmower, simulate
 from drake_auv.planning import Path
 
 
@@ -17,9 +17,9 @@ def parse(module, argv):
     return parser.parse_args(argv)
 
 
-def test_demo_writes_recording_and_error_plot(tmp_path, capsys):
-    out = tmp_path / "demo"
-    args = parse(demo, ["demo", "--out", str(out), "--extent", "20", "8", "--quiet"])
+def test_lawnmower_writes_recording_and_error_plot(tmp_path, capsys):
+    out = tmp_path / "lawnmower"
+    args = parse(lawnmower, ["lawnmower", "--out", str(out), "--extent", "20", "8", "--quiet"])
     assert args.func(args) == 0
     html = (out / "mission.html").read_text()
     commands = [base64.b64decode(b64) for b64 in
@@ -57,19 +57,19 @@ def test_bad_inputs_are_named(tmp_path):
         args = parse(simulate, ["simulate", str(tmp_path / "missing.csv"), "--no-html"])
         args.func(args)
     with pytest.raises(ValueError, match="extent"):
-        args = parse(demo, ["demo", "--out", str(tmp_path), "--extent", "1", "8", "--no-html"])
+        args = parse(lawnmower, ["lawnmower", "--out", str(tmp_path), "--extent", "1", "8", "--no-html"])
         args.func(args)
     with pytest.raises(ValueError, match="omega"):
-        args = parse(demo, ["demo", "--out", str(tmp_path), "--altitude", "-1", "--no-html"])
+        args = parse(lawnmower, ["lawnmower", "--out", str(tmp_path), "--altitude", "-1", "--no-html"])
         args.func(args)
 
 
 def test_first_turn_index_finds_the_end_of_the_first_lane():
     points = [(x, 0.0, -5.0) for x in range(11)] + [(10.0, 2.0, -5.0), (9.0, 2.0, -5.0)]
     path = Path(np.array(points), 0.0, (0.0, 0.0, -1.0))
-    assert demo.first_turn_index(path) == 10
+    assert lawnmower.first_turn_index(path) == 10
     straight = Path(np.array([(0.0, 0, 0), (1.0, 0.1, 0), (2.0, 0, 0)]), 0.0, (0.0, 0.0, -1.0))
-    assert demo.first_turn_index(straight) == 2
+    assert lawnmower.first_turn_index(straight) == 2
 
 
 def test_realtime_rate_validated(tmp_path):

@@ -1,92 +1,61 @@
-"""`drake-auv demo`: the GIRONA 500 flies a lawnmower over a synthetic seabed.
+"""`drake-auv demo`: the all-together boulder mission (what `make demo` runs).
 
-The lawnmower comes from the off-line planner (`drake_auv.planning.lawnmower.plan_lawnmower`):
-lanes spaced by the down-looking footprint at altitude Omega, following the terrain.
-
-Writes `<out>/mission.html` (standalone Meshcat recording: seabed, path, vehicle and trail),
-`<out>/tracking_error.png`, `<out>/path.csv` and `<out>/state.csv`. At this stage the demo
-exercises the vehicle foundation (dynamics, allocation, tracking, navigation, visualisation);
-the full coverage mission grows on top of it.
+Plans on the boulder's prior map, simulates horizontal profile following and the nominal plan
+with realtime replanning, and writes `<out>/report.md`, `report.json`, `plan.png`,
+`coverage.png`, `distance.png` and `mission.html` (a standalone Meshcat recording).
 """
 
 from __future__ import annotations
 
-import numpy as np
-
 DEFAULT_OUT = "out/demo"
 
 
-def first_turn_index(path, angle_deg: float = 45.0) -> int:
-    """Index of the sample where the horizontal direction of travel first turns by more than
-    `angle_deg` from the first segment's (the end of the first lane); the last index if never."""
-    d = np.diff(path.points[:, :2], axis=0)
-    moving = np.linalg.norm(d, axis=1) > 1e-9
-    if not moving.any():
-        return len(path) - 1
-    d = d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-12)
-    first = d[np.argmax(moving)]
-    turned = moving & (d @ first < np.cos(np.radians(angle_deg)))
-    return int(np.argmax(turned)) if turned.any() else len(path) - 1
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "demo", help="the all-together boulder mission: plan, profile following, replanning",
+        description="The reference's combined experiment on the boulder site, headless: "
+                    "off-line plan on the prior map, horizontal profile following, then the "
+                    "plan flown with realtime replanning against the on-line octree map under "
+                    "prior-map and navigation error. Writes a report, figures and mission.html.")
+    parser.add_argument("--out", default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="seed of the prior-map error, navigation drift, noise and STOMP")
+    parser.add_argument("--prior-error", type=float, default=3.0,
+                        help="horizontal error of the prior map, m in [0, 5] (default 3)")
+    parser.add_argument("--follow-loops", type=float, default=1.0,
+                        help="loops of horizontal profile following around the boulder "
+                             "(default 1)")
+    parser.add_argument("--replan-time", type=float, default=None,
+                        help="cap on the replanning phase's simulated time, s (default: the "
+                             "whole plan)")
+    parser.add_argument("--playback-speed", type=float, default=20.0,
+                        help="the HTML animation plays this many times faster than real time")
+    parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     from pathlib import Path as FilePath
 
-    from drake_auv.commands.simulate import fly_path, report
-    from drake_auv.planning.lawnmower import lane_spacing, plan_lawnmower
-    from drake_auv.terrain.synthetic import random_seabed
-    from drake_auv.visualization import Scene
+    from drake_auv.mission import MissionConfig, run_mission, write_recording
+    from drake_auv.mission_report import write_report
 
-    width, length = args.extent
-    if not (5.0 <= width <= 2000.0 and 5.0 <= length <= 2000.0):
-        raise ValueError(f"--extent must be two sizes in [5, 2000] m, got {args.extent}")
-    cell = 1.0
-    shape = (int(round(length / cell)) + 1, int(round(width / cell)) + 1)
-    seabed = random_seabed(seed=args.seed, shape=shape, cell=cell, relief=args.relief)
-    path = plan_lawnmower(seabed, omega=args.altitude, aperture_deg=args.aperture_deg,
-                          overlap=args.overlap)
-    spacing = lane_spacing(args.altitude, args.aperture_deg, args.overlap)
-    out = FilePath(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    path.to_csv(out / "path.csv")
+    config = MissionConfig(seed=args.seed, prior_error_m=args.prior_error,
+                           follow_loops=args.follow_loops, replan_time=args.replan_time)
     scene = None
     if not args.no_html:
+        from drake_auv.visualization import Scene
+
         scene = Scene()
-        scene.add_terrain(seabed)
-    print(f"lawnmower over a {width:g} m x {length:g} m random seabed (seed {args.seed}): "
-          f"lanes {spacing:.2f} m apart, {args.altitude:g} m above the seabed; "
-          f"{path.length:.0f} m at {args.speed:g} m/s")
-    result = fly_path(path, out, args.speed, scene, playback_speed=args.playback_speed,
-                      settle_samples=first_turn_index(path), progress=not args.quiet,
-                      realtime_rate=args.realtime_rate)
-    report(result, out)
+        scene.start_recording(playback_speed=args.playback_speed, live=False)
+    result = run_mission(config, scene=scene, progress=not args.quiet)
+    out = FilePath(args.out)
+    summary = write_report(result, out)
+    if scene is not None:
+        write_recording(result, scene, out / "mission.html")
+    mission = summary["results"]["mission"]
+    print(f"multibeam coverage {100 * mission['multibeam_coverage']:.1f} %, camera "
+          f"{100 * mission['camera_coverage']:.1f} %, minimum clearance "
+          f"{mission['clearance_min_m']:.2f} m; report in {out / 'report.md'}")
     return 0
-
-
-def add_parser(subparsers) -> None:
-    parser = subparsers.add_parser(
-        "demo", help="fly a lawnmower over a synthetic seabed and record it",
-        description="The GIRONA 500 tracks a constant-altitude lawnmower (the planner's "
-                    "plan_lawnmower) over a random smooth seabed; writes mission.html (Meshcat recording) and tracking_error.png.")
-    parser.add_argument("--out", default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic seabed")
-    parser.add_argument("--speed", type=float, default=0.5, help="survey speed, m/s (default 0.5)")
-    parser.add_argument("--extent", type=float, nargs=2, default=(50.0, 30.0),
-                        metavar=("WIDTH", "LENGTH"),
-                        help="seabed size along x and y, m (default 50 30)")
-    parser.add_argument("--altitude", type=float, default=5.0,
-                        help="survey altitude Omega above the seabed, m (default 5: 5.2 m lanes)")
-    parser.add_argument("--aperture-deg", type=float, default=60.0,
-                        help="down-looking sensor aperture, degrees (default 60)")
-    parser.add_argument("--overlap", type=float, default=0.1,
-                        help="lane overlap fraction (default 0.1)")
-    parser.add_argument("--relief", type=float, default=4.0,
-                        help="seabed relief peak to peak, m (default 4)")
-    parser.add_argument("--playback-speed", type=float, default=10.0,
-                        help="the HTML animation plays this many times faster than real time")
-    parser.add_argument("--realtime-rate", type=float, default=0.0,
-                        help="pace the simulation to watch it live (1 = real time; default 0 = "
-                             "as fast as possible)")
-    parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    parser.set_defaults(func=run)

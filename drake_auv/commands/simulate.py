@@ -2,7 +2,7 @@
 
 Writes `<out>/mission.html` (standalone Meshcat recording), `<out>/tracking_error.png`
 (cross-track error over time) and `<out>/state.csv` (the logged true state).
-`fly_path` is shared with `drake-auv demo`.
+`fly_path` is shared with `drake-auv lawnmower`.
 """
 
 from __future__ import annotations
