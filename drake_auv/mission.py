@@ -194,6 +194,24 @@ def _log_xyz(log_sink, context) -> tuple[np.ndarray, np.ndarray]:
     return log.sample_times(), log.data()[:3].T.copy()
 
 
+def _fly(name: str, scenario: Scenario, simulator: Simulator, budget: float, stop,
+         clock: _MissionClock, state_log, estimated_log, camera: CoverageRecorder,
+         multibeam: CoverageRecorder) -> PhaseResult:
+    """Simulates one phase until `stop()` or `budget` s and collects its `PhaseResult`."""
+    context = simulator.get_context()
+    wall = time.perf_counter()
+    simulator.Initialize()
+    clock.advance(simulator, budget, stop, name)
+    wall = time.perf_counter() - wall
+    t, xyz = _log_xyz(state_log, context)
+    _, estimated = _log_xyz(estimated_log, context)
+    distance, clearance = _structure_distances(scenario, xyz)
+    camera_best, multibeam_best = (r.best_angles(r.GetMyContextFromRoot(context))
+                                   for r in (camera, multibeam))
+    return PhaseResult(name, t, xyz, estimated, distance, clearance, camera_best,
+                       multibeam_best, wall)
+
+
 def profile_phase(scenario: Scenario, caster: RayCaster, config: MissionConfig,
                   clock: _MissionClock, scene=None) -> PhaseResult:
     """Horizontal profile following: one closed loop around the boulder."""
@@ -230,16 +248,8 @@ def profile_phase(scenario: Scenario, caster: RayCaster, config: MissionConfig,
         angle = np.unwrap(np.arctan2(x[1] - centre[1], x[0] - centre[0]))
         return abs(angle[-1] - angle[0]) >= 2.0 * np.pi * config.follow_loops
 
-    wall = time.perf_counter()
-    simulator.Initialize()
-    clock.advance(simulator, budget, closed, "profile following")
-    wall = time.perf_counter() - wall
-    t, xyz = _log_xyz(handles.state_log, context)
-    _, est = _log_xyz(handles.estimated_state_log, context)
-    distance, clearance = _structure_distances(scenario, xyz)
-    best = {k: r.best_angles(r.GetMyContextFromRoot(context)) for k, r in recorders.items()}
-    return PhaseResult("profile", t, xyz, est, distance, clearance, best["camera"],
-                       best["multibeam"], wall)
+    return _fly("profile", scenario, simulator, budget, closed, clock, handles.state_log,
+                handles.estimated_state_log, recorders["camera"], recorders["multibeam"])
 
 
 def replan_phase(scenario: Scenario, caster: RayCaster, plan: CoveragePlan,
@@ -257,7 +267,6 @@ def replan_phase(scenario: Scenario, caster: RayCaster, plan: CoveragePlan,
         multibeam_mount="port", seed=config.seed, scene=scene,
         target_faces=scenario.target_faces, camera_range=config.camera_range)
     simulator = Simulator(diagram)
-    context = simulator.get_context()
     budget = config.time_margin * nominal.times(config.speed)[-1]
     if config.replan_time is not None:
         budget = min(budget, config.replan_time)
@@ -266,18 +275,11 @@ def replan_phase(scenario: Scenario, caster: RayCaster, plan: CoveragePlan,
     def done() -> bool:
         return bool(log) and log[-1].plan is None
 
-    wall = time.perf_counter()
-    simulator.Initialize()
-    clock.advance(simulator, budget, done, "replanning")
-    wall = time.perf_counter() - wall
-    t, xyz = _log_xyz(handles.state_log, context)
-    _, est = _log_xyz(handles.estimated_log, context)
-    distance, clearance = _structure_distances(scenario, xyz)
-    best = [r.best_angles(r.GetMyContextFromRoot(context))
-            for r in (handles.camera_coverage, handles.multibeam_coverage)]
-    return PhaseResult("replan", t, xyz, est, distance, clearance, best[0], best[1], wall,
-                       replan_wall=np.array([s.wall_time for s in log if s.plan is not None]),
-                       octree_map=handles.mapper.octree_map)
+    phase = _fly("replan", scenario, simulator, budget, done, clock, handles.state_log,
+                 handles.estimated_log, handles.camera_coverage, handles.multibeam_coverage)
+    phase.replan_wall = np.array([s.wall_time for s in log if s.plan is not None])
+    phase.octree_map = handles.mapper.octree_map
+    return phase
 
 
 def run_mission(config: MissionConfig = MissionConfig(), scene=None,
