@@ -143,3 +143,23 @@ def test_3d_offset_metric_keeps_omega_along_the_normal_of_a_sloping_face():
                - omega) > 0.5  # the horizontal metric misreads a sloping face
     with pytest.raises(ValueError, match="offset_metric"):
         ReplanningParameters(offset_metric="vertical")
+
+
+def test_offset_is_queried_only_where_it_is_weighted_and_the_cost_is_unchanged():
+    from drake_auv.planning.replanning import ReplanningCost, ReplanningParameters, SliceMap
+
+    rng = np.random.default_rng(11)
+    wall = np.column_stack([rng.uniform(-5, 5, 400), np.full(400, 6.0), rng.uniform(-3, 3, 400)])
+    params = ReplanningParameters(omega=5.0, offset_metric="3d")
+    slice_map = SliceMap(wall, (-1.0, 1.0), params.depth_band, params.clearance, metric="3d")
+    keep = np.array([1, 1, 0, 0, 1, 0, 1, 1], bool)
+    cost = ReplanningCost(slice_map, np.zeros(len(keep)), params, keep)
+    rollouts = rng.normal(0.0, 2.0, (5, len(keep), 3))
+    # The cost term by term, querying every point.
+    d, _ = slice_map.offset(rollouts, 2.0 * params.omega)
+    expected = (params.offset_weight * keep * np.minimum(np.abs(d - params.omega), params.omega)
+                + params.obstacle_weight * np.maximum(
+                    0.0, params.clearance - slice_map.clearance(rollouts, params.clearance)) ** 2
+                + params.depth_weight * rollouts[..., 2] ** 2)
+    assert np.allclose(cost(rollouts), expected, rtol=1e-12, atol=1e-12)
+    assert np.allclose(cost(rollouts[0]), expected[0], rtol=1e-12, atol=1e-12)

@@ -124,6 +124,14 @@ def resample_polyline(points, spacing: float) -> np.ndarray:
 DEPTH_MARGIN = 1.0  # m, how far rollouts may stray from the section's depths (see SliceMap)
 
 
+def _kdtree(points: np.ndarray) -> cKDTree:
+    """KD-tree of voxel centres, built for this use: rebuilt at every step and queried from
+    metres away (the offset is ~Omega), where the voxels of a surface are nearly equidistant
+    and a default tree visits many small leaves. Large, unbalanced (sliding-midpoint) leaves
+    answer the same nearest neighbours 2-4x faster here and build faster."""
+    return cKDTree(points, leafsize=64, balanced_tree=False, compact_nodes=False)
+
+
 class SliceMap:
     """Occupied voxels of the on-line map near a section, queried for the replanning cost.
 
@@ -147,11 +155,11 @@ class SliceMap:
             self.dims = 2
             in_band = (z >= z_range[0] - depth_band) & (z <= z_range[1] + depth_band)
             self.band_points = occupied[in_band, :2]
-        self.band_tree = cKDTree(self.band_points) if len(self.band_points) else None
+        self.band_tree = _kdtree(self.band_points) if len(self.band_points) else None
         reach = clearance + margin
         slab = occupied[(z >= z_range[0] - reach) & (z <= z_range[1] + reach)]
-        self.slab_tree_2d = cKDTree(slab[:, :2]) if len(slab) else None
-        self.slab_tree_3d = cKDTree(slab) if len(slab) else None
+        self.slab_tree_2d = _kdtree(slab[:, :2]) if len(slab) else None
+        self.slab_tree_3d = _kdtree(slab) if len(slab) else None
 
     def clearance(self, points: np.ndarray, upper_bound: float) -> np.ndarray:
         """3D distance to the nearest occupied voxel centre, inf beyond `upper_bound`, m."""
@@ -196,8 +204,13 @@ class ReplanningCost:
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
         p = self.params
-        d_h, _ = self.slice_map.offset(trajectories, 2.0 * p.omega)
-        offset = np.minimum(np.abs(d_h - p.omega), p.omega)
+        # The offset is measured only at the points that keep it (weight > 0): elsewhere it
+        # adds nothing, and the nearest-voxel query is the costliest part of the cost.
+        offset = np.zeros(trajectories.shape[:-1])
+        weighted = self.offset_weight > 0
+        if weighted.any():
+            d_h, _ = self.slice_map.offset(trajectories[..., weighted, :], 2.0 * p.omega)
+            offset[..., weighted] = np.minimum(np.abs(d_h - p.omega), p.omega)
         d = self.slice_map.clearance(trajectories, p.clearance)
         obstacle = np.maximum(0.0, p.clearance - d) ** 2
         depth = (trajectories[..., 2] - self.z_ref) ** 2
