@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle
+from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle, _decode
 
 
 def _fan(n=480, aperture=np.radians(120.0), tilt=0.0):
@@ -157,3 +157,50 @@ def test_lazy_insertion_labels_match_eager_octomap_and_the_file_is_complete(tmp_
     back = octomap.OcTree(0.5)
     assert back.readBinary(str(tmp_path / "map.bt").encode())
     assert np.array_equal(np.asarray(back.getLabels(probe)), labels)
+
+
+def _brute_force_occupied(omap, lo, hi):
+    """Occupied voxel centres in the box, every voxel ever hit read from the octree."""
+    codes = np.fromiter(omap._candidates, dtype=np.int64, count=len(omap._candidates))
+    centres = (_decode(codes) + 0.5) * omap.resolution
+    centres = centres[np.all((centres >= lo) & (centres <= hi), axis=1)]
+    return centres[np.asarray(omap.tree.getLabels(centres)) == 1] if len(centres) else centres
+
+
+def test_cached_labels_match_reading_every_voxel_through_moving_scans_and_clearing():
+    # Scans against a block that then moves (as a navigation jump would), so voxels are hit,
+    # then cleared; fans at random attitudes and some non-coplanar scans; box queries at
+    # random moments must equal reading every candidate's label from the octree.
+    rng = np.random.default_rng(21)
+    omap = OctreeMap(resolution=0.5)
+    checked = 0
+    for k in range(160):
+        block = trimesh.creation.box(extents=(4.0, 4.0, 8.0))
+        block.apply_translation((0.0 if k < 80 else 2.5, 0.0, -4.0))
+        angle = 0.15 * k
+        origin = np.array([9.0 * np.cos(angle), 9.0 * np.sin(angle), rng.uniform(-8.0, 0.0)])
+        if k % 7 == 3:  # rays in every direction: not coplanar
+            d = rng.normal(size=(150, 3))
+            d /= np.linalg.norm(d, axis=1, keepdims=True)
+        else:
+            yaw, roll = angle + np.pi + rng.uniform(-0.5, 0.5), rng.uniform(-np.pi, np.pi)
+            cr, sr, cy, sy = np.cos(roll), np.sin(roll), np.cos(yaw), np.sin(yaw)
+            rot = (np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+                   @ np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]]))
+            d = _fan(n=120) @ rot.T
+        omap.insert_scan(origin, d, _cast(block, origin, d, 12.0), 12.0)
+        if rng.random() < 0.3:
+            centre = origin + rng.uniform(-6.0, 6.0, 3)
+            half = rng.uniform(3.0, 15.0, 3)
+            lo, hi = centre - half, centre + half
+            got, want = omap.occupied_points(lo, hi), _brute_force_occupied(omap, lo, hi)
+            assert sorted(map(tuple, got)) == sorted(map(tuple, want))
+            checked += len(want)
+        if k == 79:
+            before = np.sum(omap.occupied_points()[:, 0] < 0.5)  # only the first block there
+    assert checked > 500  # the queries did see structure
+    everything = omap.occupied_points()
+    assert sorted(map(tuple, everything)) == sorted(map(tuple, _brute_force_occupied(
+        omap, np.full(3, -np.inf), np.full(3, np.inf))))
+    # Many of the first block's voxels were cleared once it moved (the rest are occluded).
+    assert before > 100 and np.sum(everything[:, 0] < 0.5) < 0.75 * before

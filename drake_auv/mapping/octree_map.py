@@ -12,6 +12,14 @@ work per multibeam ping. Every query here reads leaves (`search` finds the leaf 
 the pruned node it would have been merged into, with the same log-odds), so labels are the
 same; `sync()` brings the inner nodes up to date (done before writing a file).
 
+Occupied voxels are found among the candidates (voxels ever hit), whose labels are cached:
+a scan can change only the voxels its rays cross, and the rays of one sonar update lie in a
+plane through the sensor (a multibeam fan, the profiler's head plane), so a cached label is
+read again from the octree only when the voxel lies within a voxel of the plane of a scan
+inserted since (and within its reach); labels older than the last `_SCAN_WINDOW` scans
+are read again. Scans whose rays are not coplanar mark their whole reach. A 1 Hz box query
+thus reads the few voxels the last second of pings swept, not every voxel in the box.
+
 Distance queries go through a KD-tree of occupied voxel centres that is rebuilt lazily, only
 when the map changed since the last build, so the 1 Hz replanner pays for it once per step.
 """
@@ -24,6 +32,7 @@ from scipy.spatial import cKDTree
 
 _OFFSET = 1 << 20  # voxel index offset so indices encode as non-negative 21-bit fields
 _MASK = (1 << 21) - 1
+_SCAN_WINDOW = 40  # scans remembered for the label cache; older labels are read again
 
 
 def _encode(idx: np.ndarray) -> np.ndarray:
@@ -68,6 +77,16 @@ class OctreeMap:
         """Forgets everything: the whole map becomes unknown."""
         self.tree.clear()
         self._candidates: set[int] = set()  # voxels ever hit: a superset of the occupied ones
+        # The candidates as arrays (insertion order), with their cached label and the revision
+        # at which it was read from the octree (-1: never); codes hit but not yet in them.
+        self._codes = np.zeros(0, dtype=np.int64)
+        self._centres = np.zeros((0, 3))
+        self._label = np.zeros(0, dtype=bool)
+        self._checked = np.zeros(0, dtype=np.int64)
+        self._new_codes: list[np.ndarray] = []
+        # The last `_SCAN_WINDOW` scans: revision, origin, plane normal, plane tolerance and
+        # reach (m), as rows.
+        self._scans: list[tuple] = []
         self._occupied = np.zeros((0, 3))
         self._kdtree: cKDTree | None = None
         self._dirty = False
@@ -104,10 +123,66 @@ class OctreeMap:
         self.tree.insertPointCloud(endpoints, origin, maxrange=float(max_range), lazy_eval=True)
         if np.any(hit):
             idx = np.floor(endpoints[hit] / self.resolution)
-            self._candidates.update(_encode(idx).tolist())
+            new = set(_encode(idx).tolist()) - self._candidates
+            if new:
+                self._candidates.update(new)
+                self._new_codes.append(np.fromiter(new, dtype=np.int64, count=len(new)))
         self._dirty = True
         self.revision += 1
         self.num_scans += 1
+        self._record_swept(origin, directions, np.minimum(length, max_range))
+
+    def _record_swept(self, origin, directions, lengths) -> None:
+        """Remembers where the scan just inserted may have changed labels: the voxels crossed
+        by its rays, whose centres lie within half a voxel diagonal of a ray (one voxel here,
+        for margin), so within that of the rays' best-fit plane through `origin` widened by
+        the rays' largest departure from it."""
+        normal = np.linalg.eigh(directions.T @ directions)[1][:, 0]  # least spread
+        reach = float(lengths.max()) + self.resolution
+        tolerance = self.resolution + reach * float(np.abs(directions @ normal).max())
+        self._scans.append((self.revision, *origin, *normal, tolerance, reach))
+        del self._scans[:-_SCAN_WINDOW]
+
+    def _materialise(self) -> None:
+        """Moves the newly hit codes into the candidate arrays (labels unread)."""
+        if not self._new_codes:
+            return
+        codes = np.concatenate(self._new_codes)
+        self._new_codes = []
+        self._codes = np.concatenate([self._codes, codes])
+        self._centres = np.vstack([self._centres, (_decode(codes) + 0.5) * self.resolution])
+        self._label = np.concatenate([self._label, np.zeros(len(codes), bool)])
+        self._checked = np.concatenate([self._checked, np.full(len(codes), -1, np.int64)])
+
+    def _read_labels(self, index: np.ndarray) -> None:
+        """Brings the cached labels of candidates `index` up to the current revision, reading
+        from the octree only those a scan since their last read may have changed."""
+        stale = index[self._checked[index] < self.revision]
+        if len(stale) == 0:
+            return
+        checked = self._checked[stale]
+        scans = np.array(self._scans).reshape(-1, 9)
+        # Read before the oldest remembered scan (or never): read again.
+        swept = checked < scans[0, 0] - 1 if len(scans) else np.ones(len(stale), bool)
+        test = np.flatnonzero(~swept)
+        if len(test):
+            checked, centres = checked[test], self._centres[stale[test]]
+            scans = scans[scans[:, 0] > checked.min()]
+            origins, normals = scans[:, 1:4], scans[:, 4:7]
+            offsets = np.einsum("sk,sk->s", origins, normals)
+            origin_sq = np.einsum("sk,sk->s", origins, origins)
+            for chunk in range(0, len(test), 8192):  # (8192, S) blocks bound the memory
+                part = slice(chunk, chunk + 8192)
+                c = centres[part]
+                plane = np.abs(c @ normals.T - offsets) <= scans[:, 7]
+                dist_sq = (np.einsum("mk,mk->m", c, c)[:, None] - 2.0 * (c @ origins.T)
+                           + origin_sq)
+                near = plane & (dist_sq <= scans[:, 8] ** 2) & (scans[:, 0] > checked[part, None])
+                swept[test[part]] |= near.any(axis=1)
+        read = stale[swept]
+        if len(read):
+            self._label[read] = np.asarray(self.tree.getLabels(self._centres[read])) == 1
+        self._checked[stale] = self.revision
 
     def insert_returns(self, returns) -> None:
         """Inserts a `drake_auv.sensors.SonarReturns` (navigation frame)."""
@@ -119,15 +194,9 @@ class OctreeMap:
     def _refresh(self) -> None:
         if not self._dirty:
             return
-        if self._candidates:
-            codes = np.fromiter(self._candidates, dtype=np.int64, count=len(self._candidates))
-            centres = (_decode(codes) + 0.5) * self.resolution
-            occupied = self.tree.getLabels(centres) == 1
-            # Voxels cleared since they were hit stop being candidates until hit again.
-            self._candidates = set(codes[occupied].tolist())
-            self._occupied = centres[occupied]
-        else:
-            self._occupied = np.zeros((0, 3))
+        self._materialise()
+        self._read_labels(np.arange(len(self._codes)))
+        self._occupied = self._centres[self._label]
         self._kdtree = cKDTree(self._occupied) if len(self._occupied) else None
         self._dirty = False
 
@@ -135,8 +204,9 @@ class OctreeMap:
         """(m, 3) centres of the occupied voxels (finest resolution), m.
 
         With a box (`lo`, `hi`: (3,) corners, m), only the voxels inside it, and only those
-        are checked against the octree: a local query (the replanner's) costs what the box
-        holds, not what the whole map holds (a seabed of thousands of voxels, say).
+        are brought up to date (of them, only the ones recent scans swept are read from the
+        octree): a local query (the replanner's) costs what the box holds, not what the
+        whole map holds (a seabed of thousands of voxels, say).
         """
         if lo is None and hi is None:
             self._refresh()
@@ -146,15 +216,10 @@ class OctreeMap:
         if not self._dirty:
             inside = np.all((self._occupied >= lo) & (self._occupied <= hi), axis=1)
             return self._occupied[inside]
-        if not self._candidates:
-            return np.zeros((0, 3))
-        codes = np.fromiter(self._candidates, dtype=np.int64, count=len(self._candidates))
-        centres = (_decode(codes) + 0.5) * self.resolution
-        inside = np.all((centres >= lo) & (centres <= hi), axis=1)
-        codes, centres = codes[inside], centres[inside]
-        occupied = self.tree.getLabels(centres) == 1 if len(centres) else np.zeros(0, bool)
-        self._candidates.difference_update(codes[~occupied].tolist())
-        return centres[occupied]
+        self._materialise()
+        inside = np.flatnonzero(np.all((self._centres >= lo) & (self._centres <= hi), axis=1))
+        self._read_labels(inside)
+        return self._centres[inside[self._label[inside]]]
 
     @property
     def kdtree(self) -> cKDTree | None:
