@@ -137,7 +137,11 @@ class OctreeMap:
         by its rays, whose centres lie within half a voxel diagonal of a ray (one voxel here,
         for margin), so within that of the rays' best-fit plane through `origin` widened by
         the rays' largest departure from it."""
-        normal = np.linalg.eigh(directions.T @ directions)[1][:, 0]  # least spread
+        # A fan's outer rays span its plane; otherwise the direction of least spread.
+        normal = np.cross(directions[0], directions[-1])
+        norm = np.linalg.norm(normal)
+        normal = (normal / norm if norm > 1e-3
+                  else np.linalg.eigh(directions.T @ directions)[1][:, 0])
         reach = float(lengths.max()) + self.resolution
         tolerance = self.resolution + reach * float(np.abs(directions @ normal).max())
         self._scans.append((self.revision, *origin, *normal, tolerance, reach))
