@@ -26,6 +26,8 @@ when the map changed since the last build, so the 1 Hz replanner pays for it onc
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import octomap
 from scipy.spatial import cKDTree
@@ -138,8 +140,9 @@ class OctreeMap:
         for margin), so within that of the rays' best-fit plane through `origin` widened by
         the rays' largest departure from it."""
         # A fan's outer rays span its plane; otherwise the direction of least spread.
-        normal = np.cross(directions[0], directions[-1])
-        norm = np.linalg.norm(normal)
+        (ax, ay, az), (bx, by, bz) = directions[0].tolist(), directions[-1].tolist()
+        normal = np.array([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx])
+        norm = math.sqrt(normal @ normal)
         normal = (normal / norm if norm > 1e-3
                   else np.linalg.eigh(directions.T @ directions)[1][:, 0])
         reach = float(lengths.max()) + self.resolution
