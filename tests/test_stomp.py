@@ -95,3 +95,25 @@ def test_bad_input_raises():
         stomp(bad, free_field)
     with pytest.raises(ValueError, match="state_cost"):
         stomp(LINE, lambda t: np.zeros(3))
+
+
+def test_one_cost_call_per_iteration_and_the_reported_cost_is_the_trajectorys():
+    centre, radius = np.array([5.0, 0.4]), 1.5
+    calls = []
+
+    def cost(trajectories):
+        calls.append(trajectories.shape[0])
+        d = np.linalg.norm(trajectories - centre, axis=-1)
+        return 20.0 * np.maximum(0.0, radius - d) ** 2
+
+    initial = np.linspace([0.0, 0.0], [10.0, 0.0], 21)
+    params = StompParameters(num_rollouts=8, max_iterations=30, patience=5, noise_std=0.4)
+    result = stomp(initial, cost, params, seed=4)
+    # The initial trajectory, then one batch per iteration and one judging the last update.
+    assert len(calls) == result.iterations + 2
+    assert calls[0] == 1 and calls[1] == 8 and set(calls[2:-1]) == {9} and calls[-1] in (1, 9)
+    # Costs judged inside a batch are the costs of the trajectory alone.
+    alone = float((cost(result.trajectory[None])
+                   + smoothness_costs(result.trajectory[None], params.smoothness_weight)).sum())
+    assert result.cost == pytest.approx(alone, rel=1e-12, abs=1e-12)
+    assert result.cost_history[-1] == result.cost < result.initial_cost

@@ -130,7 +130,9 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
     Args:
         initial: (N, D) initial trajectory, N >= 3, finite.
         state_cost: maps a batch of trajectories (K, N, D) to per-timestep costs (K, N), >= 0
-            and finite; it is called once per iteration on all rollouts together.
+            and finite, each trajectory's independent of the others in the batch; it is
+            called once per iteration on all rollouts together (plus the trajectory the
+            previous iteration produced, appended as row K), and once on the initial one.
         params: `StompParameters`.
         seed: seed of the rollout noise; the same seed gives the same result.
         matrices: `StompMatrices(N)` to reuse across calls (built here when None).
@@ -165,27 +167,39 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
     history = [best_cost]
     stalled = 0
     iterations = 0
-    for iterations in range(1, params.max_iterations + 1):
-        # Rollout noise eps[k] ~ N(0, R^-1) per dimension, zero at the fixed ends.
-        eps = np.zeros((K, num_points, dim))
-        z = rng.standard_normal((K, num_points - 2, dim))
-        eps[:, 1:-1, :] = np.einsum("ij,kjd->kid", matrices.noise_factor, z) * std
-        rollouts = theta[None] + eps
-        costs = costs_of(rollouts)  # (K, N)
+    # The cost of the updated theta is evaluated with the next iteration's rollouts, in the
+    # same call (one cost query per iteration instead of two; costs are per trajectory, so
+    # the numbers are the ones a separate call would give).
+    pending = False
+    for iterations in range(1, params.max_iterations + 2):
+        if iterations <= params.max_iterations:
+            # Rollout noise eps[k] ~ N(0, R^-1) per dimension, zero at the fixed ends.
+            eps = np.zeros((K, num_points, dim))
+            z = rng.standard_normal((K, num_points - 2, dim))
+            eps[:, 1:-1, :] = np.einsum("ij,kjd->kid", matrices.noise_factor, z) * std
+            rollouts = theta[None] + eps
+            batch = np.concatenate([rollouts, theta[None]]) if pending else rollouts
+        else:
+            batch = theta[None]
+        batch_costs = costs_of(batch)
+        if pending:  # the previous iteration's update, judged
+            cost = float(batch_costs[-1].sum())
+            if cost < best_cost:
+                improved = (best_cost - cost) > params.tolerance * max(abs(best_cost), 1e-12)
+                best, best_cost = theta.copy(), cost
+                stalled = 0 if improved else stalled + 1
+            else:
+                stalled += 1
+            history.append(best_cost)
+            if stalled >= params.patience or iterations > params.max_iterations:
+                iterations -= 1
+                break
+        costs = batch_costs[:K]  # (K, N)
         lo, hi = costs.min(axis=0), costs.max(axis=0)
         spread = np.where(hi - lo > 0, hi - lo, 1.0)
         prob = np.exp(-params.h * (costs - lo) / spread)
         prob /= prob.sum(axis=0, keepdims=True)
         dtheta = np.einsum("ki,kid->id", prob, eps)[1:-1]
         theta[1:-1] += matrices.smoothing @ dtheta
-        cost = total_cost(theta)
-        if cost < best_cost:
-            improved = (best_cost - cost) > params.tolerance * max(abs(best_cost), 1e-12)
-            best, best_cost = theta.copy(), cost
-            stalled = 0 if improved else stalled + 1
-        else:
-            stalled += 1
-        history.append(best_cost)
-        if stalled >= params.patience:
-            break
+        pending = True
     return StompResult(best, best_cost, history[0], np.array(history), iterations)
