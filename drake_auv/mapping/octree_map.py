@@ -173,23 +173,37 @@ class OctreeMap:
         swept = checked < scans[0, 0] - 1 if len(scans) else np.ones(len(stale), bool)
         test = np.flatnonzero(~swept)
         if len(test):
-            checked, centres = checked[test], self._centres[stale[test]]
-            scans = scans[scans[:, 0] > checked.min()]
-            origins, normals = scans[:, 1:4], scans[:, 4:7]
-            offsets = np.einsum("sk,sk->s", origins, normals)
-            origin_sq = np.einsum("sk,sk->s", origins, origins)
-            for chunk in range(0, len(test), 8192):  # (8192, S) blocks bound the memory
-                part = slice(chunk, chunk + 8192)
-                c = centres[part]
-                plane = np.abs(c @ normals.T - offsets) <= scans[:, 7]
-                dist_sq = (np.einsum("mk,mk->m", c, c)[:, None] - 2.0 * (c @ origins.T)
-                           + origin_sq)
-                near = plane & (dist_sq <= scans[:, 8] ** 2) & (scans[:, 0] > checked[part, None])
-                swept[test[part]] |= near.any(axis=1)
+            # Most were read at the last query and need only the scans since; the rest
+            # (entering the box) are tested against every scan since their own read.
+            latest = checked[test] == checked[test].max()
+            for group in (test[latest], test[~latest]):
+                if len(group):
+                    swept[group] = self._swept(self._centres[stale[group]], checked[group],
+                                               scans)
         read = stale[swept]
         if len(read):
             self._label[read] = np.asarray(self.tree.getLabels(self._centres[read])) == 1
         self._checked[stale] = self.revision
+
+    @staticmethod
+    def _swept(centres: np.ndarray, checked: np.ndarray, scans: np.ndarray) -> np.ndarray:
+        """(m,) True where a voxel centre lies in the plane slab and the reach of a scan
+        (rows of `_scans`) inserted after its label was read (`checked`)."""
+        scans = scans[scans[:, 0] > checked.min()]
+        out = np.zeros(len(centres), bool)
+        if len(scans) == 0:
+            return out
+        origins, normals = scans[:, 1:4], scans[:, 4:7]
+        offsets = np.einsum("sk,sk->s", origins, normals)
+        origin_sq = np.einsum("sk,sk->s", origins, origins)
+        for chunk in range(0, len(centres), 8192):  # (8192, S) blocks bound the memory
+            part = slice(chunk, chunk + 8192)
+            c = centres[part]
+            plane = np.abs(c @ normals.T - offsets) <= scans[:, 7]
+            dist_sq = np.einsum("mk,mk->m", c, c)[:, None] - 2.0 * (c @ origins.T) + origin_sq
+            near = plane & (dist_sq <= scans[:, 8] ** 2) & (scans[:, 0] > checked[part, None])
+            out[part] = near.any(axis=1)
+        return out
 
     def insert_returns(self, returns) -> None:
         """Inserts a `drake_auv.sensors.SonarReturns` (navigation frame)."""
