@@ -15,7 +15,6 @@ import timeit
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.control import TrackingGains
 from drake_auv.diagrams.profile_following import build_profile_following_diagram
 from drake_auv.perception import FollowingParams, HorizontalFollower, estimate_profile
 from drake_auv.scenarios import get_scenario
@@ -39,8 +38,7 @@ def pool_real_time_factor() -> float:
     start = scenario.start_state.copy()
     start[2] = -4.0
     diagram, _ = build_profile_following_diagram(
-        scenario.world, start, "horizontal", FollowingParams(offset=2.0, corner_weight=0.5),
-        gains=TrackingGains(kp_yaw=4.0, kd_yaw=4.0))
+        scenario.world, start, "horizontal", FollowingParams(offset=2.0, corner_weight=0.5))
     simulator = Simulator(diagram)
     simulator.Initialize()
     start_time = time.perf_counter()

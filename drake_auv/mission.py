@@ -27,7 +27,6 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 from tqdm import tqdm
 
-from drake_auv.control import TrackingGains
 from drake_auv.diagrams.profile_following import (build_profile_following_diagram,
                                                   true_clearance)
 from drake_auv.diagrams.replanning import build_replanning_diagram
@@ -40,7 +39,6 @@ from drake_auv.scenarios import Scenario, get_scenario
 from drake_auv.systems.coverage_recorder import CoverageRecorder
 
 VEHICLE_RADIUS = 1.0  # m, a sphere around the GIRONA 500's hulls for the contact check
-FOLLOW_GAINS = TrackingGains(kp_yaw=4.0, kd_yaw=4.0)  # see docs/profile_following.md
 
 
 @dataclass(frozen=True)
@@ -234,8 +232,7 @@ def profile_phase(scenario: Scenario, caster: RayCaster, config: MissionConfig,
             builder.Connect(vehicle.dynamics.state_output, recorder.true_state_input)
 
     diagram, handles = build_profile_following_diagram(
-        caster, start, "horizontal", params, navigation=config.navigation(), seed=config.seed,
-        gains=FOLLOW_GAINS, scene=scene, extra=add_recorders)
+        caster, start, "horizontal", params, navigation=config.navigation(), seed=config.seed, scene=scene, extra=add_recorders)
     simulator = Simulator(diagram)
     context = simulator.get_context()
     circumference = 2.0 * np.pi * 16.0 * config.follow_loops

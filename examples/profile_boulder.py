@@ -20,13 +20,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import trimesh
 
-from drake_auv.control import TrackingGains
 from drake_auv.diagrams.profile_following import (build_profile_following_diagram, run_mission,
                                                   true_clearance)
 from drake_auv.perception import EstimatorParams, FollowingParams
 from drake_auv.scenarios import get_scenario
 
-GAINS = TrackingGains(kp_yaw=4.0, kd_yaw=4.0)  # see examples/profile_pool.py
 VEHICLE_RADIUS = 1.0  # m
 
 
@@ -46,7 +44,7 @@ def run(depth=34.0, offset=3.0, speed=None, loops=1.0, scene=None, max_time=600.
     start = np.zeros(12)
     start[:3] = (centre[0] - 16.0, centre[1], -depth)  # in front of the boulder's -x side
     diagram, handles = build_profile_following_diagram(
-        world, start, "horizontal", params, seed=seed, gains=GAINS, scene=scene)
+        world, start, "horizontal", params, seed=seed, scene=scene)
 
     def closed(context):
         x = handles.state_log.FindLog(context).data()

@@ -22,13 +22,11 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from drake_auv.control import TrackingGains
 from drake_auv.diagrams.profile_following import (build_profile_following_diagram, run_mission,
                                                   true_clearance)
 from drake_auv.perception import FollowingParams
 from drake_auv.scenarios import get_scenario
 
-GAINS = TrackingGains(kp_yaw=4.0, kd_yaw=4.0)  # see examples/profile_pool.py
 VEHICLE_RADIUS = 1.0  # m
 # The C in its x-z section (scenarios._c_object_geometry) and the seabed, for the figure.
 C_OUTLINE = np.array([[0, -20], [0, -17], [10, -17], [10, -9], [0, -9], [0, -6], [13, -6],
@@ -41,7 +39,7 @@ def run(scene=None, max_time=400.0, seed=0):
     params = FollowingParams(offset=scenario.params["omega"], speed=scenario.params["speed"])
     diagram, handles = build_profile_following_diagram(
         scenario.world, scenario.start_state, "vertical", params, plane_yaw=0.0, seed=seed,
-        gains=GAINS, scene=scene)
+        scene=scene)
     passed_top = {"flag": False}
 
     def behind_the_c(context):  # over the top, then back down on the seabed beyond the C

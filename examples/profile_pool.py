@@ -25,7 +25,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from drake_auv.control import TrackingGains, wrap_angle
+from drake_auv.control import wrap_angle
 from drake_auv.diagrams.profile_following import (build_profile_following_diagram, run_mission,
                                                   true_clearance)
 from drake_auv.navigation import NavigationParams
@@ -33,9 +33,6 @@ from drake_auv.perception import FollowingParams
 from drake_auv.scenarios import get_scenario
 from drake_auv.sensors.noise import SonarNoise
 
-# A stiffer heading loop than the tracker's default: the vehicle faces the wall while it
-# translates, and the default loop overshoots 90 degree turns by about 20 degrees.
-GAINS = TrackingGains(kp_yaw=4.0, kd_yaw=4.0)
 SETTLE = 20.0  # s, the reference's pool result holds after the first 20 s
 VEHICLE_RADIUS = 1.0  # m, GIRONA 500 envelope 1.5 x 1.0 x 1.0 m
 
@@ -61,7 +58,7 @@ def horizontal(scenario, noise=None, navigation=None, seed=0, scene=None, max_ti
     start[2] = -p["depth"]
     diagram, handles = build_profile_following_diagram(
         scenario.world, start, "horizontal", params, noise=noise, navigation=navigation,
-        seed=seed, gains=GAINS, scene=scene)
+        seed=seed, scene=scene)
     simulator = run_mission(diagram, max_time,
                             stop=lambda c: _laps(handles, c) >= p["laps"],
                             label="pool horizontal" + (" (spurious)" if noise else "")
@@ -84,7 +81,7 @@ def vertical(scenario, seed=0, max_time=200.0):
     start = np.zeros(12)
     start[:3] = (-6.0, 0.0, -3.0)
     diagram, handles = build_profile_following_diagram(
-        scenario.world, start, "vertical", params, plane_yaw=0.0, seed=seed, gains=GAINS)
+        scenario.world, start, "vertical", params, plane_yaw=0.0, seed=seed)
 
     def at_cliff_top(context):  # climbed the far wall to the depth limit
         x = handles.state_log.FindLog(context).data()

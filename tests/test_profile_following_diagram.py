@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.control import TrackingGains, wrap_angle
+from drake_auv.control import wrap_angle
 from drake_auv.diagrams.profile_following import (build_profile_following_diagram,
                                                   true_clearance)
 from drake_auv.perception import FollowingParams
@@ -14,7 +14,6 @@ from drake_auv.sensors.noise import SonarNoise
 from drake_auv.sensors.returns import SonarReturns
 from drake_auv.systems.profile_following import ProfileFollowingController
 
-GAINS = TrackingGains(kp_yaw=4.0, kd_yaw=4.0)
 
 
 def _returns(points, sequence, time=0.0):
@@ -71,7 +70,7 @@ def test_pool_corner_in_horizontal_mode(noise):
     start[:3], start[5] = (3.0, -2.0, -4.0), -np.pi / 2  # 2 m from the y = -4 wall, facing it
     params = FollowingParams(offset=2.0, speed=0.3, corner_weight=0.5)
     diagram, handles = build_profile_following_diagram(scenario.world, start, "horizontal",
-                                                       params, noise=noise, seed=3, gains=GAINS)
+                                                       params, noise=noise, seed=3)
     _, t, x, profile = _advance(diagram, handles, 22.0)
     # round the (8, -4) corner: now 2 m from the x = 8 wall, facing +x, moving along +y
     assert x[0, -1] == pytest.approx(6.0, abs=0.2)
@@ -90,7 +89,7 @@ def test_ceiling_turn_inside_the_c_in_vertical_mode():
     start[:3] = (7.0, 0.0, -13.0)  # inside the C, 3 m from its inner wall, facing it
     diagram, handles = build_profile_following_diagram(
         scenario.world, start, "vertical", FollowingParams(offset=2.0, speed=0.3),
-        plane_yaw=0.0, gains=GAINS)
+        plane_yaw=0.0)
     context, t, x, profile = _advance(diagram, handles, 50.0)
     follower = handles.controller.follower(handles.controller.GetMyContextFromRoot(context))
     assert follower.turns == 1

@@ -5,17 +5,15 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.control import TrackingGains
 from drake_auv.diagrams.profile_following import (build_profile_following_diagram,
                                                   true_clearance)
 from drake_auv.perception import EstimatorParams, FollowingParams
 from drake_auv.scenarios import get_scenario
 
-GAINS = TrackingGains(kp_yaw=4.0, kd_yaw=4.0)
 
 
 def _fly(world, start, mode, params, duration, **kwargs):
-    diagram, handles = build_profile_following_diagram(world, start, mode, params, gains=GAINS,
+    diagram, handles = build_profile_following_diagram(world, start, mode, params,
                                                        **kwargs)
     simulator = Simulator(diagram)
     simulator.AdvanceTo(duration)

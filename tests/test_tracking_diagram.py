@@ -98,3 +98,25 @@ def test_exported_ports():
     assert diagram.GetOutputPort("estimated_state").size() == 12
     with pytest.raises(ValueError, match="log_period"):
         build_tracking_diagram(lawnmower(lanes=1), log_period=0.0)
+
+
+def test_heading_step_settles_without_overshoot():
+    # A 90 degree heading step held in place: the yaw loop keeps the vehicle's own damping
+    # (fed forward on the reference rate), so the lagged thrusters do not make it overshoot.
+    from pydrake.systems.primitives import ConstantVectorSource
+
+    builder = DiagramBuilder()
+    vehicle = add_girona500(builder)
+    step = builder.AddSystem(ConstantVectorSource(np.array([0, 0, 0, np.pi / 2, 0, 0, 0, 0.0])))
+    builder.Connect(step.get_output_port(), vehicle.tracker.reference_input)
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    context = vehicle.dynamics.GetMyContextFromRoot(simulator.get_context())
+    yaw = []
+    for t in np.arange(0.5, 20.0, 0.5):
+        simulator.AdvanceTo(t)
+        yaw.append(vehicle.dynamics.state_output.Eval(context)[5])
+    yaw = np.degrees(yaw)
+    assert yaw.max() < 92.0  # the earlier law overshot to 118 degrees
+    assert abs(yaw[-1] - 90.0) < 0.5
+    assert np.argmax(yaw > 85.5) * 0.5 < 7.0  # within 5 % in under 7 s
