@@ -27,9 +27,9 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 from tqdm import tqdm
 
-from drake_auv.diagrams.profile_following import (build_profile_following_diagram,
-                                                  true_clearance)
+from drake_auv.diagrams.profile_following import build_profile_following_diagram
 from drake_auv.diagrams.replanning import build_replanning_diagram
+from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.navigation import NavigationParams
 from drake_auv.perception import EstimatorParams, FollowingParams
@@ -179,7 +179,7 @@ def plan_phase(scenario: Scenario, config: MissionConfig) -> CoveragePlan:
 
 
 def _structure_distances(scenario: Scenario, xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return (true_clearance(target_mesh(scenario), xyz), true_clearance(scenario.world, xyz))
+    return (mesh_distance(target_mesh(scenario), xyz), mesh_distance(scenario.world, xyz))
 
 
 def target_mesh(scenario: Scenario):

@@ -14,7 +14,7 @@ from pathlib import Path as FilePath
 import numpy as np
 from matplotlib.figure import Figure
 
-from drake_auv.diagrams.profile_following import true_clearance
+from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.visibility import coverage_share
 from drake_auv.mission import VEHICLE_RADIUS, MissionResult, PhaseResult, target_mesh
 from drake_auv.planning.figures import fig_path3d
@@ -58,7 +58,7 @@ def plan_summary(result: MissionResult) -> dict:
     plan, config = result.plan, result.config
     path = plan.path
     samples = path.resample(1.0).points
-    d = true_clearance(target_mesh(result.scenario), samples)
+    d = mesh_distance(target_mesh(result.scenario), samples)
     close = d < 2.0 * config.omega
     m = plan.metrics
     return dict(length_m=path.length,

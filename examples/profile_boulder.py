@@ -20,8 +20,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import trimesh
 
-from drake_auv.diagrams.profile_following import (build_profile_following_diagram, run_mission,
-                                                  true_clearance)
+from drake_auv.diagrams.profile_following import build_profile_following_diagram, run_mission
+from drake_auv.geometry.distance import mesh_distance
 from drake_auv.perception import EstimatorParams, FollowingParams
 from drake_auv.scenarios import get_scenario
 
@@ -56,7 +56,7 @@ def run(depth=34.0, offset=3.0, speed=None, loops=1.0, scene=None, max_time=600.
     x = log.data()
     profile = handles.profile_log.FindLog(context).data()
     return dict(t=log.sample_times(), x=x, estimated=profile[0], centre=centre,
-                clearance=true_clearance(world, x[:3].T), turns=_turns(x, centre),
+                clearance=mesh_distance(world, x[:3].T), turns=_turns(x, centre),
                 depth=depth, offset=offset, world=world)
 
 

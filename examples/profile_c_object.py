@@ -22,8 +22,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from drake_auv.diagrams.profile_following import (build_profile_following_diagram, run_mission,
-                                                  true_clearance)
+from drake_auv.diagrams.profile_following import build_profile_following_diagram, run_mission
+from drake_auv.geometry.distance import mesh_distance
 from drake_auv.perception import FollowingParams
 from drake_auv.scenarios import get_scenario
 
@@ -56,7 +56,7 @@ def run(scene=None, max_time=400.0, seed=0):
     profile = handles.profile_log.FindLog(context).data()
     follower = handles.controller.follower(handles.controller.GetMyContextFromRoot(context))
     return dict(t=log.sample_times(), x=x, mode=profile[6], estimated=profile[0],
-                clearance=true_clearance(scenario.world, x[:3].T), turns=follower.turns,
+                clearance=mesh_distance(scenario.world, x[:3].T), turns=follower.turns,
                 offset=params.offset, world=scenario.world)
 
 

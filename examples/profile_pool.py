@@ -26,8 +26,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from drake_auv.control import wrap_angle
-from drake_auv.diagrams.profile_following import (build_profile_following_diagram, run_mission,
-                                                  true_clearance)
+from drake_auv.diagrams.profile_following import build_profile_following_diagram, run_mission
+from drake_auv.geometry.distance import mesh_distance
 from drake_auv.navigation import NavigationParams
 from drake_auv.perception import FollowingParams
 from drake_auv.scenarios import get_scenario
@@ -70,7 +70,7 @@ def horizontal(scenario, noise=None, navigation=None, seed=0, scene=None, max_ti
     true_slope = np.degrees(wrap_angle(np.arctan2(-wall_normal[:, 1], -wall_normal[:, 0]) - x[5]))
     est_slope = np.degrees(wrap_angle(np.arctan2(-profile[3], -profile[2]) - x[5]))
     return dict(t=t, x=x, frontal=hits.ranges, estimated=profile[0], true_slope=true_slope,
-                est_slope=est_slope, clearance=true_clearance(scenario.world, x[:3].T),
+                est_slope=est_slope, clearance=mesh_distance(scenario.world, x[:3].T),
                 laps=_laps(handles, simulator.get_context()), offset=params.offset)
 
 
@@ -92,7 +92,7 @@ def vertical(scenario, seed=0, max_time=200.0):
     forward = np.tile([1.0, 0.0, 0.0], (len(t), 1))  # the cliff is the +x end wall
     cliff = handles.caster.cast(x[:3].T, forward, 20.0).ranges
     return dict(t=t, x=x, cliff=cliff, estimated=profile[0],
-                clearance=true_clearance(scenario.world, x[:3].T), offset=params.offset)
+                clearance=mesh_distance(scenario.world, x[:3].T), offset=params.offset)
 
 
 def _horizontal_figure(run, title, filename):

@@ -6,8 +6,8 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from drake_auv.control import wrap_angle
-from drake_auv.diagrams.profile_following import (build_profile_following_diagram,
-                                                  true_clearance)
+from drake_auv.diagrams.profile_following import build_profile_following_diagram
+from drake_auv.geometry.distance import mesh_distance
 from drake_auv.perception import FollowingParams
 from drake_auv.scenarios import get_scenario
 from drake_auv.sensors.noise import SonarNoise
@@ -97,20 +97,7 @@ def test_ceiling_turn_inside_the_c_in_vertical_mode():
     assert abs(wrap_angle(x[5, -1] - np.pi)) < np.radians(10)  # now facing -x
     assert x[2, -1] == pytest.approx(-11.0, abs=0.25)  # 2 m under the ceiling (z = -9)
     assert x[0, -1] < 5.0  # moving along the ceiling towards the opening
-    assert true_clearance(scenario.world, x[:3].T).min() > 1.5
-
-
-def test_true_clearance_is_exact_on_a_box():
-    import trimesh
-
-    box = trimesh.creation.box(extents=(2.0, 2.0, 2.0))
-    q = np.random.default_rng(0).uniform(-3, 3, (500, 3))
-    outside = np.linalg.norm(np.maximum(np.abs(q) - 1.0, 0.0), axis=1)
-    inside = np.all(np.abs(q) < 1.0, axis=1)
-    expected = np.where(inside, 1.0 - np.abs(q).max(axis=1), outside)
-    np.testing.assert_allclose(true_clearance(box, q), expected, atol=1e-9)
-    with pytest.raises(ValueError, match="points"):
-        true_clearance(box, [[0.0, np.nan, 0.0]])
+    assert mesh_distance(scenario.world, x[:3].T).min() > 1.5
 
 
 def test_diagram_rejects_bad_options():

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.diagrams.profile_following import (build_profile_following_diagram,
-                                                  true_clearance)
+from drake_auv.diagrams.profile_following import build_profile_following_diagram
+from drake_auv.geometry.distance import mesh_distance
 from drake_auv.perception import EstimatorParams, FollowingParams
 from drake_auv.scenarios import get_scenario
 
@@ -27,7 +27,7 @@ def test_pool_v_profile_to_the_cliff():
     start[:3] = (-6.0, 0.0, -3.0)  # over the shallow end, heading +x along the V
     t, x = _fly(world, start, "vertical", FollowingParams(offset=2.0, min_depth=1.0), 55.0,
                 plane_yaw=0.0)
-    clearance = true_clearance(world, x[:3].T)
+    clearance = mesh_distance(world, x[:3].T)
     assert np.all(np.abs(clearance[t > 10] - 2.0) < 0.3)
     deepest = np.argmin(x[2])
     assert abs(x[0, deepest]) < 1.5 and x[2, deepest] == pytest.approx(-5.0, abs=0.3)  # V apex
@@ -45,7 +45,7 @@ def test_boulder_closed_loop_without_contact():
     t, x = _fly(scenario.world, start, "horizontal", params, 180.0)
     angle = np.unwrap(np.arctan2(x[1] - centre[1], x[0] - centre[0]))
     assert abs(angle[-1] - angle[0]) > 2 * np.pi  # closed the loop
-    clearance = true_clearance(scenario.world, x[:3].T)
+    clearance = mesh_distance(scenario.world, x[:3].T)
     assert clearance.min() > 2.0  # the vehicle's radius is 1 m
     assert np.abs(clearance[t > 30] - 3.0).mean() < 0.3
     assert np.all(np.abs(x[2] + 34.0) < 0.15)  # constant depth

@@ -1,7 +1,6 @@
 """Profile-following mission: the GIRONA 500 driven by its pencil-beam profiler.
 
-Also `run_mission` (simulate with a progress bar and a stop condition) and `true_clearance`
-(exact distance to the true mesh, for the no-contact checks of the examples and tests).
+Also `run_mission` (simulate with a progress bar and a stop condition).
 
     true state ──> PencilBeamProfiler ──returns──> ProfileFollowingController ──reference──┐
          ^              ^ estimated_state ─────────────────┘ ^                            v
@@ -17,11 +16,9 @@ import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-import trimesh
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import VectorLogSink
-from scipy.spatial import cKDTree
 from tqdm import tqdm
 
 from drake_auv.control import TrackingGains
@@ -146,34 +143,6 @@ def build_profile_following_diagram(world, initial_state, mode: str = "horizonta
     return diagram, ProfileFollowingHandles(vehicle, profiler, controller, logs["state_log"],
                                             logs["estimated_state_log"], logs["reference_log"],
                                             logs["profile_log"], caster, visualizer)
-
-
-def true_clearance(mesh: trimesh.Trimesh, points, chunk: int = 256) -> np.ndarray:
-    """(n,) exact distance from each point (n, 3) to the mesh's surface, m.
-
-    The nearest triangle's centroid lies within d + r of the point, d being the true distance
-    (at most the distance to the nearest centroid) and r the largest centroid-to-vertex
-    distance of any triangle, so only the triangles in that ball are tested exactly.
-    """
-    points = np.atleast_2d(np.asarray(points, dtype=float))
-    if points.shape[1] != 3 or not np.all(np.isfinite(points)):
-        raise ValueError(f"true_clearance: points must be finite (n, 3), got {points.shape}")
-    triangles = np.asarray(mesh.triangles)
-    centroids = triangles.mean(axis=1)
-    reach = float(np.linalg.norm(triangles - centroids[:, None], axis=2).max())
-    tree = cKDTree(centroids)
-    nearest, _ = tree.query(points)
-    out = np.empty(len(points))
-    for start in range(0, len(points), chunk):
-        block = slice(start, start + chunk)
-        candidates = tree.query_ball_point(points[block], nearest[block] + reach)
-        owner = np.repeat(np.arange(len(candidates)), [len(c) for c in candidates])
-        faces = np.concatenate(candidates).astype(int)
-        closest = trimesh.triangles.closest_point(triangles[faces], points[block][owner])
-        dist = np.linalg.norm(closest - points[block][owner], axis=1)
-        out[block] = np.full(len(candidates), np.inf)
-        np.minimum.at(out[block], owner, dist)
-    return out
 
 
 def run_mission(diagram, duration: float, stop=None, chunk: float = 1.0, progress: bool = True,
