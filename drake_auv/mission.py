@@ -150,13 +150,14 @@ class MissionResult:
 
 
 class _MissionClock:
-    """One progress bar over the simulated seconds of every phase."""
+    """One progress bar over the simulated-time budgets of every phase."""
 
     def __init__(self, total: float, progress: bool):
         self.bar = tqdm(total=round(total), unit="s sim", desc="mission", disable=not progress)
 
     def advance(self, simulator: Simulator, end: float, stop, label: str, chunk: float = 5.0):
-        """Advances `simulator` to `end` in chunks, stopping early when `stop()` is true."""
+        """Advances `simulator` to `end` in chunks, stopping early when `stop()` is true; the
+        bar then skips the rest of this phase's budget."""
         self.bar.set_description(label)
         context = simulator.get_context()
         while context.get_time() < end - 1e-9:
@@ -165,9 +166,23 @@ class _MissionClock:
             self.bar.update(round(context.get_time()) - round(before))
             if stop():
                 break
+        self.bar.update(round(end) - round(context.get_time()))
 
     def close(self):
         self.bar.close()
+
+
+def follow_budget(config: MissionConfig) -> float:
+    """Longest simulated time of the profile-following phase, s: `follow_loops` turns of a
+    16 m radius circle at the survey speed, times the margin."""
+    return config.time_margin * 2.0 * np.pi * 16.0 * config.follow_loops / config.speed
+
+
+def replan_budget(config: MissionConfig, plan: CoveragePlan) -> float:
+    """Longest simulated time of the replanning phase, s: the nominal plan's duration times
+    the margin, capped by `replan_time`."""
+    budget = config.time_margin * plan.path.times(config.speed)[-1]
+    return budget if config.replan_time is None else min(budget, config.replan_time)
 
 
 def plan_phase(scenario: Scenario, config: MissionConfig) -> CoveragePlan:
@@ -235,8 +250,7 @@ def profile_phase(scenario: Scenario, caster: RayCaster, config: MissionConfig,
         caster, start, "horizontal", params, navigation=config.navigation(), seed=config.seed, scene=scene, extra=add_recorders)
     simulator = Simulator(diagram)
     context = simulator.get_context()
-    circumference = 2.0 * np.pi * 16.0 * config.follow_loops
-    budget = config.time_margin * circumference / config.speed
+    budget = follow_budget(config)
 
     def closed() -> bool:
         x = handles.state_log.FindLog(context).data()
@@ -264,9 +278,7 @@ def replan_phase(scenario: Scenario, caster: RayCaster, plan: CoveragePlan,
         multibeam_mount="port", seed=config.seed, scene=scene,
         target_faces=scenario.target_faces, camera_range=config.camera_range)
     simulator = Simulator(diagram)
-    budget = config.time_margin * nominal.times(config.speed)[-1]
-    if config.replan_time is not None:
-        budget = min(budget, config.replan_time)
+    budget = replan_budget(config, plan)
     log = handles.replanner.log
 
     def done() -> bool:
@@ -285,11 +297,7 @@ def run_mission(config: MissionConfig = MissionConfig(), scene=None,
     scenario = get_scenario("boulder")
     caster = RayCaster(scenario.world)
     plan = plan_phase(scenario, config)
-    nominal_time = plan.path.times(config.speed)[-1]
-    if config.replan_time is not None:
-        nominal_time = min(nominal_time, config.replan_time)
-    follow_time = 2.0 * np.pi * 16.0 * config.follow_loops / config.speed
-    clock = _MissionClock(follow_time + nominal_time, progress)
+    clock = _MissionClock(follow_budget(config) + replan_budget(config, plan), progress)
     if scene is not None:
         scene.add_mesh("world", scenario.world, rgba=(0.55, 0.5, 0.42, 1.0))
         scene.add_path("nominal_path", plan.path)
