@@ -39,6 +39,8 @@ from drake_auv.scenarios import Scenario, get_scenario
 from drake_auv.systems.coverage_recorder import CoverageRecorder
 
 VEHICLE_RADIUS = 1.0  # m, a sphere around the GIRONA 500's hulls for the contact check
+FOLLOW_RADIUS = 16.0  # m, from the boulder's centre: where profile following starts, and the
+# radius of the circle that sizes its time budget (the boulder is about 20 m x 15 m)
 
 
 @dataclass(frozen=True)
@@ -142,6 +144,8 @@ class PhaseResult:
 
 @dataclass
 class MissionResult:
+    """The plan and the simulated phases (profile following, then replanning)."""
+
     config: MissionConfig
     scenario: Scenario
     plan: CoveragePlan
@@ -174,8 +178,8 @@ class _MissionClock:
 
 def follow_budget(config: MissionConfig) -> float:
     """Longest simulated time of the profile-following phase, s: `follow_loops` turns of a
-    16 m radius circle at the survey speed, times the margin."""
-    return config.time_margin * 2.0 * np.pi * 16.0 * config.follow_loops / config.speed
+    `FOLLOW_RADIUS` circle at the survey speed, times the margin."""
+    return config.time_margin * 2.0 * np.pi * FOLLOW_RADIUS * config.follow_loops / config.speed
 
 
 def replan_budget(config: MissionConfig, plan: CoveragePlan) -> float:
@@ -233,7 +237,7 @@ def profile_phase(scenario: Scenario, caster: RayCaster, config: MissionConfig,
     params = FollowingParams(offset=config.follow_offset, speed=config.speed,
                              estimator=EstimatorParams(window=config.follow_offset + 3.0))
     start = np.zeros(12)
-    start[:3] = (centre[0] - 16.0, centre[1], -config.follow_depth)  # off the boulder's -x side
+    start[:3] = (centre[0] - FOLLOW_RADIUS, centre[1], -config.follow_depth)  # off its -x side
     recorders = {}
 
     def add_recorders(builder, vehicle):

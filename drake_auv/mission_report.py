@@ -46,6 +46,8 @@ def phase_summary(phase: PhaseResult, areas: np.ndarray, near: float) -> dict:
                 distance_min_m=float(phase.distance.min()),
                 clearance_min_m=float(phase.clearance.min()),
                 contact=bool(phase.clearance.min() <= VEHICLE_RADIUS),
+                navigation_error_max_m=float(np.linalg.norm(
+                    phase.estimated_xyz - phase.xyz, axis=1).max()),
                 camera_coverage=coverage_share(phase.camera_best, areas),
                 multibeam_coverage=coverage_share(phase.multibeam_best, areas),
                 camera_angle_mean_deg=cam_mean, camera_angle_sd_deg=cam_sd,
@@ -142,6 +144,7 @@ def report_markdown(summary: dict) -> str:
             ("true distance to the boulder, sd (m)", "distance_sd_m", "{:.2f}"),
             ("true distance to the boulder, min (m)", "distance_min_m", "{:.2f}"),
             ("clearance to anything, min (m)", "clearance_min_m", "{:.2f}"),
+            ("navigation error, max (m)", "navigation_error_max_m", "{:.2f}"),
             ("camera coverage of the boulder (%)", "camera_coverage", "{:.1%}"),
             ("multibeam coverage of the boulder (%)", "multibeam_coverage", "{:.1%}"),
             ("camera viewing angle, mean (deg)", "camera_angle_mean_deg", "{:.1f}"),
