@@ -1,2 +1,16 @@
 """Subcommands of the `drake-auv` console script: each module has `add_parser(subparsers)`
 that registers its arguments and sets `func` to the function that runs it."""
+
+
+def add_recording_options(parser, playback_speed: float, realtime: bool = True) -> None:
+    """The options every simulating command shares: the recording's playback speed,
+    `--no-html`, `--quiet` and, with `realtime`, pacing the simulation to watch it live."""
+    parser.add_argument("--playback-speed", type=float, default=playback_speed,
+                        help="the HTML animation plays this many times faster than real time "
+                             f"(default {playback_speed:g})")
+    if realtime:
+        parser.add_argument("--realtime-rate", type=float, default=0.0,
+                            help="pace the simulation to watch it live (1 = real time; "
+                                 "default 0 = as fast as possible)")
+    parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -7,6 +7,8 @@ with realtime replanning, and writes `<out>/report.md`, `report.json`, `plan.png
 
 from __future__ import annotations
 
+from drake_auv.commands import add_recording_options
+
 DEFAULT_OUT = "out/demo"
 
 
@@ -28,10 +30,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--replan-time", type=float, default=None,
                         help="cap on the replanning phase's simulated time, s (default: the "
                              "whole plan)")
-    parser.add_argument("--playback-speed", type=float, default=20.0,
-                        help="the HTML animation plays this many times faster than real time")
-    parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_recording_options(parser, playback_speed=20.0, realtime=False)
     parser.set_defaults(func=run)
 
 

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from drake_auv.commands import add_recording_options
+
 DEFAULT_OUT = "out/lawnmower"
 
 
@@ -82,11 +84,5 @@ def add_parser(subparsers) -> None:
                         help="lane overlap fraction (default 0.1)")
     parser.add_argument("--relief", type=float, default=4.0,
                         help="seabed relief peak to peak, m (default 4)")
-    parser.add_argument("--playback-speed", type=float, default=10.0,
-                        help="the HTML animation plays this many times faster than real time")
-    parser.add_argument("--realtime-rate", type=float, default=0.0,
-                        help="pace the simulation to watch it live (1 = real time; default 0 = "
-                             "as fast as possible)")
-    parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_recording_options(parser, playback_speed=10.0)
     parser.set_defaults(func=run)

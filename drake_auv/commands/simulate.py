@@ -13,6 +13,8 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.commands import add_recording_options
+
 DEFAULT_OUT = "out/simulate"
 
 
@@ -161,11 +163,5 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--random-walk", type=float, default=0.0,
                         help="navigation drift random walk, m per sqrt(m travelled) (default 0)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the navigation noise")
-    parser.add_argument("--playback-speed", type=float, default=10.0,
-                        help="the HTML animation plays this many times faster than real time")
-    parser.add_argument("--realtime-rate", type=float, default=0.0,
-                        help="pace the simulation to watch it live (1 = real time; default 0 = "
-                             "as fast as possible)")
-    parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_recording_options(parser, playback_speed=10.0)
     parser.set_defaults(func=run)
