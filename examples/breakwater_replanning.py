@@ -25,10 +25,10 @@ import numpy as np
 import trimesh
 from pydrake.systems.analysis import Simulator
 from scipy import ndimage
-from scipy.spatial import cKDTree
 from tqdm import tqdm
 
 from drake_auv.diagrams.replanning import build_replanning_diagram
+from drake_auv.geometry.distance import mesh_distance
 from drake_auv.navigation import NavigationParams
 from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import motion_heading, resample
@@ -85,18 +85,10 @@ def nominal_contour(prior, depth: float, omega: float, block_size: float, start,
 
 
 
-class SurfaceDistance:
-    """True distance from points to some faces of the world, via a KD-tree of dense seeded
-    surface samples about `spacing` apart (the error is below `spacing`)."""
-
-    def __init__(self, world, faces: np.ndarray, spacing: float = 0.15, seed: int = 0):
-        sub = world.submesh([np.flatnonzero(faces)], append=True)
-        samples, _ = trimesh.sample.sample_surface(sub, int(np.ceil(sub.area / spacing ** 2)),
-                                                   seed=seed)
-        self.tree = cKDTree(samples)
-
-    def __call__(self, points) -> np.ndarray:
-        return self.tree.query(np.asarray(points, dtype=float))[0]
+def surface_distance(world, faces: np.ndarray):
+    """A function giving the exact distance (m) from points to some faces of the world."""
+    sub = world.submesh([np.flatnonzero(faces)], append=True)
+    return lambda points: mesh_distance(sub, points)
 
 
 def mission_faces(scenario):
@@ -134,8 +126,7 @@ def run_mission(scenario, nominal: Path, seed: int, replanning: bool, speed: flo
 
 
 def mission_metrics(run: dict, nominal: Path, speed: float, omega: float,
-                    to_target: SurfaceDistance, to_structure: SurfaceDistance,
-                    to_world: SurfaceDistance) -> dict:
+                    to_target, to_structure, to_world) -> dict:
     """True distance to the structure (the breakwater's blocks) over the survey (from the
     first approach within Omega + 2 m of the target block to the end of the plan), minimum
     clearance to anything (seabed included) over the whole run, coverage and step times."""
@@ -253,9 +244,9 @@ def main(argv=None):
         max_waypoints=args.max_waypoints, omega=omega,
         stomp=replace(stomp, num_rollouts=args.rollouts, max_iterations=args.iterations))
     _, structure, near = mission_faces(scenario)
-    to_target = SurfaceDistance(scenario.world, scenario.target_faces)
-    to_structure = SurfaceDistance(scenario.world, structure)
-    to_world = SurfaceDistance(scenario.world, near)
+    to_target = surface_distance(scenario.world, scenario.target_faces)
+    to_structure = surface_distance(scenario.world, structure)
+    to_world = surface_distance(scenario.world, near)
     rows, figure_runs = [], []
     for seed in tqdm(range(args.seeds), desc="seeds"):
         navigation = None if args.no_drift else NavigationParams(
