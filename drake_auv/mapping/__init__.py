@@ -1,5 +1,7 @@
-"""The on-line octree map (OctoMap) and its distance queries, pure (no Drake)."""
+"""The on-line octree map: the OctoMap octree and its distance queries (`octree_map`) and the
+log of returns it is built from (`scan_log`), pure; the `OctreeMapper` LeafSystem (`mapper`)."""
 
-from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle
+from drake_auv.mapping.octree_map import OctreeMap
+from drake_auv.mapping.scan_log import ScanBatch, ScanLog
 
-__all__ = ["OctreeMap", "OctreeMapHandle"]
+__all__ = ["OctreeMap", "ScanBatch", "ScanLog"]

@@ -1,98 +1,112 @@
-"""`OctreeMapper`: builds the on-line octree map from the multibeam and profiler returns.
+"""`OctreeMapper`: the on-line octree map, built from the multibeam and profiler returns.
 
-A thin adapter over `drake_auv.mapping.OctreeMap`. Where the octree lives: in one `OctreeMap`
-object owned by the system (`mapper.octree_map`); the context's abstract state holds an
-`OctreeMapHandle` to it (whose deepcopy shares the map) and the sequence numbers of the last
-returns inserted. An OctoMap octree is a C++ object of megabytes that Drake would otherwise
-deep-copy with every context copy and output evaluation; sharing it means every context of
-one mapper sees the same map (call `octree_map.clear()` to start a new mission with the
-same diagram, or build a new diagram).
+All of it lives in the Context. The state is the log of the returns received so far (a
+`ScanLog`, immutable and persistent, so Drake's state copies are free and each Context's
+history is its own), written at `period` by an unrestricted update. The `map` output is the
+octree of that log: an `OnlineMap` held in the output port's cache, which is per Context.
+Evaluating it brings the octree up to the Context's log by inserting only the batches it has
+not seen (OctoMap insertion is incremental); a cache that cannot (a fresh copy of the Context,
+or a log that is not its future) rebuilds from the whole log. So two Contexts of one diagram
+never share a map, and copying one costs a rebuild, not a shared mutable object.
 
-Ports: inputs `multibeam_returns`, `profiler_returns` (abstract `SonarReturns`, either may be
-left unconnected); output `map` (abstract `OctreeMapHandle`).
+Ports: inputs `multibeam_returns`, `profiler_returns` (`SonarReturns`; either may be left
+unconnected); outputs `map` (`OnlineMap`) and `scan_log` (`ScanLog`, the recorded returns).
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
-from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle
+from drake_auv.mapping.octree_map import OctreeMap
+from drake_auv.mapping.scan_log import ScanBatch, ScanLog
+from drake_auv.sonar.returns import SonarReturns
 
 
-@dataclass(frozen=True)
-class _MapperState:
-    handle: OctreeMapHandle
-    multibeam_sequence: int = -1
-    profiler_sequence: int = -1
+class OnlineMap:
+    """The octree of a `ScanLog` up to `version` (None: nothing inserted yet).
+
+    A cache value: its deep copy is an empty map of the same resolution, which the next
+    evaluation of the `map` port rebuilds from the log, never a second owner of this octree.
+    """
+
+    def __init__(self, resolution: float):
+        self.map = OctreeMap(resolution)
+        self.version: ScanLog | None = None
 
     def __deepcopy__(self, memo):
-        # Immutable (replaced, never mutated) and the map is shared anyway: Drake copies the
-        # abstract state at every unrestricted update of the diagram, so copies are free.
-        return self
+        return OnlineMap(self.map.resolution)
+
+    def catch_up(self, log: ScanLog) -> None:
+        """Inserts the batches of `log` this map has not seen (all of them if its version is
+        not in `log`'s past)."""
+        if log is self.version:
+            return
+        new = log.since(self.version)
+        if new is None:
+            self.map.clear()
+            new = log.batches()
+        for batch in new:
+            self.map.insert_scan(batch.origin, batch.directions, batch.ranges, batch.max_range)
+        self.version = log
 
 
 class OctreeMapper(LeafSystem):
-    """Inserts new sonar returns into the shared octree at `period`.
+    """Records new sonar returns at `period` and serves the octree map of them.
 
     Args:
-        octree_map: the map to fill (default: a new `OctreeMap(resolution, beam_stride=...)`).
-        resolution: voxel edge of the default map, m.
-        period: insertion period, s, in [0.01, 10]; returns of an update that was already
-            inserted (same `sequence`) are skipped, so a period shorter than the sensors' is
-            harmless, a longer one drops the pings in between.
-        multibeam_stride: insert every n-th multibeam beam (profiler beams are all inserted).
+        resolution: voxel edge, m, in (0.01, 10].
+        period: recording period, s, in [0.01, 10]; returns of an update already recorded
+            (same `sequence`) are skipped, so a period shorter than the sensors' is harmless,
+            a longer one drops the pings in between.
+        multibeam_stride: record every n-th multibeam beam (profiler beams are all kept).
     """
 
-    def __init__(self, octree_map: OctreeMap | None = None, resolution: float = 0.5,
-                 period: float = 0.1, multibeam_stride: int = 2):
+    def __init__(self, resolution: float = 0.5, period: float = 0.1, multibeam_stride: int = 2):
         super().__init__()
         if not (np.isfinite(period) and 0.01 <= period <= 10.0):
             raise ValueError(f"OctreeMapper period must be in [0.01, 10] s, got {period}")
         if int(multibeam_stride) != multibeam_stride or multibeam_stride < 1:
             raise ValueError(f"multibeam_stride must be an integer >= 1, got {multibeam_stride}")
-        self.octree_map = octree_map if octree_map is not None else OctreeMap(resolution)
+        OctreeMap(resolution)  # checks the resolution
+        self.resolution = float(resolution)
         self.period = float(period)
         self.multibeam_stride = int(multibeam_stride)
-        self.multibeam_input = self.DeclareAbstractInputPort("multibeam_returns",
-                                                             AbstractValue.Make(None))
-        self.profiler_input = self.DeclareAbstractInputPort("profiler_returns",
-                                                            AbstractValue.Make(None))
-        self._state_index = self.DeclareAbstractState(
-            AbstractValue.Make(_MapperState(OctreeMapHandle(self.octree_map))))
-        self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_map)
+        model = AbstractValue.Make(SonarReturns.empty(20.0))
+        self.multibeam_input = self.DeclareAbstractInputPort("multibeam_returns", model)
+        self.profiler_input = self.DeclareAbstractInputPort("profiler_returns", model.Clone())
+        self._log_index = self.DeclareAbstractState(AbstractValue.Make(ScanLog()))
+        # The `sequence` of the last batch recorded from each sonar.
+        self._sequences = self.DeclareDiscreteState(np.array([-1.0, -1.0]))
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_log)
         self.map_output = self.DeclareAbstractOutputPort(
-            "map", lambda: AbstractValue.Make(OctreeMapHandle(self.octree_map)), self._calc_map,
-            prerequisites_of_calc={self.abstract_state_ticket(self._state_index)})
+            "map", lambda: AbstractValue.Make(OnlineMap(self.resolution)), self._calc_map,
+            prerequisites_of_calc={self.abstract_state_ticket(self._log_index)})
+        self.scan_log_output = self.DeclareStateOutputPort("scan_log", self._log_index)
 
-    def _new_returns(self, port, context, last_sequence: int):
-        if not port.HasValue(context):
-            return None
-        returns = port.Eval(context)
-        if returns is None or returns.sequence == last_sequence or len(returns) == 0:
-            return None
-        return returns
-
-    def _update_map(self, context, state):
-        current = context.get_abstract_state(self._state_index).get_value()
-        omap = current.handle.map
-        mb_seq, pr_seq = current.multibeam_sequence, current.profiler_sequence
-        mb = self._new_returns(self.multibeam_input, context, mb_seq)
-        if mb is not None:
-            s = self.multibeam_stride
-            omap.insert_scan(mb.origin_nav, mb.directions_nav[::s], mb.ranges[::s],
-                             mb.max_range)
-            mb_seq = mb.sequence
-        pr = self._new_returns(self.profiler_input, context, pr_seq)
-        if pr is not None:
-            omap.insert_returns(pr)
-            pr_seq = pr.sequence
-        if (mb_seq, pr_seq) != (current.multibeam_sequence, current.profiler_sequence):
-            state.get_mutable_abstract_state(self._state_index).set_value(
-                _MapperState(current.handle, mb_seq, pr_seq))
+    def _update_log(self, context, state):
+        log = context.get_abstract_state(self._log_index).get_value()
+        sequences = context.get_discrete_state(self._sequences).get_value().copy()
+        for k, (port, source, stride) in enumerate((
+                (self.multibeam_input, "multibeam", self.multibeam_stride),
+                (self.profiler_input, "profiler", 1))):
+            if not port.HasValue(context):
+                continue
+            returns = port.Eval(context)
+            if returns.sequence == sequences[k] or len(returns) == 0:
+                continue
+            log = log.append(ScanBatch.make(returns.time, source, returns.origin_nav,
+                                            returns.directions_nav[::stride],
+                                            returns.ranges[::stride], returns.max_range))
+            sequences[k] = returns.sequence
+        state.get_mutable_abstract_state(self._log_index).set_value(log)
+        state.get_mutable_discrete_state(self._sequences).set_value(sequences)
 
     def _calc_map(self, context, output):
-        output.set_value(context.get_abstract_state(self._state_index).get_value().handle)
+        output.get_mutable_value().catch_up(
+            context.get_abstract_state(self._log_index).get_value())
+
+    def scan_log(self, context) -> ScanLog:
+        """The returns recorded in this system's `context`."""
+        return context.get_abstract_state(self._log_index).get_value()

@@ -278,19 +278,3 @@ class OctreeMap:
         if not self.tree.writeBinary(str(filename).encode()):
             raise ValueError(f"could not write octree to {filename}")
 
-
-class OctreeMapHandle:
-    """A reference to an `OctreeMap` that Drake's value copies share instead of copying.
-
-    Drake deep-copies abstract values (contexts, output caches); an octree is large and lives
-    in C++, so the handle's deepcopy returns a handle to the same map.
-    """
-
-    def __init__(self, octree_map: OctreeMap):
-        self.map = octree_map
-
-    def __deepcopy__(self, memo):
-        return OctreeMapHandle(self.map)
-
-    def __copy__(self):
-        return OctreeMapHandle(self.map)

@@ -45,6 +45,9 @@ class FollowingParams:
     offset: desired distance to the profile, m.
     speed: survey speed along the profile, m/s.
     side: +1 keeps the profile on the right of the motion, -1 on the left.
+    yaw_offset: horizontal mode, heading relative to facing the profile, rad (-pi/2 turns a
+        port-looking payload to the profile while the vehicle moves along it, with side -1);
+        while searching the vehicle moves towards where it would face.
     max_correction: cap of the position correction along the normal, m.
     slow_band: distance error at which the advance speed has faded to zero, m.
     yaw_rate: maximum rate of the yaw reference, rad/s.
@@ -70,6 +73,7 @@ class FollowingParams:
     offset: float = 2.0
     speed: float = 0.3
     side: int = 1
+    yaw_offset: float = 0.0
     max_correction: float = 1.0
     slow_band: float = 1.0
     yaw_rate: float = np.radians(15.0)
@@ -231,12 +235,14 @@ class HorizontalFollower(_Follower):
             self.depth_z = float(state[2])
         position = state[:3]
         points = self.map.horizontal_slice(position, self.params.plane_band)
+        facing = state[5] - self.params.yaw_offset
         if self.look is None:
-            self.look = np.array([np.cos(state[5]), np.sin(state[5])])
+            self.look = np.array([np.cos(facing), np.sin(facing)])
         estimate = self._estimate(points)
         reference = np.zeros(8)
         if estimate is None:
-            heading = np.array([np.cos(self.yaw_ref), np.sin(self.yaw_ref)])
+            ahead = self.yaw_ref - self.params.yaw_offset
+            heading = np.array([np.cos(ahead), np.sin(ahead)])
             reference[:2] = position[:2]
             reference[4:6] = self._search_speed() * heading
             mode = "search"
@@ -245,7 +251,8 @@ class HorizontalFollower(_Follower):
             correction, velocity = follow_step(estimate, self.params)
             reference[:2] = position[:2] + correction
             reference[4:6] = velocity
-            yaw_rate = self._steer_yaw(np.arctan2(-estimate.normal[1], -estimate.normal[0]), dt)
+            yaw_rate = self._steer_yaw(np.arctan2(-estimate.normal[1], -estimate.normal[0])
+                                       + self.params.yaw_offset, dt)
             tangent = self.params.side * np.array([estimate.normal[1], -estimate.normal[0]])
             self.look = tangent
             mode = "follow"

@@ -1,13 +1,16 @@
 """`ProfileFollowingController`: sensor-based profile following as a Drake LeafSystem.
 
 A thin adapter over `drake_auv.perception` (`HorizontalFollower` / `VerticalFollower`): at the
-profiler's update period it feeds the new returns to the follower's local map and stores the
-tracker reference it computes. The follower (local map, RANSAC generator, yaw and turn state)
-is abstract state; it holds a few thousand points at most, so the copies Drake makes of it
-are cheap. Between updates the reference position is extrapolated with its velocity, so the
-tracker's position error does not build up along the profile.
+profiler's update period, while one of its legs flies, it feeds the new returns to the
+follower's local map and stores the tracker reference it computes. A new leg starts a new
+follower (empty local map, its own mode and depth or plane). The follower (local map, RANSAC
+generator, yaw and turn state) is abstract state; it holds a few thousand points at most, so
+the copies Drake makes of it are cheap. Discrete-state groups: `reference` (8) with the time
+it was computed (`reference_time`), the last returns' sequence and leg (`consumed`), and
+`profile` (7). Between updates the reference position is extrapolated with its velocity, so
+the tracker's position error does not build up along the profile.
 
-Ports: inputs `returns` (abstract `SonarReturns`), `estimated_state` (12); outputs
+Ports: inputs `returns` (`SonarReturns`), `estimated_state` (12), `leg` (2); outputs
 `reference` (8, world) and `profile` (7): `[distance, normal_distance, normal_a, normal_b,
 orientation, valid, mode]` in the scan plane's 2D axes (horizontal: x, y; vertical: s, h), mode
 0 search, 1 follow, 2 turn; distances NaN while no profile is seen.
@@ -15,10 +18,13 @@ orientation, valid, mode]` in the scan plane's 2D axes (horizontal: x, y; vertic
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import LeafSystem
 
+from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.perception.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.model import STATE_SIZE
@@ -27,51 +33,80 @@ MODES = ("search", "follow", "turn")
 PROFILE_SIZE = 7
 
 
+@dataclass(frozen=True)
+class FollowConfig:
+    """One profile-following leg.
+
+    Attributes:
+        mode: "horizontal" (constant depth, facing the profile) or "vertical" (in the vertical
+            plane along `plane_yaw`, with the 180 degree turn under ceilings).
+        params: `FollowingParams`.
+        depth_z: horizontal mode, z to hold, m (None: the z where the leg starts).
+        plane_yaw: vertical mode, direction of the plane, rad (None: the yaw at the start).
+    """
+
+    mode: str = "horizontal"
+    params: FollowingParams = FollowingParams()
+    depth_z: float | None = None
+    plane_yaw: float | None = None
+
+    def __post_init__(self):
+        if self.mode not in ("horizontal", "vertical"):
+            raise ValueError(f"profile following mode must be 'horizontal' or 'vertical', "
+                             f"got {self.mode!r}")
+
+    def follower(self, seed: int):
+        if self.mode == "horizontal":
+            return HorizontalFollower(self.params, depth_z=self.depth_z, seed=seed)
+        return VerticalFollower(self.params, plane_yaw=self.plane_yaw, seed=seed)
+
+
 class ProfileFollowingController(LeafSystem):
     """Drives the tracker from profiler returns.
 
     Args:
-        mode: "horizontal" (constant depth, facing the profile) or "vertical" (in the vertical
-            plane along `plane_yaw`, with the 180 degree turn under ceilings).
-        params: `FollowingParams`.
+        legs: {leg index: `FollowConfig`} of the mission legs it flies, or one `FollowConfig`
+            for leg 0 (the controller alone, its `leg` input unconnected).
         period: update period, s; use the profiler's (its returns hold the pings since its
             last update).
-        depth_z: horizontal mode, z to hold (None: the initial z).
-        plane_yaw: vertical mode, direction of the plane (None: the initial yaw).
-        seed: seed of the estimator's RANSAC.
+        seed: seed of the estimator's RANSAC (leg k uses seed + k).
     """
 
-    def __init__(self, mode: str = "horizontal", params: FollowingParams | None = None,
-                 period: float = 0.1, depth_z: float | None = None,
-                 plane_yaw: float | None = None, seed: int = 0):
+    def __init__(self, legs: FollowConfig | dict[int, FollowConfig] = FollowConfig(),
+                 period: float = 0.1, seed: int = 0):
         super().__init__()
-        if mode not in ("horizontal", "vertical"):
-            raise ValueError(f"ProfileFollowingController mode must be 'horizontal' or "
-                             f"'vertical', got {mode!r}")
         if not (np.isfinite(period) and 1e-3 <= period <= 5.0):
-            raise ValueError(f"ProfileFollowingController period must be in [0.001, 5] s, got {period}")
-        self.mode = mode
-        self.params = params if params is not None else FollowingParams()
+            raise ValueError(f"ProfileFollowingController period must be in [0.001, 5] s, "
+                             f"got {period}")
+        self.legs = {0: legs} if isinstance(legs, FollowConfig) else dict(legs)
+        if not self.legs:
+            raise ValueError("ProfileFollowingController needs at least one leg")
         self.period = float(period)
-        if mode == "horizontal":
-            follower = HorizontalFollower(self.params, depth_z=depth_z, seed=seed)
-        else:
-            follower = VerticalFollower(self.params, plane_yaw=plane_yaw, seed=seed)
+        self.seed = int(seed)
         self.returns_input = self.DeclareAbstractInputPort(
             "returns", AbstractValue.Make(SonarReturns.empty(20.0)))
         self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
-        self._follower_index = self.DeclareAbstractState(AbstractValue.Make(follower))
-        # reference (8), time of the update, sequence number of the last returns used, profile (7)
-        initial = np.zeros(8 + 2 + PROFILE_SIZE)
-        initial[9] = -1
-        self._xd = self.DeclareDiscreteState(BasicVector(initial))
+        self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
+        first = min(self.legs)
+        self._follower_index = self.DeclareAbstractState(
+            AbstractValue.Make(self.legs[first].follower(self.seed + first)))
+        self._reference = self.DeclareDiscreteState(8)
+        self._reference_time = self.DeclareDiscreteState(1)
+        self._consumed = self.DeclareDiscreteState(np.array([-1.0, -1.0]))  # sequence, leg
+        initial_profile = np.full(PROFILE_SIZE, np.nan)
+        initial_profile[5:] = 0.0
+        self._profile = self.DeclareDiscreteState(initial_profile)
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_reference)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_reference)
         self.reference_output = self.DeclareVectorOutputPort(
             "reference", 8, self._calc_reference,
-            prerequisites_of_calc={self.xd_ticket(), self.time_ticket()})
-        self.profile_output = self.DeclareVectorOutputPort(
-            "profile", PROFILE_SIZE, self._calc_profile, prerequisites_of_calc={self.xd_ticket()})
+            prerequisites_of_calc={self.discrete_state_ticket(self._reference),
+                                   self.discrete_state_ticket(self._reference_time),
+                                   self.discrete_state_ticket(self._consumed),
+                                   self.input_port_ticket(self.leg_input.get_index()),
+                                   self.input_port_ticket(self.state_input.get_index()),
+                                   self.time_ticket()})
+        self.profile_output = self.DeclareStateOutputPort("profile", self._profile)
 
     def follower(self, context):
         """The follower (its map, turn count, ...) held in this system's own `context`
@@ -79,13 +114,20 @@ class ProfileFollowingController(LeafSystem):
         return context.get_abstract_state(self._follower_index).get_value()
 
     def _update_reference(self, context, state):
+        leg, _ = read_leg(self.leg_input, context)
+        config = self.legs.get(leg)
+        if config is None:
+            return  # not flying
         t = context.get_time()
-        x = context.get_discrete_state(self._xd).get_value()
+        sequence, flown = context.get_discrete_state(self._consumed).get_value()
         follower = state.get_mutable_abstract_state(self._follower_index).get_mutable_value()
-        if follower.time is not None and t <= follower.time:
+        if flown != leg:  # a new leg: a new follower
+            follower = config.follower(self.seed + leg)
+            state.get_mutable_abstract_state(self._follower_index).set_value(follower)
+        elif follower.time is not None and t <= follower.time:
             return  # the initialization and the first periodic event share t = 0
         returns = self.returns_input.Eval(context) if self.returns_input.HasValue(context) else None
-        points, sequence = np.empty((0, 3)), x[9]
+        points = np.empty((0, 3))
         if returns is not None and returns.sequence != sequence:  # each batch once
             points, sequence = returns.points_nav, returns.sequence
         out = follower.update(t, self.state_input.Eval(context), points)
@@ -97,14 +139,19 @@ class ProfileFollowingController(LeafSystem):
                            est.orientation)
             profile[5] = 1.0
         profile[6] = MODES.index(out.mode)
-        state.get_mutable_discrete_state(self._xd).set_value(
-            np.concatenate([out.reference, [t, sequence], profile]))
+        discrete = state.get_mutable_discrete_state()
+        discrete.set_value(self._reference, out.reference)
+        discrete.set_value(self._reference_time, [t])
+        discrete.set_value(self._consumed, [sequence, leg])
+        discrete.set_value(self._profile, profile)
 
     def _calc_reference(self, context, output):
-        x = context.get_discrete_state(self._xd).get_value()
-        reference = x[:8].copy()
-        reference[:3] += reference[4:7] * (context.get_time() - x[8])
+        leg, _ = read_leg(self.leg_input, context)
+        if context.get_discrete_state(self._consumed)[1] != leg:  # before the leg's first update
+            x = self.state_input.Eval(context)
+            output.SetFromVector(np.concatenate([x[:3], [x[5]], np.zeros(4)]))
+            return
+        reference = context.get_discrete_state(self._reference).get_value().copy()
+        since = context.get_time() - context.get_discrete_state(self._reference_time)[0]
+        reference[:3] += reference[4:7] * since
         output.SetFromVector(reference)
-
-    def _calc_profile(self, context, output):
-        output.SetFromVector(context.get_discrete_state(self._xd).get_value()[10:])

@@ -1,18 +1,22 @@
 """`Replanner`: the realtime replanning loop of the reference as a Drake LeafSystem.
 
-At each replanning step (every `period` s, and at initialisation) it takes the estimated
+At each replanning step (every `period` s while one of its legs flies) it takes the estimated
 position, marks the nominal waypoints the previous plan has flown past as visited, collects
 the next section (waypoints within R, at most K), optimises it with STOMP against the current
-octree map (`drake_auv.replanning.section.replan_section`) and times it at the survey speed.
-Between steps it outputs the reference along that plan; after the last waypoint it holds the
-end of the last plan.
+octree map (`drake_auv.replanning.section.replan_section`) and times it at the survey speed
+as a `PiecewisePolynomial` of [x, y, z, yaw], which the `reference` output evaluates. After
+the last waypoint it holds the end of the last plan and reports the leg finished.
 
-The plan is abstract state (a few dozen points: cheap to copy). `log` keeps, per step, the
-time, the wall-clock and CPU time of the step (map query plus STOMP, s) and the optimised
-section, for the mission's report; it is a diagnostic written by the update, not state.
+The nominal plan is an input (`nominal`, a `Path` from a source system), the map another
+(`map`, the mapper's `OnlineMap`). State, all in the Context: the plan and its trajectory
+(abstract, replaced at every step, never modified), the progress (`progress` group: leg,
+next waypoint, steps, finished) and the record of the last step (`last_step` group: time,
+wall and CPU time of the step, of which the map query, next waypoint, whether a section was
+planned), which the `step` output exposes for a `LogVectorOutput`.
 
-Ports: inputs `estimated_state` (12), `map` (abstract `OctreeMapHandle`); output
-`reference` (8, world: `[x, y, z, yaw, vx, vy, vz, yaw_rate]`).
+Ports: inputs `estimated_state` (12), `map` (`OnlineMap`), `nominal` (`Path`), `leg` (2);
+outputs `reference` (8, world: `[x, y, z, yaw, vx, vy, vz, yaw_rate]`), `status` (3:
+`[leg, finished, next_index]`, the leg last flown, -1 before any) and `step` (6).
 """
 
 from __future__ import annotations
@@ -23,49 +27,40 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
+from pydrake.trajectories import PiecewisePolynomial
 
+from drake_auv.leg_signal import LEG_SIZE, read_leg
+from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import motion_heading
 from drake_auv.replanning.section import ReplanningParameters, SectionPlan, replan_section
 from drake_auv.vehicle.model import STATE_SIZE
+from drake_auv.vehicle.path_reference import trajectory_reference
+
+STEP_FIELDS = ("time", "wall_time", "query_time", "cpu_time", "next_index", "planned")
 
 
 @dataclass(frozen=True)
-class _ReplannerState:
-    next_index: int = 0
-    step: int = 0
+class _Plan:
+    """The current section and its timed trajectory (None before the first step of a leg).
+    Immutable: a step stores a new one and the trajectory is never modified, so Drake's copies
+    of the state may share it."""
+
     plan: SectionPlan | None = None
-    start_time: float = 0.0
-    times: np.ndarray | None = None  # (N,) sample times of the plan, s
-    samples: np.ndarray | None = None  # (4, N) x, y, z, unwrapped yaw
+    trajectory: PiecewisePolynomial | None = None
 
     def __deepcopy__(self, memo):
-        # Immutable: each update stores a new object. Drake copies the abstract state at every
-        # unrestricted update of the diagram (10 Hz sonars), so copies must be free.
         return self
 
 
-@dataclass(frozen=True)
-class ReplanningStep:
-    """One entry of `Replanner.log`."""
-
-    time: float
-    wall_time: float  # s, the whole step: map query plus section and STOMP
-    query_time: float  # s (wall), of which the map query (occupied voxels in the section's box)
-    cpu_time: float  # s, the step's CPU time on its thread (what load on the machine hides)
-    next_index: int
-    plan: SectionPlan | None
+def _placeholder_path() -> Path:
+    return Path(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))
 
 
 class Replanner(LeafSystem):
-    """Replans the next section of `waypoints` against the on-line map every `period` s.
+    """Replans the next section of the `nominal` input's waypoints against the on-line map.
 
     Args:
-        waypoints: (n, 3) nominal waypoints in the navigation frame (e.g. a `Path`'s points,
-            planned off-line on the prior map), or a `Path`.
-        offset_labels: with a `Path`, the labels of the samples that follow a wall at Omega
-            (default: "slice"); the other samples (lanes, transits) keep only clearance and
-            depth. With an array every waypoint keeps the offset.
         params: `ReplanningParameters` (R, K, Omega, clearance, STOMP's rollouts/iterations).
         speed: survey speed along the plans, m/s, > 0.
         period: replanning period, s, in [0.05, 30].
@@ -75,101 +70,112 @@ class Replanner(LeafSystem):
         heading_offset: yaw relative to the direction of motion where no structure is mapped
             within 2 Omega (or always, with `sensor_azimuth` None), rad.
         yaw_rate: largest commanded yaw rate, rad/s, > 0.
-        seed: seed of STOMP's rollouts (step k uses seed + k).
+        seed: seed of STOMP's rollouts (step k of a leg uses seed + k).
+        offset_labels: labels of the nominal samples that follow a wall at Omega (slicing
+            contours); the others (lanes, transits) keep only clearance and depth.
+        legs: the mission legs this replanner flies (default: leg 0, so it runs unsupervised).
     """
 
-    def __init__(self, waypoints, params: ReplanningParameters | None = None,
-                 speed: float = 0.3, period: float = 1.0,
-                 sensor_azimuth: float | None = np.pi / 2, heading_offset: float = 0.0,
-                 yaw_rate: float = np.radians(15.0), seed: int = 0,
-                 offset_labels=("slice",)):
+    def __init__(self, params: ReplanningParameters | None = None, speed: float = 0.3,
+                 period: float = 1.0, sensor_azimuth: float | None = np.pi / 2,
+                 heading_offset: float = 0.0, yaw_rate: float = np.radians(15.0),
+                 seed: int = 0, offset_labels=("slice",), legs=(0,)):
         super().__init__()
-        points = waypoints.points if isinstance(waypoints, Path) else waypoints
-        points = np.asarray(points, dtype=float)
-        self.keep_offset = (np.isin(waypoints.labels, list(offset_labels))
-                            if isinstance(waypoints, Path) else None)
-        if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
-            raise ValueError(f"waypoints must have shape (n >= 1, 3), got {points.shape}")
-        if not np.all(np.isfinite(points)):
-            raise ValueError("waypoints must be finite (no NaN or inf)")
         if not (np.isfinite(speed) and speed > 0):
             raise ValueError(f"speed must be > 0 m/s, got {speed}")
         if not (np.isfinite(period) and 0.05 <= period <= 30.0):
             raise ValueError(f"Replanner period must be in [0.05, 30] s, got {period}")
         if not (np.isfinite(yaw_rate) and yaw_rate > 0):
             raise ValueError(f"yaw_rate must be > 0 rad/s, got {yaw_rate}")
-        self.waypoints = points
         self.params = params if params is not None else ReplanningParameters()
         self.speed, self.period = float(speed), float(period)
         self.sensor_azimuth = None if sensor_azimuth is None else float(sensor_azimuth)
         self.heading_offset, self.yaw_rate = float(heading_offset), float(yaw_rate)
         self.seed = int(seed)
-        self.log: list[ReplanningStep] = []
+        self.offset_labels = tuple(offset_labels)
+        self.legs = frozenset(int(leg) for leg in legs)
         self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
-        self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(None))
-        self._state_index = self.DeclareAbstractState(AbstractValue.Make(_ReplannerState()))
+        self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
+        self.nominal_input = self.DeclareAbstractInputPort(
+            "nominal", AbstractValue.Make(_placeholder_path()))
+        self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
+        self._plan_index = self.DeclareAbstractState(AbstractValue.Make(_Plan()))
+        # [leg flown (-1: none yet), next waypoint, steps of this leg, finished (0/1)]
+        self._progress = self.DeclareDiscreteState(np.array([-1.0, 0.0, 0.0, 0.0]))
+        self._last_step = self.DeclareDiscreteState(np.zeros(len(STEP_FIELDS)))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_plan)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, self.period, self._update_plan)
         self.reference_output = self.DeclareVectorOutputPort(
             "reference", 8, self._calc_reference,
-            prerequisites_of_calc={self.abstract_state_ticket(self._state_index)})
+            prerequisites_of_calc={self.abstract_state_ticket(self._plan_index),
+                                   self.time_ticket(),
+                                   self.input_port_ticket(self.state_input.get_index())})
+        self.status_output = self.DeclareVectorOutputPort(
+            "status", 3, self._calc_status,
+            prerequisites_of_calc={self.discrete_state_ticket(self._progress)})
+        self.step_output = self.DeclareStateOutputPort("step", self._last_step)
 
-    def plan_state(self, context) -> _ReplannerState:
-        """The current plan held in `context` (next waypoint, section, timing)."""
-        return context.get_abstract_state(self._state_index).get_value()
+    def section(self, context) -> SectionPlan | None:
+        """The section planned at the last step in this system's `context`."""
+        return context.get_abstract_state(self._plan_index).get_value().plan
 
     def _update_plan(self, context, state):
+        leg, _ = read_leg(self.leg_input, context)
+        if leg not in self.legs:
+            return  # not flying: nothing to do
         t = context.get_time()
-        current = self.plan_state(context)
+        flown, next_index, steps, finished = context.get_discrete_state(
+            self._progress).get_value()
+        current = context.get_abstract_state(self._plan_index).get_value()
+        if flown != leg:  # a new leg: from the first waypoint, nothing planned yet
+            next_index, steps, finished, current = 0, 0, 0.0, _Plan()
+        if finished:
+            return
         x = self.state_input.Eval(context)
-        next_index = current.next_index
         if current.plan is not None:
-            arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(
-                np.diff(current.samples[:3].T, axis=0), axis=1))])
-            travelled = np.interp(t - current.start_time, current.times, arc)
-            next_index = current.plan.next_index(travelled)
-        handle = self.map_input.Eval(context) if self.map_input.HasValue(context) else None
+            samples = current.trajectory.vector_values(current.trajectory.get_segment_times())
+            arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(samples[:3].T, axis=0),
+                                                                  axis=1))])
+            at = np.interp(t, current.trajectory.get_segment_times(), arc)
+            next_index = current.plan.next_index(at)
+        nominal = self.nominal_input.Eval(context)
+        keep_offset = np.isin(nominal.labels, self.offset_labels)
+        online = self.map_input.Eval(context) if self.map_input.HasValue(context) else None
         start, start_cpu = time.perf_counter(), time.thread_time()
-        occupied = handle.map if handle is not None else np.zeros((0, 3))
-        plan = replan_section(x[:3], self.waypoints, next_index, occupied, self.params,
-                              seed=self.seed + current.step, keep_offset=self.keep_offset)
+        plan = replan_section(x[:3], nominal.points, int(next_index),
+                              online.map if online is not None else np.zeros((0, 3)),
+                              self.params, seed=self.seed + int(steps), keep_offset=keep_offset)
         wall, cpu = time.perf_counter() - start, time.thread_time() - start_cpu
-        query = plan.query_time if plan is not None else 0.0
-        self.log.append(ReplanningStep(t, wall, query, cpu, next_index, plan))
         if plan is None:  # every waypoint visited: hold the end of the last plan
-            new = _ReplannerState(next_index, current.step + 1, None, current.start_time,
-                                  current.times, current.samples)
-            if current.samples is None:  # nothing was ever planned: hold the vehicle
-                hold = np.append(x[:3], x[5])[:, None]
-                new = _ReplannerState(next_index, current.step + 1, None, t,
-                                      np.array([0.0]), hold)
+            finished = 1.0
+            new = current
         else:
-            pts = plan.trajectory
-            heading = motion_heading(pts, fallback=x[5]) + self.heading_offset
-            if self.sensor_azimuth is not None:
-                facing = plan.facing - self.sensor_azimuth
-                heading = np.where(np.isfinite(facing), facing, heading)
-            heading = x[5] + np.angle(np.exp(1j * (heading - x[5])))  # nearest turn first
-            path = Path(pts, heading, np.column_stack([np.cos(heading), np.sin(heading),
-                                                       np.zeros(len(pts))]))
-            times = path.times(self.speed, self.yaw_rate)
-            samples = np.vstack([pts.T, np.unwrap(heading)])
-            new = _ReplannerState(next_index, current.step + 1, plan, t, times, samples)
-        state.get_mutable_abstract_state(self._state_index).set_value(new)
+            new = _Plan(plan, self._timed(plan, x, t))
+        state.get_mutable_abstract_state(self._plan_index).set_value(new)
+        state.get_mutable_discrete_state(self._progress).set_value(
+            [leg, next_index, steps + 1, finished])
+        state.get_mutable_discrete_state(self._last_step).set_value(
+            [t, wall, plan.query_time if plan is not None else 0.0, cpu, next_index,
+             float(plan is not None)])
+
+    def _timed(self, plan: SectionPlan, x: np.ndarray, t: float) -> PiecewisePolynomial:
+        """The section's trajectory from time `t` at the survey speed, with its yaw: facing the
+        mapped structure with the payload sensor where it is seen, along the motion elsewhere."""
+        pts = plan.trajectory
+        heading = motion_heading(pts, fallback=x[5]) + self.heading_offset
+        if self.sensor_azimuth is not None:
+            facing = plan.facing - self.sensor_azimuth
+            heading = np.where(np.isfinite(facing), facing, heading)
+        heading = x[5] + np.angle(np.exp(1j * (heading - x[5])))  # nearest turn first
+        path = Path(pts, heading, np.column_stack([np.cos(heading), np.sin(heading),
+                                                   np.zeros(len(pts))]))
+        return path.to_trajectory(self.speed, start_time=t, yaw_rate=self.yaw_rate)
 
     def _calc_reference(self, context, output):
-        current = self.plan_state(context)
-        if current.samples is None:  # before initialisation: hold the vehicle where it is
-            x = self.state_input.Eval(context)
-            output.SetFromVector(np.concatenate([x[:3], [x[5]], np.zeros(4)]))
-            return
-        tau = context.get_time() - current.start_time
-        times, samples = current.times, current.samples
-        if len(times) < 2 or tau >= times[-1]:
-            output.SetFromVector(np.concatenate([samples[:, -1], np.zeros(4)]))
-            return
-        tau = max(tau, 0.0)
-        i = min(int(np.searchsorted(times, tau, side="right")) - 1, len(times) - 2)
-        rate = (samples[:, i + 1] - samples[:, i]) / (times[i + 1] - times[i])
-        value = samples[:, i] + rate * (tau - times[i])
-        output.SetFromVector(np.concatenate([value, rate]))
+        output.SetFromVector(trajectory_reference(
+            context.get_abstract_state(self._plan_index).get_value().trajectory,
+            context.get_time(), self.state_input, context))
+
+    def _calc_status(self, context, output):
+        progress = context.get_discrete_state(self._progress).get_value()
+        output.SetFromVector([progress[0], progress[3], progress[1]])

@@ -52,5 +52,5 @@ class MultibeamSonar(RangeSonar):
     def update_angles(self, n: int) -> np.ndarray:
         return self.angles
 
-    def update_geometry(self, n: int):
+    def update_geometry(self, n: int, model: SonarModel | None = None):
         return self._geometry

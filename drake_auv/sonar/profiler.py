@@ -11,9 +11,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.sonar.noise import SonarNoise
 from drake_auv.sonar.beams import SonarModel, SonarMount, head_angles
 from drake_auv.sonar.range_sonar import RangeSonar
+
+# Head set-up for profile following (our choice): a full circle at the SeaKing's coarse 1.8
+# degree step and 30 pings/s, one revolution in 6.7 s, batched at 10 Hz.
+FOLLOWING_SETUP = dict(sector_deg=(-180.0, 180.0), step_deg=1.8, ping_rate=30.0,
+                       update_rate=10.0, beam_width_deg=1.5, max_range=20.0)
 
 
 class PencilBeamProfiler(RangeSonar):
@@ -33,6 +39,9 @@ class PencilBeamProfiler(RangeSonar):
         noise: error options (default: none).
         seed: seed of the noise.
         max_incidence_deg: grazing limit, deg.
+        planes: {mission leg: scan plane} where the head is tilted to another plane than
+            `scan_plane` (a tilt unit: vertical on vertical-following legs); with it the
+            profiler gets a `leg` input.
     """
 
     def __init__(self, world, scan_plane: str = "horizontal", sector_deg=(-180.0, 180.0),
@@ -40,7 +49,7 @@ class PencilBeamProfiler(RangeSonar):
                  beam_width_deg: float = 1.5, max_range: float = 20.0,
                  mount_position=(0.0, 0.0, 0.0), mount: SonarMount | None = None,
                  noise: SonarNoise | None = None, seed: int = 0,
-                 max_incidence_deg: float = 85.0):
+                 max_incidence_deg: float = 85.0, planes: dict[int, str] | None = None):
         if scan_plane not in ("horizontal", "vertical"):
             raise ValueError(f"scan_plane must be 'horizontal' or 'vertical', got {scan_plane!r}")
         lo, hi = (float(a) for a in sector_deg)
@@ -54,10 +63,21 @@ class PencilBeamProfiler(RangeSonar):
         if not (np.isfinite(update_rate) and 0 < update_rate <= ping_rate):
             raise ValueError(f"update_rate must be in (0, ping_rate = {ping_rate}] Hz, "
                              f"got {update_rate}")
-        mount = mount if mount is not None else SonarMount.named(scan_plane, mount_position)
-        model = SonarModel(mount, max_range=max_range, beam_width=np.radians(beam_width_deg),
-                           max_incidence=np.radians(max_incidence_deg),
-                           noise=noise if noise is not None else SonarNoise())
+        self.planes = dict(planes or {})
+        if not set(self.planes.values()) <= {"horizontal", "vertical"}:
+            raise ValueError(f"planes must map legs to 'horizontal' or 'vertical', got "
+                             f"{self.planes}")
+
+        def model_of(plane_mount):
+            return SonarModel(plane_mount, max_range=max_range,
+                              beam_width=np.radians(beam_width_deg),
+                              max_incidence=np.radians(max_incidence_deg),
+                              noise=noise if noise is not None else SonarNoise())
+
+        model = model_of(mount if mount is not None
+                         else SonarMount.named(scan_plane, mount_position))
+        self._leg_models = {leg: model_of(SonarMount.named(plane, mount_position))
+                            for leg, plane in self.planes.items() if plane != scan_plane}
         self.sector = (np.radians(lo), np.radians(hi))
         self.step = np.radians(step_deg)
         self.pings_per_update = ping_rate / update_rate
@@ -68,6 +88,13 @@ class PencilBeamProfiler(RangeSonar):
         self._cycle = int(round(cycle)) if abs(cycle - round(cycle)) < 1e-6 else None
         self._geometry_cache = {}
         super().__init__(world, model, 1.0 / update_rate, seed)
+        if self.planes:
+            self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
+
+    def scan_model(self, context) -> SonarModel:
+        if not self._leg_models:
+            return self.model
+        return self._leg_models.get(read_leg(self.leg_input, context)[0], self.model)
 
     def _ping_range(self, n: int) -> tuple[int, int]:
         first = int(np.floor(n * self.pings_per_update + 1e-9))
@@ -77,13 +104,14 @@ class PencilBeamProfiler(RangeSonar):
         first, last = self._ping_range(n)
         return head_angles(np.arange(first, last), self.sector, self.step)
 
-    def update_geometry(self, n: int):
+    def update_geometry(self, n: int, model: SonarModel | None = None):
+        model = self.model if model is None else model
         if self._cycle is None:
-            return super().update_geometry(n)
+            return super().update_geometry(n, model)
         first, last = self._ping_range(n)
-        key = (first % self._cycle, last - first)
+        key = (id(model), first % self._cycle, last - first)
         geometry = self._geometry_cache.get(key)
         if geometry is None:
-            geometry = super().update_geometry(n)
+            geometry = super().update_geometry(n, model)
             self._geometry_cache[key] = geometry
         return geometry

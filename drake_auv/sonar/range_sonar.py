@@ -52,15 +52,21 @@ class RangeSonar(LeafSystem):
         """Beam angles (rad, scan plane) fired by update n."""
         raise NotImplementedError
 
-    def update_geometry(self, n: int) -> BeamGeometry:
-        """Body-frame beams of update n (subclasses with fixed beams cache this)."""
-        return beam_geometry(self.model, self.update_angles(n))
+    def update_geometry(self, n: int, model: SonarModel | None = None) -> BeamGeometry:
+        """Body-frame beams of update n with `model` (default `self.model`; subclasses with
+        fixed beams cache this)."""
+        return beam_geometry(self.model if model is None else model, self.update_angles(n))
+
+    def scan_model(self, context) -> SonarModel:
+        """The sensor model of the update about to fire (subclasses may switch it)."""
+        return self.model
 
     def _update_returns(self, context, state):
         n = context.get_abstract_state(self._returns_index).get_value().sequence
-        rng = np.random.default_rng([self.seed, n]) if self.model.noise.enabled else None
-        returns = scan(self.caster, self.model, None, self.true_state_input.Eval(context),
+        model = self.scan_model(context)
+        rng = np.random.default_rng([self.seed, n]) if model.noise.enabled else None
+        returns = scan(self.caster, model, None, self.true_state_input.Eval(context),
                        self.estimated_state_input.Eval(context), rng=rng,
                        time=context.get_time(), sequence=n + 1,
-                       geometry=self.update_geometry(n))
+                       geometry=self.update_geometry(n, model))
         state.get_mutable_abstract_state(self._returns_index).set_value(returns)

@@ -1,0 +1,78 @@
+"""`drake-auv run MISSION_FILE_OR_NAME -o OUT`: fly a mission in one dive and report it.
+
+Writes `report.md`, `report.json`, the figures, `mission.html`, `trajectory.csv` and
+`diagram.dot` into OUT. `--set KEY=VALUE` overrides the file's values by dotted keys into its
+sections (`--set replanner.optimizer=none`, `--set sonar_noise=realistic`,
+`--set steps.2.survey.replanning=false`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path as FilePath
+
+from drake_auv.commands import add_recording_options
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "run", help="fly a mission file (or a built-in mission) in one dive",
+        description="Loads a mission file (YAML: site, navigation, sonar noise, replanner, "
+                    "payload, limits, steps) or a built-in mission (boulder, breakwater, "
+                    "pool, c_object), plans it, flies every step in one simulated dive and "
+                    "writes the report, figures, recording, trajectory and Diagram.")
+    parser.add_argument("mission", help="a mission YAML file or a built-in mission's name")
+    parser.add_argument("-o", "--out", required=True, help="output folder")
+    add_mission_options(parser)
+    add_recording_options(parser, playback_speed=20.0, realtime=False)
+    parser.set_defaults(func=run)
+
+
+def add_mission_options(parser) -> None:
+    """`--seed` and `--set`, shared with `drake-auv demo`."""
+    parser.add_argument("--seed", type=int, default=None,
+                        help="seed of the prior-map error, navigation drift, sonar noise and "
+                             "STOMP (default: the file's)")
+    parser.add_argument("--set", dest="overrides", action="append", default=[],
+                        metavar="KEY=VALUE",
+                        help="override a value of the mission file by its dotted key "
+                             "(repeatable), e.g. replanner.optimizer=none")
+
+
+def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
+        playback_speed: float = 20.0, progress: bool = True) -> dict:
+    """Loads, flies and reports `mission` into `out`; returns the report's summary."""
+    from drake_auv.mission.config import load_mission
+    from drake_auv.mission.plan import plan_mission
+    from drake_auv.mission.recording import finish_recording, prepare_scene
+    from drake_auv.mission.report import write_outputs
+    from drake_auv.mission.runner import run_mission
+    from drake_auv.mission.site import check_against_site, load_site
+
+    spec = load_mission(mission, seed=seed, overrides=overrides)
+    site = load_site(spec.site, spec.seed, label=spec.name)
+    check_against_site(spec, site)
+    scene = None
+    if html:
+        from drake_auv.visualization import Scene
+
+        scene = Scene()
+        prepare_scene(scene, site, plan_mission(spec, site))
+        scene.start_recording(playback_speed=playback_speed, live=False)
+    result = run_mission(spec, site, scene=scene, progress=progress)
+    out = FilePath(out)
+    summary = write_outputs(result, out)
+    if scene is not None:
+        finish_recording(result, scene, out / "mission.html")
+    return summary
+
+
+def run(args) -> int:
+    summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
+                  args.playback_speed, not args.quiet)
+    c = summary["coverage"]
+    print(f"{summary['mission']['name']}: multibeam coverage {100 * c['multibeam']:.1f} %, "
+          f"camera {100 * c['camera']:.1f} %, minimum clearance "
+          f"{summary['min_clearance_m']:.2f} m"
+          + (" (contact)" if summary["contact"] else "")
+          + f"; report in {FilePath(args.out) / 'report.md'}")
+    return 0

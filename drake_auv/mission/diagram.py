@@ -1,0 +1,224 @@
+"""`build_mission_diagram`: one Diagram flies a whole mission, in one dive.
+
+Like a manipulation station: free functions add and wire each part into a `DiagramBuilder`,
+and `build_mission_diagram` is the one place that builds the whole mission.
+
+    nominal_plan ──> path_reference ──┐
+         │      profile_following ────┤ reference_switch ─> tracker ─> allocation ─> dynamics
+         └──────────> replanner ──────┘        ^ behaviour                               │
+                  ^ map      ^ status    mission_supervisor <─ path/replanner status     │
+             octree_mapper   └──────────────── leg ─────> behaviours, profiler head      │
+                  ^                                                                      │
+         multibeam, profiler <── true state (ray casting on the true world) ─────────────┤
+                  ^ estimated state <── navigation <─────────────────────────────────────┘
+    camera_coverage, multibeam_coverage, logs and the Meshcat visualisers listen.
+
+The true world reaches only the sonars' ray casting and the coverage recorders; everything
+that decides (supervisor, behaviours, mapper) sees the estimated state and the returns.
+Behaviours that are not flying skip their periodic updates, and `PortSwitch` evaluates only
+the selected reference.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantValueSource, LogVectorOutput, PortSwitch
+
+from drake_auv.coverage.recorder import CoverageRecorder
+from drake_auv.geometry.raycast import RayCaster
+from drake_auv.mapping.mapper import OctreeMapper
+from drake_auv.mission.config import MissionSpec
+from drake_auv.mission.plan import SENSOR_AZIMUTH, MissionPlan, plan_mission, terrain_elevation
+from drake_auv.mission.site import Site
+from drake_auv.mission.supervisor import MissionSupervisor
+from drake_auv.perception.controller import ProfileFollowingController
+from drake_auv.replanning.replanner import Replanner
+from drake_auv.replanning.section import ReplanningParameters
+from drake_auv.replanning.stomp import StompParameters
+from drake_auv.sonar.multibeam import MultibeamSonar
+from drake_auv.sonar.profiler import FOLLOWING_SETUP, PencilBeamProfiler
+from drake_auv.vehicle.diagram import VehicleSystems, add_girona500
+from drake_auv.vehicle.path_reference import PathReference
+
+LOG_PERIOD = 0.1  # s, of the state logs
+SUPERVISOR_PERIOD = 0.5  # s
+CAMERA_SIDE = {"port": (0.0, 1.0, 0.0), "starboard": (0.0, -1.0, 0.0),
+               "down": (0.0, 0.0, -1.0), "forward": (1.0, 0.0, 0.0)}
+BEHAVIOURS = ("path", "follow", "replan")  # the reference switch's inputs, in this order
+
+
+@dataclass
+class MissionHandles:
+    """The systems `build_mission_diagram` added, and the plan it flies."""
+
+    plan: MissionPlan
+    caster: RayCaster
+    vehicle: VehicleSystems
+    multibeam: MultibeamSonar
+    profiler: PencilBeamProfiler
+    mapper: OctreeMapper
+    path_reference: PathReference
+    controller: ProfileFollowingController | None
+    replanner: Replanner | None
+    supervisor: MissionSupervisor
+    camera_coverage: CoverageRecorder
+    multibeam_coverage: CoverageRecorder
+    logs: dict  # name -> VectorLogSink: state, estimated_state, reference, leg, profile, replanning
+
+
+def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
+               spec: MissionSpec, plan: MissionPlan, max_range: float):
+    """The payload multibeam and the pencil-beam profiler (its head tilted to the vertical
+    plane on vertical-following legs), ray casting on the true world, placing their returns
+    with the estimated state."""
+    noise = spec.sonar_noise.to_noise()
+    multibeam = builder.AddNamedSystem("multibeam", MultibeamSonar(
+        caster, max_range=max_range, mount=spec.payload.multibeam_mount, noise=noise,
+        seed=spec.seed))
+    options = {**FOLLOWING_SETUP, "max_range": max_range}
+    profiler = builder.AddNamedSystem("profiler", PencilBeamProfiler(
+        caster, scan_plane="horizontal", noise=noise, seed=spec.seed + 1,
+        planes=plan.profiler_planes or None, **options))
+    for sonar in (multibeam, profiler):
+        builder.Connect(vehicle.dynamics.state_output, sonar.true_state_input)
+        builder.Connect(vehicle.navigation.estimated_state_output, sonar.estimated_state_input)
+    return multibeam, profiler
+
+
+def replanning_parameters(spec: MissionSpec, plan: MissionPlan) -> ReplanningParameters:
+    """The replanner's parameters from the mission file's `replanner` section."""
+    r = spec.replanner
+    defaults = ReplanningParameters().stomp
+    stomp = StompParameters(num_rollouts=r.rollouts or defaults.num_rollouts,
+                            max_iterations=r.iterations or defaults.max_iterations,
+                            noise_std=defaults.noise_std,
+                            smoothness_weight=defaults.smoothness_weight,
+                            patience=defaults.patience)
+    return ReplanningParameters(radius=r.R, max_waypoints=r.K, omega=plan.omega,
+                                clearance=r.clearance_m, offset_metric=plan.offset_metric,
+                                stomp=stomp)
+
+
+def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, mapper,
+                   spec: MissionSpec, plan: MissionPlan, site: Site):
+    """The nominal plan's source, the three behaviours, the reference switch and the
+    supervisor, wired. Returns (path_reference, controller, replanner, supervisor, switch)."""
+    estimated = vehicle.navigation.estimated_state_output
+    source = None
+    if plan.nominal is not None:  # the off-line plan, as a signal
+        source = builder.AddNamedSystem("nominal_plan",
+                                        ConstantValueSource(AbstractValue.Make(plan.nominal)))
+    switch = builder.AddNamedSystem("reference_switch", PortSwitch(8))
+    ports = {name: switch.DeclareInputPort(name).get_index() for name in BEHAVIOURS}
+    supervisor = builder.AddNamedSystem("mission_supervisor",
+                                        MissionSupervisor(plan.legs, ports,
+                                                          SUPERVISOR_PERIOD))
+    path_reference = builder.AddNamedSystem("path_reference", PathReference(
+        plan.path_legs, terrain=terrain_elevation(site), clearance=spec.replanner.clearance_m))
+    if source is not None:
+        builder.Connect(source.get_output_port(), path_reference.nominal_input)
+    behaviours = {"path": path_reference}
+    controller = replanner = None
+    if plan.follow_legs:
+        controller = builder.AddNamedSystem("profile_following", ProfileFollowingController(
+            plan.follow_legs, period=profiler.period, seed=spec.seed))
+        builder.Connect(profiler.returns_output, controller.returns_input)
+        behaviours["follow"] = controller
+    if plan.replan_legs:
+        replanner = builder.AddNamedSystem("replanner", Replanner(
+            replanning_parameters(spec, plan), speed=plan.survey_speed,
+            period=spec.replanner.period_s,
+            sensor_azimuth=SENSOR_AZIMUTH.get(spec.payload.multibeam_mount),
+            seed=spec.seed, legs=plan.replan_legs))
+        builder.Connect(mapper.map_output, replanner.map_input)
+        builder.Connect(source.get_output_port(), replanner.nominal_input)
+        builder.Connect(replanner.status_output, supervisor.replanner_status_input)
+        behaviours["replan"] = replanner
+    for name, system in behaviours.items():
+        builder.Connect(estimated, system.state_input)
+        builder.Connect(supervisor.leg_output, system.leg_input)
+        builder.Connect(system.reference_output, switch.GetInputPort(name))
+    if plan.profiler_planes:
+        builder.Connect(supervisor.leg_output, profiler.leg_input)
+    builder.Connect(path_reference.status_output, supervisor.path_status_input)
+    builder.Connect(estimated, supervisor.state_input)
+    builder.Connect(supervisor.behaviour_output, switch.get_port_selector_input_port())
+    builder.Connect(switch.get_output_port(), vehicle.tracker.reference_input)
+    return path_reference, controller, replanner, supervisor, switch
+
+
+def add_coverage_recorders(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
+                           spec: MissionSpec, site: Site, max_range: float):
+    """What the payload camera and multibeam have seen of the target, on the true world."""
+    mount = spec.payload.multibeam_mount
+    camera = builder.AddNamedSystem("camera_coverage", CoverageRecorder(
+        caster, site.target_faces, sensor="camera",
+        aperture_deg=spec.payload.camera_aperture_deg, max_range=spec.payload.camera_range_m,
+        axis_body=CAMERA_SIDE[mount], rate=2.0))
+    multibeam = builder.AddNamedSystem("multibeam_coverage", CoverageRecorder(
+        caster, site.target_faces, sensor="multibeam", max_range=max_range, mount=mount,
+        rate=2.0))
+    for recorder in (camera, multibeam):
+        builder.Connect(vehicle.dynamics.state_output, recorder.true_state_input)
+    return camera, multibeam
+
+
+def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | None = None,
+                          scene=None, caster: RayCaster | None = None):
+    """The whole mission `spec` at `site` as one Diagram; returns (diagram, MissionHandles).
+
+    Args:
+        plan: the off-line part (default: `plan_mission(spec, site)`).
+        scene: a `drake_auv.visualization.Scene` to draw the vehicle, its trail and the
+            on-line map in while it flies.
+        caster: a `RayCaster` of `site.world` to share (default: built here).
+    Exported outputs: `state` (true), `estimated_state`, `map`, `leg`.
+    """
+    plan = plan if plan is not None else plan_mission(spec, site)
+    caster = caster if caster is not None else RayCaster(site.world)
+    max_range = site.max_range
+    builder = DiagramBuilder()
+    vehicle = add_girona500(builder, navigation=spec.navigation.to_params(spec.seed),
+                            initial_state=plan.start_state)
+    multibeam, profiler = add_sonars(builder, caster, vehicle, spec, plan, max_range)
+    mapper = builder.AddNamedSystem("octree_mapper", OctreeMapper(
+        resolution=spec.replanner.voxel_m))
+    builder.Connect(multibeam.returns_output, mapper.multibeam_input)
+    builder.Connect(profiler.returns_output, mapper.profiler_input)
+    path_reference, controller, replanner, supervisor, switch = add_behaviours(
+        builder, vehicle, profiler, mapper, spec, plan, site)
+    camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
+                                                        max_range)
+    logs = {
+        "state": LogVectorOutput(vehicle.dynamics.state_output, builder, LOG_PERIOD),
+        "estimated_state": LogVectorOutput(vehicle.navigation.estimated_state_output, builder,
+                                           LOG_PERIOD),
+        "reference": LogVectorOutput(switch.get_output_port(), builder, LOG_PERIOD),
+        "leg": LogVectorOutput(supervisor.leg_output, builder, SUPERVISOR_PERIOD),
+    }
+    if controller is not None:
+        logs["profile"] = LogVectorOutput(controller.profile_output, builder, LOG_PERIOD)
+    if replanner is not None:
+        logs["replanning"] = LogVectorOutput(replanner.step_output, builder, replanner.period)
+    for name, log in logs.items():
+        log.set_name(f"{name}_log")
+    builder.ExportOutput(vehicle.dynamics.state_output, "state")
+    builder.ExportOutput(vehicle.navigation.estimated_state_output, "estimated_state")
+    builder.ExportOutput(mapper.map_output, "map")
+    builder.ExportOutput(supervisor.leg_output, "leg")
+    if scene is not None:
+        from drake_auv.visualization.octree import OctreeVisualizer
+
+        scene.add_vehicle_visualizer(builder, vehicle.dynamics.state_output)
+        octree_view = builder.AddNamedSystem("octree_visualizer", OctreeVisualizer(
+            scene.meshcat, scene.path_of("octree"), period=10.0))
+        builder.Connect(mapper.map_output, octree_view.map_input)
+    diagram = builder.Build()
+    diagram.set_name(f"mission_{spec.name}")
+    handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,
+                             controller, replanner, supervisor, camera, multibeam_coverage, logs)
+    return diagram, handles

@@ -1,0 +1,208 @@
+"""From a mission file to what the Diagram flies: the off-line plan and the legs.
+
+`plan_mission` runs the `plan` step off-line on the site's prior map (the coverage planner, or
+the offset contour of the structure at one depth), then turns every simulated step into legs
+(`drake_auv.mission.legs`): a transit to where the step begins, then the step's behaviour,
+each with the parameters its LeafSystem needs and a time budget.
+
+Where a follow step begins, unless the file says: on the line from the vehicle's previous
+position to the structure's charted centre, `offset` + 4 m outside the structure's cross-
+section at the step's depth on the prior map (within the profiler's range of it). The centre is
+the target's footprint as the operator charts it, i.e. on the prior map (shifted by its error).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from drake_auv.mission.config import FollowStep, MissionSpec, PlanStep, SurveyStep
+from drake_auv.mission.legs import Leg
+from drake_auv.mission.site import Site
+from drake_auv.perception.behaviours import EstimatorParams, FollowingParams
+from drake_auv.perception.controller import FollowConfig
+from drake_auv.planning.path import Path
+from drake_auv.planning.surface import TerrainSurface
+from drake_auv.vehicle.path_reference import PathLeg
+
+TIME_MARGIN = 1.4  # a leg may last this many times its nominal duration ...
+TIME_SLACK = 120.0  # ... plus this, s
+TRANSIT_SPEED = 0.5  # m/s
+APPROACH_MARGIN = 4.0  # m beyond offset + cross-section where following starts
+SENSOR_AZIMUTH = {"port": np.pi / 2, "starboard": -np.pi / 2}  # payload axis in the body frame
+
+
+@dataclass
+class MissionPlan:
+    """The off-line part of a mission.
+
+    Attributes:
+        nominal: the nominal path of the survey (None without a plan step).
+        coverage: the `CoveragePlan` when the plan step used the coverage planner.
+        omega: the plan's offset, m (None without a plan step).
+        offset_metric: how the replanner measures the offset ("3d" on coverage plans, whose
+            slices follow sloping faces; "horizontal" on contours of vertical walls).
+        legs: every leg in order; path_legs, follow_legs, replan_legs: the parameters of the
+            legs each behaviour flies, by leg index; profiler_planes: legs whose profiler
+            scans the vertical plane.
+        survey_speed: m/s along the nominal path (the plan step's).
+        start_state: (12,) where the vehicle starts (local frame).
+        budget: sum of the legs' time budgets, s.
+    """
+
+    nominal: Path | None
+    coverage: object
+    omega: float | None
+    offset_metric: str
+    legs: tuple[Leg, ...]
+    path_legs: dict[int, PathLeg]
+    follow_legs: dict[int, FollowConfig]
+    replan_legs: tuple[int, ...]
+    profiler_planes: dict[int, str]
+    survey_speed: float
+    start_state: np.ndarray
+    budget: float
+
+
+def _plan_step(step: PlanStep, site: Site):
+    """(nominal path, coverage plan or None, offset metric) of the plan step."""
+    if step.method == "contour":
+        from drake_auv.planning.contour import nominal_contour
+
+        return nominal_contour(site.prior, depth=step.depth, omega=step.omega), None, "horizontal"
+    from drake_auv.planning.coverage_plan import plan_coverage
+
+    kwargs = dict(omega=step.omega, aperture_deg=step.aperture_deg, overlap=step.overlap,
+                  slope_threshold=step.slope_threshold, slice_spacing=step.slice_spacing,
+                  slice_count=step.slice_count, sensor_range=site.max_range)
+    if step.min_area_m2 is not None:
+        kwargs["min_area"] = step.min_area_m2
+    plan = plan_coverage(site.prior, **kwargs)
+    return plan.path, plan, "3d"
+
+
+def charted_centre(site: Site) -> np.ndarray:
+    """(2,) the structure's centre on the operator's chart: the target footprint's centre,
+    moved by the prior map's error (the chart and the prior map agree)."""
+    lo, hi = site.target_mesh.bounds
+    return 0.5 * (lo[:2] + hi[:2]) + site.prior_shift
+
+
+def approach_point(site: Site, depth: float, offset: float, previous: np.ndarray) -> np.ndarray:
+    """(2,) where horizontal following at `depth` begins, coming from `previous` (2,)."""
+    centre = charted_centre(site)
+    prior = site.prior
+    gx, gy = np.meshgrid(prior.x, prior.y)
+    solid = np.nan_to_num(prior.z, nan=-np.inf) > -depth
+    radius = 0.0
+    if solid.any():
+        radius = float(np.hypot(gx[solid] - centre[0], gy[solid] - centre[1]).max())
+    towards = np.asarray(previous, dtype=float)[:2] - centre
+    norm = np.linalg.norm(towards)
+    direction = towards / norm if norm > 1e-6 else np.array([-1.0, 0.0])
+    return centre + (radius + offset + APPROACH_MARGIN) * direction
+
+
+def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
+    """Plans the mission `spec` at `site` (see the module docstring)."""
+    nominal = coverage = omega = None
+    offset_metric, survey_speed = "3d", 0.5
+    azimuth = SENSOR_AZIMUTH.get(spec.payload.multibeam_mount)
+    for step in spec.steps:
+        if isinstance(step, PlanStep):
+            nominal, coverage, offset_metric = _plan_step(step, site)
+            omega = step.omega
+            survey_speed = step.speed
+    start = site.start_state
+    if start is None:  # at the beginning of the first simulated step
+        start = np.zeros(12)
+        first = next(s for s in spec.steps if not isinstance(s, PlanStep))
+        if isinstance(first, SurveyStep):
+            start[:3], start[5] = nominal.points[0], nominal.heading[0]
+        else:
+            xy = (site.to_local(np.asarray(first.start[:2], dtype=float))
+                  if first.start is not None else charted_centre(site) + [-30.0, 0.0])
+            start[:3] = (xy[0], xy[1], -first.depth)
+    legs, path_legs, follow_legs, replan_legs, planes = [], {}, {}, [], {}
+    position, yaw = np.asarray(start[:3], float), float(start[5])
+    budget = 0.0
+
+    def add(leg: Leg) -> int:
+        nonlocal budget
+        legs.append(leg)
+        budget += leg.max_duration
+        return len(legs) - 1
+
+    def add_transit(step_index: int, target, end_yaw, speed: float) -> None:
+        nonlocal position, yaw
+        target = np.asarray(target, dtype=float)
+        duration = TIME_MARGIN * np.linalg.norm(target - position) / speed + TIME_SLACK
+        index = add(Leg("transit", step_index, "path", "arrive", duration,
+                        target=tuple(target), tolerance=1.5))
+        path_legs[index] = PathLeg("goto", tuple(target), end_yaw, speed)
+        position, yaw = target, yaw if end_yaw is None else end_yaw
+
+    for k, step in enumerate(spec.steps):
+        if isinstance(step, FollowStep):
+            z = -step.depth
+            if step.start is not None:
+                xy = site.to_local(np.asarray(step.start[:2], dtype=float))
+            elif step.mode == "horizontal":
+                xy = approach_point(site, step.depth, step.offset, position[:2])
+            else:
+                xy = position[:2]
+            centre = charted_centre(site)
+            facing = (float(np.arctan2(*(centre - xy)[::-1])) if step.mode == "horizontal"
+                      else np.radians(step.heading_deg or 0.0))
+            side, yaw_offset = 1, 0.0
+            if step.mode == "horizontal" and azimuth is not None:
+                # fly along the wall with the payload facing it: the wall on the payload's side
+                side, yaw_offset = (-1 if azimuth > 0 else 1), -azimuth
+            add_transit(k, (*xy, z), facing + yaw_offset, TRANSIT_SPEED)
+            params = FollowingParams(offset=step.offset, speed=step.speed, side=side,
+                                     yaw_offset=yaw_offset,
+                                     estimator=EstimatorParams(window=step.offset + 3.0))
+            params = replace(params, warmup=360.0 / 1.8 / 30.0)  # one turn of the profiler head
+            if step.mode == "horizontal":
+                radius = np.linalg.norm(xy - centre)
+                nominal_time = 2 * np.pi * radius * step.loops / step.speed
+                leg = Leg("follow", k, "follow", "loops", step.max_time_s or
+                          TIME_MARGIN * nominal_time + TIME_SLACK, centre=tuple(centre),
+                          loops=step.loops)
+                config = FollowConfig("horizontal", params, depth_z=z)
+            else:
+                plane = np.radians(step.heading_deg or 0.0)
+                distance = step.distance_m or 0.0
+                leg = Leg("follow", k, "follow", "distance", step.max_time_s or
+                          TIME_MARGIN * 3.0 * max(distance, 10.0) / step.speed + TIME_SLACK,
+                          direction=(np.cos(plane), np.sin(plane)), distance=step.distance_m,
+                          end_depth=step.end_depth_m)
+                config = FollowConfig("vertical", params, plane_yaw=plane)
+            index = add(leg)
+            follow_legs[index] = config
+            if step.mode == "vertical":
+                planes[index] = "vertical"
+            position = np.array([*xy, z])  # where the next transit is planned from
+        elif isinstance(step, SurveyStep):
+            add_transit(k, nominal.points[0], float(nominal.heading[0]), TRANSIT_SPEED)
+            duration = step.max_time_s or (TIME_MARGIN * nominal.times(survey_speed)[-1]
+                                           + TIME_SLACK)
+            if step.replanning:
+                index = add(Leg("survey", k, "replan", "replanner", duration))
+                replan_legs.append(index)
+            else:
+                index = add(Leg("survey", k, "path", "path_end", duration))
+                path_legs[index] = PathLeg("nominal", speed=survey_speed)
+            position = nominal.points[-1]
+    if not legs:
+        raise ValueError(f"mission {spec.name!r} has no simulated step (follow or survey)")
+    return MissionPlan(nominal, coverage, omega, offset_metric, tuple(legs), path_legs,
+                       follow_legs, tuple(replan_legs), planes, survey_speed,
+                       np.asarray(start, float),
+                       budget)
+
+
+def terrain_elevation(site: Site):
+    """The prior map's elevation as a callable (x, y) -> z, for transits."""
+    return TerrainSurface(site.prior).elevation

@@ -1,0 +1,324 @@
+"""The report of a flown mission: `report.json`, `report.md`, figures, the trajectory and the
+Diagram, written by `write_outputs`.
+
+`report.json` keys (a contract; more may be added): `coverage.multibeam`, `coverage.camera`
+(fractions of the target's area, union over the dive), `min_clearance_m` (true, to anything),
+`contact`, `distance_to_target` (`mean_m`, `sd_m`, `min_m` over the survey samples within
+2 Omega of the target, and `map_mean_m`, the same against the on-line map's voxels on the
+target, as the reference reports it), `phases` (`name`, `start_s`, `end_s`, one time axis).
+Everything but `timing` depends only on the mission file and its seed.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path as FilePath
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from drake_auv.geometry.distance import mesh_distance
+from drake_auv.geometry.visibility import coverage_share
+from drake_auv.mission.config import mission_to_dict
+from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
+
+PHASE_COLOURS = {"transit": "0.45", "follow": "tab:green", "survey": "tab:blue"}
+
+
+def angle_stats(best: np.ndarray, areas: np.ndarray) -> tuple[float, float]:
+    """Area-weighted mean and standard deviation of the seen faces' best angles, degrees."""
+    seen = np.isfinite(best)
+    if not seen.any():
+        return float("nan"), float("nan")
+    w = areas[seen] / areas[seen].sum()
+    deg = np.degrees(best[seen])
+    mean = float(w @ deg)
+    return mean, float(np.sqrt(w @ (deg - mean) ** 2))
+
+
+def near_distance(result: MissionResult) -> float:
+    """The band (m) within which survey samples count for the distance statistics: 2 Omega
+    (2 x the largest following offset without a plan)."""
+    if result.plan.omega is not None:
+        return 2.0 * result.plan.omega
+    return 2.0 * max(step.params.offset for step in result.plan.follow_legs.values())
+
+
+def _scored_samples(result: MissionResult) -> np.ndarray:
+    """Mask of the samples the distance statistics use: survey legs (follow legs without a
+    survey), within 2 Omega of the target."""
+    names = np.array([result.plan.legs[leg].phase for leg in result.leg_at])
+    scored = names == ("survey" if (names == "survey").any() else "follow")
+    near = scored & (result.distance < near_distance(result))
+    return near if near.any() else scored
+
+
+def map_distance(result: MissionResult, samples: np.ndarray) -> np.ndarray:
+    """Distance from `samples` (n, 3) to the on-line map's occupied voxels lying on the
+    target (within 1.5 voxels of its true surface), m; inf without any."""
+    from scipy.spatial import cKDTree
+
+    voxels = result.online_map.map.occupied_points()
+    if len(voxels) == 0 or len(samples) == 0:
+        return np.full(len(samples), np.inf)
+    on_target = mesh_distance(result.site.target_mesh, voxels) <= 1.5 * result.online_map.map.resolution
+    if not on_target.any():
+        return np.full(len(samples), np.inf)
+    return cKDTree(voxels[on_target]).query(samples)[0]
+
+
+def phase_summary(result: MissionResult, mask: np.ndarray) -> dict:
+    """Statistics of the samples `mask` of the dive."""
+    t, xyz = result.times[mask], result.state[mask, :3]
+    nav_error = np.linalg.norm(result.estimated[mask, :3] - xyz, axis=1)
+    return dict(length_m=float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).sum()),
+                duration_s=float(t[-1] - t[0]) if len(t) else 0.0,
+                distance_min_m=float(result.distance[mask].min()),
+                clearance_min_m=float(result.clearance[mask].min()),
+                navigation_error_max_m=float(nav_error.max()))
+
+
+def plan_summary(result: MissionResult) -> dict | None:
+    """The off-line plan: lengths, planned duration, the planner's own metrics on the prior map
+    (coverage plans), and the true distance of the nominal path to the target."""
+    nominal = result.plan.nominal
+    if nominal is None:
+        return None
+    d = mesh_distance(result.site.target_mesh, nominal.resample(1.0).points)
+    close = d < near_distance(result)
+    out = dict(length_m=nominal.length, length_by_label_m=nominal.length_by_label(),
+               planned_duration_s=float(nominal.times(result.plan.survey_speed)[-1]),
+               omega_m=result.plan.omega,
+               nominal_true_distance_mean_m=float(d[close].mean()) if close.any() else None,
+               nominal_true_distance_min_m=float(d.min()))
+    coverage = result.plan.coverage
+    if coverage is not None and coverage.metrics is not None:
+        m = coverage.metrics.total
+        out.update(high_slope_regions=int(coverage.labels.n_regions),
+                   planned_view_mean_deg=m.view_mean_deg, planned_view_sd_deg=m.view_sd_deg,
+                   planned_coverage_prior=m.coverage,
+                   planned_clearance_min_prior_m=m.min_clearance)
+    return out
+
+
+def summarise(result: MissionResult) -> dict:
+    """Everything the report shows; `timing` holds the wall-clock figures (they vary with the
+    machine), the rest depends only on the mission file and its seed."""
+    areas = result.areas
+    scored = _scored_samples(result)
+    d = result.distance[scored]
+    map_d = map_distance(result, result.state[scored, :3])
+    map_d = map_d[np.isfinite(map_d)]
+    phases = []
+    for phase in result.phases:
+        mask = np.isin(result.leg_at, phase.legs)
+        entry = dict(name=phase.name, start_s=phase.start_s, end_s=phase.end_s,
+                     legs=phase.legs, outcomes=[result.outcomes[k] for k in phase.legs])
+        if mask.any():
+            entry.update(phase_summary(result, mask))
+        phases.append(entry)
+    cam_mean, cam_sd = angle_stats(result.camera_best, areas)
+    mb_mean, mb_sd = angle_stats(result.multibeam_best, areas)
+    min_clearance = float(result.clearance.min())
+    summary = dict(
+        mission=dict(name=result.spec.name, seed=result.spec.seed,
+                     site=result.site.name, completed=result.completed,
+                     target_area_m2=float(areas.sum())),
+        coverage=dict(multibeam=coverage_share(result.multibeam_best, areas),
+                      camera=coverage_share(result.camera_best, areas),
+                      multibeam_angle_mean_deg=mb_mean, multibeam_angle_sd_deg=mb_sd,
+                      camera_angle_mean_deg=cam_mean, camera_angle_sd_deg=cam_sd),
+        min_clearance_m=min_clearance,
+        contact=bool(min_clearance <= VEHICLE_RADIUS),
+        distance_to_target=dict(
+            mean_m=float(d.mean()), sd_m=float(d.std()), min_m=float(result.distance.min()),
+            map_mean_m=float(map_d.mean()) if len(map_d) else None,
+            map_sd_m=float(map_d.std()) if len(map_d) else None,
+            near_m=near_distance(result), samples=int(scored.sum())),
+        navigation_error_max_m=float(np.linalg.norm(
+            result.estimated[:, :3] - result.state[:, :3], axis=1).max()),
+        phases=phases,
+        plan=plan_summary(result),
+        config=mission_to_dict(result.spec),
+    )
+    timing = dict(wall_s=result.wall_s, sim_s=result.duration_s,
+                  real_time_factor=result.duration_s / max(result.wall_s, 1e-9))
+    if len(result.replanning):
+        wall = result.replanning[:, 1]
+        timing.update(replan_steps=len(wall), replan_median_ms=float(np.median(wall) * 1e3),
+                      replan_p95_ms=float(np.percentile(wall, 95) * 1e3))
+    summary["timing"] = timing
+    return _rounded(summary)
+
+
+def _rounded(value, digits: int = 4):
+    if isinstance(value, dict):
+        return {k: _rounded(v, digits) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_rounded(v, digits) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return round(float(value), digits) if np.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def _fmt(value, spec: str, unit: str = "") -> str:
+    return "n/a" if value is None else f"{value:{spec}}{unit}"
+
+
+def report_markdown(summary: dict) -> str:
+    """The report as Markdown."""
+    m, c, d = summary["mission"], summary["coverage"], summary["distance_to_target"]
+    lines = [f"# Mission report: {m['name']}", "",
+             f"Site `{m['site']}`, seed {m['seed']}; "
+             + ("every leg flown." if m["completed"] else "**stopped by the time cap**.")
+             + " One dive: the vehicle, its navigation error and the on-line map carry "
+             "across the phases.", ""]
+    plan = summary["plan"]
+    if plan is not None:
+        lines += ["## Off-line plan (on the prior map)", "", "| quantity | value |",
+                  "| --- | --- |",
+                  f"| path length | {plan['length_m']:.1f} m ("
+                  + ", ".join(f"{k} {v:.1f} m" for k, v in plan["length_by_label_m"].items())
+                  + ") |",
+                  f"| planned duration | {plan['planned_duration_s']:.0f} s |",
+                  f"| Omega | {plan['omega_m']:g} m |",
+                  f"| true distance of the nominal path to the target | mean "
+                  f"{_fmt(plan['nominal_true_distance_mean_m'], '.2f')} m, min "
+                  f"{plan['nominal_true_distance_min_m']:.2f} m |"]
+        if "planned_coverage_prior" in plan:
+            lines += [f"| high-slope regions | {plan['high_slope_regions']} |",
+                      f"| viewing angle on the prior map | {plan['planned_view_mean_deg']:.1f}"
+                      f" deg (sd {plan['planned_view_sd_deg']:.1f}) |",
+                      f"| coverage of the prior map | "
+                      f"{100 * plan['planned_coverage_prior']:.1f} % |"]
+        lines.append("")
+    lines += ["## Phases (true state, true surface)", "",
+              "| phase | start (s) | end (s) | length (m) | min distance to target (m) | "
+              "min clearance (m) | max navigation error (m) | legs |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for p in summary["phases"]:
+        lines.append(f"| {p['name']} | {p['start_s']:.0f} | {p['end_s']:.0f} | "
+                     f"{_fmt(p.get('length_m'), '.1f')} | {_fmt(p.get('distance_min_m'), '.2f')}"
+                     f" | {_fmt(p.get('clearance_min_m'), '.2f')} | "
+                     f"{_fmt(p.get('navigation_error_max_m'), '.2f')} | "
+                     + ", ".join(f"{k} ({o})" for k, o in zip(p["legs"], p["outcomes"])) + " |")
+    lines += ["", "## Whole dive", "",
+              f"- Target surface: {m['target_area_m2']:.0f} m^2. Covered by the multibeam: "
+              f"**{100 * c['multibeam']:.1f} %** (viewing angle "
+              f"{_fmt(c['multibeam_angle_mean_deg'], '.1f')} deg, sd "
+              f"{_fmt(c['multibeam_angle_sd_deg'], '.1f')}); by the camera: "
+              f"**{100 * c['camera']:.1f} %** ({_fmt(c['camera_angle_mean_deg'], '.1f')} deg, "
+              f"sd {_fmt(c['camera_angle_sd_deg'], '.1f')}).",
+              f"- True distance to the target over {d['samples']} survey samples within "
+              f"{d['near_m']:g} m: mean {d['mean_m']:.2f} m, sd {d['sd_m']:.2f} m; minimum over "
+              f"the dive {d['min_m']:.2f} m. Against the on-line map: mean "
+              f"{_fmt(d['map_mean_m'], '.2f')} m, sd {_fmt(d['map_sd_m'], '.2f')} m.",
+              f"- Minimum clearance to anything: {summary['min_clearance_m']:.2f} m: "
+              + ("**contact**." if summary["contact"] else "no contact.")
+              + f" Largest navigation error: {summary['navigation_error_max_m']:.2f} m.",
+              "", "## Timing (wall clock: varies with the machine and its load)", ""]
+    t = summary["timing"]
+    lines.append(f"- {t['sim_s']:.0f} s simulated in {t['wall_s']:.1f} s wall: "
+                 f"{t['real_time_factor']:.0f}x real time.")
+    if "replan_steps" in t:
+        lines.append(f"- {t['replan_steps']} replanning steps: median "
+                     f"{t['replan_median_ms']:.1f} ms, 95th percentile {t['replan_p95_ms']:.1f}"
+                     " ms.")
+    lines += ["", "Files: `coverage.png`, `distance.png`, `plan.png` (coverage plans), "
+              "`mission.html` (Meshcat recording), `trajectory.csv`, `diagram.dot`.", ""]
+    return "\n".join(lines)
+
+
+def fig_coverage(result: MissionResult) -> Figure:
+    """The target's faces coloured by the best multibeam viewing angle of the dive."""
+    from matplotlib import colormaps
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    best = result.multibeam_best
+    triangles = np.asarray(result.site.world.triangles)[result.site.target_faces]
+    colours = colormaps["viridis_r"](np.clip(np.degrees(np.nan_to_num(best, nan=0.0)) / 90.0,
+                                             0.0, 1.0))
+    colours[~np.isfinite(best)] = (0.85, 0.1, 0.1, 1.0)
+    fig = Figure(figsize=(11, 5))
+    lo, hi = triangles.reshape(-1, 3).min(axis=0), triangles.reshape(-1, 3).max(axis=0)
+    for k, (elev, azim) in enumerate(((25, -60), (-15, 120))):
+        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+        ax.add_collection3d(Poly3DCollection(triangles, facecolors=colours, linewidths=0))
+        ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]),
+               xlabel="x (m)", ylabel="y (m)", zlabel="z (m)")
+        ax.set_box_aspect(np.maximum(hi - lo, 1e-3))
+        ax.view_init(elev=elev, azim=azim)
+    share = coverage_share(best, result.areas)
+    fig.suptitle(f"Multibeam coverage of the target: {100 * share:.1f} % "
+                 "(colour: best viewing angle, 0 (yellow) to 90 deg (purple); red: unseen)")
+    return fig
+
+
+def fig_distance(result: MissionResult) -> Figure:
+    """True distance to the target and clearance against time, by phase; tracks from above."""
+    fig = Figure(figsize=(13, 5))
+    ax, top = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    names = np.array([result.plan.legs[leg].phase for leg in result.leg_at])
+    for name in dict.fromkeys(names):
+        mask = names == name
+        colour = PHASE_COLOURS.get(name, "k")
+        t = np.where(mask, result.times, np.nan)
+        ax.plot(t, np.where(mask, result.distance, np.nan), color=colour, lw=0.9,
+                label=f"{name}: distance to the target")
+        ax.plot(t, np.where(mask, result.clearance, np.nan), color=colour, lw=0.6, ls=":")
+        top.plot(np.where(mask, result.state[:, 0], np.nan),
+                 np.where(mask, result.state[:, 1], np.nan), color=colour, lw=0.8, label=name)
+    band = near_distance(result) / 2.0
+    ax.axhline(band, color="k", ls="--", lw=0.8, label=f"Omega = {band:g} m")
+    ax.axhline(VEHICLE_RADIUS, color="tab:red", lw=0.8, label="vehicle radius (contact)")
+    ax.set(xlabel="mission time (s)", ylabel="m", ylim=(0, 3 * band),
+           title="True distance (solid) and clearance to anything (dotted)")
+    ax.legend(fontsize=7, loc="upper right")
+    if result.plan.nominal is not None:
+        nominal = result.plan.nominal.points
+        top.plot(nominal[:, 0], nominal[:, 1], color="0.5", lw=0.6, ls="--",
+                 label="nominal plan (prior map)")
+    centres = np.asarray(result.site.world.triangles_center)[result.site.target_faces]
+    stride = max(1, len(centres) // 4000)
+    top.scatter(centres[::stride, 0], centres[::stride, 1], s=0.5, c=centres[::stride, 2],
+                cmap="gist_earth")
+    top.set(aspect="equal", xlabel="x (m, local)", ylabel="y (m, local)",
+            title="Tracks from above")
+    top.legend(fontsize=7, loc="upper right")
+    return fig
+
+
+def write_trajectory(result: MissionResult, filename) -> None:
+    """`t, x, y, z, roll, pitch, yaw` (true) and `est_x, est_y, est_z` (navigation), in the
+    site's own horizontal coordinates."""
+    true_xyz = result.site.to_site(result.state[:, :3])
+    est_xyz = result.site.to_site(result.estimated[:, :3])
+    with open(filename, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["t", "x", "y", "z", "roll", "pitch", "yaw", "est_x", "est_y", "est_z"])
+        for t, p, a, e in zip(result.times, true_xyz, result.state[:, 3:6], est_xyz):
+            writer.writerow([f"{t:.2f}", *(f"{v:.3f}" for v in p), *(f"{v:.5f}" for v in a),
+                             *(f"{v:.3f}" for v in e)])
+
+
+def write_outputs(result: MissionResult, outdir, dpi: int = 110) -> dict:
+    """Writes report.json, report.md, coverage.png, distance.png, plan.png (coverage plans),
+    trajectory.csv and diagram.dot into `outdir`; returns the summary."""
+    out = FilePath(outdir)
+    out.mkdir(parents=True, exist_ok=True)
+    summary = summarise(result)
+    (out / "report.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (out / "report.md").write_text(report_markdown(summary))
+    figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result)}
+    if result.plan.coverage is not None:
+        from drake_auv.planning.figures import fig_path3d
+
+        figures["plan.png"] = fig_path3d(result.plan.coverage)
+    for name, fig in figures.items():
+        fig.savefig(out / name, dpi=dpi, bbox_inches="tight")
+    write_trajectory(result, out / "trajectory.csv")
+    (out / "diagram.dot").write_text(result.diagram_dot)
+    return summary

@@ -1,0 +1,162 @@
+"""Running a mission: load its site, plan, build the one Diagram, fly it, collect the results.
+
+`run_mission(spec)` simulates until the `MissionSupervisor`'s monitor ends the dive (every leg
+done) or the time cap (`limits.max_time_s`, default the sum of the legs' budgets). The monitor
+also advances the progress bar. `MissionResult` holds what the report needs, read from the
+Diagram's logs and the systems' Contexts after the run; true distances come from the exact
+point-to-mesh distance, on the true world.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.analysis import Simulator, SimulatorStatus
+from pydrake.systems.framework import EventStatus
+from tqdm import tqdm
+
+from drake_auv.geometry.distance import mesh_distance
+from drake_auv.mapping.scan_log import ScanLog
+from drake_auv.mission.config import MissionSpec
+from drake_auv.mission.diagram import MissionHandles, build_mission_diagram
+from drake_auv.mission.plan import MissionPlan, plan_mission
+from drake_auv.mission.site import Site, load_site, check_against_site
+from drake_auv.replanning.replanner import STEP_FIELDS
+
+VEHICLE_RADIUS = 1.0  # m, a sphere around the GIRONA 500's hulls for the contact check
+
+
+@dataclass
+class Phase:
+    """A contiguous part of the dive: consecutive legs of the same phase name."""
+
+    name: str
+    start_s: float
+    end_s: float
+    legs: list[int]
+
+
+@dataclass
+class MissionResult:
+    """A flown mission (local frame; `site.to_site` gives the site's coordinates).
+
+    Attributes:
+        spec, site, plan: what was flown, where, and its off-line part.
+        times: (n,) s; state: (n, 12) true state; estimated: (n, 12) navigation's.
+        distance: (n,) true distance to the target, m; clearance: (n,) to anything, m.
+        leg_at: (n,) index of the leg flying at each sample.
+        phases: the legs grouped by phase, on one time axis; outcomes: per leg ("goal",
+            "timed out", "flying" when the time cap stopped it).
+        camera_best, multibeam_best: (T,) best viewing angle per target face, rad, NaN unseen.
+        replanning: (k, 6) replanning steps (`replanner.STEP_FIELDS`), planned ones only.
+        scan_log: the returns recorded by the mapper; online_map: its final octree.
+        completed: whether the supervisor ended the dive (False: the time cap did).
+        wall_s: wall time of the simulation, s.
+    """
+
+    spec: MissionSpec
+    site: Site
+    plan: MissionPlan
+    times: np.ndarray
+    state: np.ndarray
+    estimated: np.ndarray
+    distance: np.ndarray
+    clearance: np.ndarray
+    leg_at: np.ndarray
+    phases: list[Phase]
+    outcomes: list[str]
+    camera_best: np.ndarray
+    multibeam_best: np.ndarray
+    replanning: np.ndarray
+    scan_log: ScanLog
+    online_map: object
+    completed: bool
+    wall_s: float
+    diagram_dot: str
+
+    @property
+    def areas(self) -> np.ndarray:
+        """(T,) area of each target face, m^2."""
+        return np.asarray(self.site.world.area_faces)[self.site.target_faces]
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.times[-1] - self.times[0])
+
+
+def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndarray]:
+    """Phases from the supervisor's `leg` log; also the (index, start) of every leg begun."""
+    index = leg_log.data()[0].astype(int)
+    start = leg_log.data()[1]
+    first = np.flatnonzero(np.r_[True, np.diff(index) != 0])
+    begun, starts = index[first], start[first]
+    phases: list[Phase] = []
+    for k, (leg, t0) in enumerate(zip(begun, starts)):
+        t1 = starts[k + 1] if k + 1 < len(starts) else end
+        name = legs[leg].phase
+        if phases and phases[-1].name == name:
+            phases[-1].end_s = float(t1)
+            phases[-1].legs.append(int(leg))
+        else:
+            phases.append(Phase(name, float(t0), float(t1), [int(leg)]))
+    return phases, begun, starts
+
+
+def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
+                progress: bool = True) -> MissionResult:
+    """Flies `spec` (at `site`, default `load_site(spec.site, spec.seed)`) in one dive."""
+    site = site if site is not None else load_site(spec.site, spec.seed)
+    check_against_site(spec, site)
+    plan = plan_mission(spec, site)
+    diagram, handles = build_mission_diagram(site, spec, plan, scene=scene)
+    simulator = Simulator(diagram)
+    context = simulator.get_context()
+    cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
+    bar = tqdm(total=int(np.ceil(cap)), unit="s sim", desc=f"mission {spec.name}",
+               disable=not progress)
+    supervisor = handles.supervisor
+
+    def monitor(root_context) -> EventStatus:
+        now = int(root_context.get_time())
+        if now > bar.n:
+            bar.update(now - bar.n)
+        return supervisor.monitor(root_context)
+
+    simulator.set_monitor(monitor)
+    wall = time.perf_counter()
+    status = simulator.AdvanceTo(cap)
+    wall = time.perf_counter() - wall
+    bar.close()
+    completed = status.reason() == SimulatorStatus.ReturnReason.kReachedTerminationCondition
+    return _collect(spec, site, plan, diagram, handles, context, completed, wall)
+
+
+def _collect(spec, site, plan, diagram, handles: MissionHandles, context, completed: bool,
+             wall: float) -> MissionResult:
+    logs = {name: log.FindLog(context) for name, log in handles.logs.items()}
+    times = logs["state"].sample_times()
+    state = logs["state"].data().T.copy()
+    estimated = logs["estimated_state"].data().T.copy()
+    end = float(context.get_time())
+    phases, begun, starts = _phases(logs["leg"], plan.legs, end)
+    leg_at = begun[np.maximum(np.searchsorted(starts, times, side="right") - 1, 0)]
+    distance = mesh_distance(site.target_mesh, state[:, :3])
+    clearance = mesh_distance(site.world, state[:, :3])
+    replanning = np.zeros((0, len(STEP_FIELDS)))
+    if "replanning" in logs:
+        steps = logs["replanning"].data().T
+        # one row per step: the log samples the last step at every period
+        steps = steps[np.r_[True, np.diff(steps[:, 0]) != 0] & (steps[:, 5] > 0)]
+        replanning = steps
+    mapper_context = handles.mapper.GetMyContextFromRoot(context)
+    return MissionResult(
+        spec, site, plan, times, state, estimated, distance, clearance, leg_at, phases,
+        handles.supervisor.outcomes(handles.supervisor.GetMyContextFromRoot(context)),
+        handles.camera_coverage.best_angles(handles.camera_coverage.GetMyContextFromRoot(context)),
+        handles.multibeam_coverage.best_angles(
+            handles.multibeam_coverage.GetMyContextFromRoot(context)),
+        replanning, handles.mapper.scan_log(mapper_context),
+        handles.mapper.map_output.Eval(mapper_context), completed, wall,
+        diagram.GetGraphvizString())
