@@ -23,7 +23,7 @@ import trimesh
 
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.terrain.bathymetry import Bathymetry
-from drake_auv.terrain.mesh import bathymetry_to_mesh
+from drake_auv.terrain.mesh import bathymetry_to_mesh, top_surface
 
 DATA_DIR = FilePath(__file__).resolve().parents[1].parent / "shared" / "data"
 MONTEREY_TILE = "MontereyBay.R_-121.825_-121.815_36.790_36.800.epsg3857.tif"
@@ -71,37 +71,27 @@ class Scenario:
             seed: seed of the error's direction.
             spacing: cell size, m, > 0.
         """
-        if not (np.isfinite(error_m) and 0.0 <= error_m <= MAX_PRIOR_ERROR):
-            raise ValueError(f"prior_map: error_m must be in [0, {MAX_PRIOR_ERROR}] m, "
-                             f"got {error_m}")
         spacing = float(self.params["prior_spacing"] if spacing is None else spacing)
         if not (np.isfinite(spacing) and spacing > 0):
             raise ValueError(f"prior_map: spacing must be > 0 m, got {spacing}")
         bathy = self._top_surfaces.get(spacing)
         if bathy is None:  # the survey of the world, once per spacing
-            bathy = _top_surface(self.world, spacing)
+            bathy = top_surface(self.world, spacing)
             self._top_surfaces[spacing] = bathy
-        theta = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi)
-        offset = error_m * np.array([np.cos(theta), np.sin(theta)])
-        return Bathymetry(bathy.z, bathy.spacing, tuple(np.add(bathy.origin, offset)),
-                          bathy.crs, None)
+        return shift_prior(bathy, error_m, seed)
 
 
-def _top_surface(world: trimesh.Trimesh, spacing: float) -> Bathymetry:
-    """Samples the first surface seen from above on a regular grid over the world's bounds
-    (NaN where nothing lies below)."""
-    lo, hi = world.bounds
-    xmin, xmax, ymin, ymax = lo[0], hi[0], lo[1], hi[1]
-    nx = int(np.floor((xmax - xmin) / spacing)) + 1
-    ny = int(np.floor((ymax - ymin) / spacing)) + 1
-    if nx < 3 or ny < 3:
-        raise ValueError(f"prior_map: spacing {spacing} m leaves fewer than 3 x 3 cells")
-    gx, gy = np.meshgrid(xmin + spacing * np.arange(nx), ymin + spacing * np.arange(ny))
-    top = hi[2] + 1.0
-    origins = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, top)])
-    hits = RayCaster(world).cast(origins, np.tile([0.0, 0.0, -1.0], (gx.size, 1)),
-                                 top - lo[2] + 1.0)
-    return Bathymetry(hits.points[:, 2].reshape(gx.shape), (spacing, spacing), (xmin, ymin))
+def shift_prior(bathy: Bathymetry, error_m: float, seed: int) -> Bathymetry:
+    """`bathy` moved horizontally by `error_m` (m, in [0, 5]) in a direction drawn from
+    `seed`: the prior-map error. The grid, CRS and world-to-CRS map are kept (the cells now
+    claim wrong positions)."""
+    if not (np.isfinite(error_m) and 0.0 <= error_m <= MAX_PRIOR_ERROR):
+        raise ValueError(f"prior map: error_m must be in [0, {MAX_PRIOR_ERROR}] m, "
+                         f"got {error_m}")
+    theta = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi)
+    offset = error_m * np.array([np.cos(theta), np.sin(theta)])
+    return Bathymetry(bathy.z, bathy.spacing, tuple(np.add(bathy.origin, offset)),
+                      bathy.crs, bathy.to_crs)
 
 
 # ---------------------------------------------------------------- geometry builders

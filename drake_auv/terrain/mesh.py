@@ -1,9 +1,10 @@
-"""Bathymetric grid -> triangle mesh (trimesh), the surface the simulated sensors see.
+"""Bathymetric grid <-> triangle mesh (trimesh).
 
-Vertices sit at the cell centres of the grid (world frame, z up). Each square between four
+`bathymetry_to_mesh`: the grid as the surface the simulated sensors see. Vertices sit at the cell centres of the grid (world frame, z up). Each square between four
 neighbouring samples becomes two triangles, wound counter-clockwise seen from above so the face
 normals point up (out of the seabed, into the water); a square with a no-data (NaN) corner gets
 no triangles, so holes in the survey stay holes in the mesh.
+`top_surface`: the other way, a mesh as a survey from above sees it (overhangs hidden).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
+from drake_auv.geometry.raycast import RayCaster
 from drake_auv.terrain.bathymetry import Bathymetry
 
 
@@ -53,3 +55,23 @@ def bathymetry_to_mesh(bathy: Bathymetry, stride: int = 1) -> trimesh.Trimesh:
     mesh = trimesh.Trimesh(vertices=np.nan_to_num(vertices), faces=faces, process=False)
     mesh.remove_unreferenced_vertices()
     return mesh
+
+
+def top_surface(world: trimesh.Trimesh, spacing: float) -> Bathymetry:
+    """The first surface of `world` seen from above, sampled by vertical rays on a regular
+    grid of `spacing` (m, > 0) over its horizontal bounds (world frame, z up); NaN where
+    nothing lies below."""
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"top_surface: spacing must be > 0 m, got {spacing}")
+    lo, hi = world.bounds
+    xmin, xmax, ymin, ymax = lo[0], hi[0], lo[1], hi[1]
+    nx = int(np.floor((xmax - xmin) / spacing)) + 1
+    ny = int(np.floor((ymax - ymin) / spacing)) + 1
+    if nx < 3 or ny < 3:
+        raise ValueError(f"top_surface: spacing {spacing} m leaves fewer than 3 x 3 cells")
+    gx, gy = np.meshgrid(xmin + spacing * np.arange(nx), ymin + spacing * np.arange(ny))
+    top = hi[2] + 1.0
+    origins = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, top)])
+    hits = RayCaster(world).cast(origins, np.tile([0.0, 0.0, -1.0], (gx.size, 1)),
+                                 top - lo[2] + 1.0)
+    return Bathymetry(hits.points[:, 2].reshape(gx.shape), (spacing, spacing), (xmin, ymin))

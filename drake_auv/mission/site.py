@@ -1,0 +1,260 @@
+"""Where a mission flies: the true world, the target, the prior map and the local frame.
+
+A site's files share one horizontal frame, the site's (the prior raster's CRS, often UTM with
+eastings near 500 km). The mission works in a LOCAL frame: local = site - origin in x, y (z
+unchanged, z up, sea surface z = 0), `origin` the centre of the world's horizontal bounds
+rounded to 1 m, so float32 ray casting keeps millimetres. `Site.to_site` converts outputs
+back. Built-in scenarios are already local (origin 0). Pure Python, no Drake.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+
+from drake_auv.mission.config import (FollowStep, MissionFileError, MissionSpec, PlanStep,
+                                      SiteSpec)
+from drake_auv.scenarios import Scenario, get_scenario, shift_prior
+from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.mesh import top_surface
+
+TARGET_TOLERANCE = 0.05  # m, a world face lies on the target when its centroid is this close
+DEFAULT_PRIOR_SPACING = 1.0  # m, the prior's cell when sampled from a user's world
+
+
+@dataclass
+class Site:
+    """A loaded site, in the local frame.
+
+    Attributes:
+        name: the scenario's name or the world file's stem.
+        world: true world mesh, local frame, m.
+        target_faces: (len(world.faces),) bool, the faces whose coverage is scored.
+        prior: the prior map the planner holds, local frame, already shifted by the seeded
+            prior error; its `to_crs` maps local (x, y) to the site's CRS.
+        origin: (2,) site coordinates of the local frame's origin, m.
+        crs: the site's CRS (e.g. "EPSG:32631"), or None.
+        start_state: (12,) local start state `[x, y, z, roll, pitch, yaw, u, v, w, p, q, r]`,
+            or None (the runner chooses).
+        max_range: range of the sonars, m.
+        scenario: the built-in `Scenario`, or None for a user's files.
+    """
+
+    name: str
+    world: trimesh.Trimesh = field(repr=False)
+    target_faces: np.ndarray = field(repr=False)
+    prior: Bathymetry = field(repr=False)
+    origin: np.ndarray
+    crs: str | None = None
+    start_state: np.ndarray | None = None
+    max_range: float = 20.0
+    scenario: Scenario | None = field(default=None, repr=False)
+
+    def to_local(self, points) -> np.ndarray:
+        """(..., 2) or (..., 3) site coordinates -> local (x, y shifted, z unchanged), m."""
+        return self._shift(points, -1.0)
+
+    def to_site(self, points) -> np.ndarray:
+        """(..., 2) or (..., 3) local coordinates -> site coordinates, m."""
+        return self._shift(points, 1.0)
+
+    def _shift(self, points, sign: float) -> np.ndarray:
+        out = np.array(points, dtype=float)
+        out[..., :2] += sign * np.asarray(self.origin, dtype=float)
+        return out
+
+    @property
+    def target_mesh(self) -> trimesh.Trimesh:
+        """The target faces as their own mesh (local frame)."""
+        return self.world.submesh([np.flatnonzero(self.target_faces)], append=True)
+
+
+def _state(xyz, yaw: float) -> np.ndarray:
+    state = np.zeros(12)
+    state[:3] = xyz
+    state[5] = yaw
+    return state
+
+
+def _load_mesh(path, where: str, label: str) -> trimesh.Trimesh:
+    """A mesh file as one finite, non-empty Trimesh (a Scene is concatenated)."""
+    if not path.is_file():
+        raise MissionFileError(label, where, f"{path.name} not found ({path})",
+                               "an existing PLY, OBJ, STL or GLB mesh file")
+    try:
+        loaded = trimesh.load(path, process=False)
+    except Exception as err:  # trimesh raises many types for unreadable files
+        raise MissionFileError(label, where, f"{path.name} is not a readable mesh "
+                               f"({' '.join(str(err).split())})",
+                               "a PLY, OBJ, STL or GLB triangle mesh") from None
+    if isinstance(loaded, trimesh.Scene):
+        parts = [g for g in loaded.dump() if isinstance(g, trimesh.Trimesh)]
+        loaded = trimesh.util.concatenate(parts) if parts else None
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise MissionFileError(label, where, f"{path.name} holds no triangles",
+                               "a triangle mesh with at least one face")
+    if not np.all(np.isfinite(loaded.vertices)):
+        raise MissionFileError(label, where, f"{path.name} has non-finite vertices",
+                               "finite coordinates, m")
+    return loaded
+
+
+def _local_prior(path, origin: np.ndarray, label: str) -> Bathymetry:
+    """The prior raster in the local frame (its world frame must be the site's, translated)."""
+    from drake_auv.terrain.readers import read_bathymetry
+
+    if not path.is_file():
+        raise MissionFileError(label, "site.prior", f"{path.name} not found ({path})",
+                               "an existing bathymetry raster (GeoTIFF, ASCII grid, ...)")
+    try:
+        bathy = read_bathymetry(path)
+    except ValueError as err:
+        raise MissionFileError(label, "site.prior", " ".join(str(err).split()),
+                               "a bathymetry raster GDAL reads") from None
+    to_crs = np.eye(3) if bathy.to_crs is None else np.asarray(bathy.to_crs, dtype=float)
+    if not np.allclose(to_crs[:2, :2], np.eye(2), atol=1e-9):
+        raise MissionFileError(label, "site.prior",
+                               f"{path.name} is not north-up in metres (CRS {bathy.crs})",
+                               "a north-up raster in a projected CRS in metres, e.g. UTM")
+    cell0 = to_crs[:2, :2] @ bathy.origin + to_crs[:2, 2]  # site coordinates of cell (0, 0)
+    local_to_crs = np.eye(3)
+    local_to_crs[:2, 2] = origin
+    return Bathymetry(bathy.z, bathy.spacing, tuple(cell0 - origin), bathy.crs, local_to_crs)
+
+
+def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
+    """The site of `spec`, its prior shifted by `spec.prior_error_m` in a direction drawn from
+    `seed`. Raises MissionFileError (`label`: the mission file's name) naming the field for a
+    missing or unusable file."""
+    if spec.scenario is not None:
+        scenario = get_scenario(spec.scenario)
+        prior = scenario.prior_map(spec.prior_error_m, seed, spacing=spec.prior_spacing_m)
+        start = scenario.start_state if spec.start is None else _state(
+            spec.start[:3], math.radians(spec.start[3]))
+        return Site(spec.scenario, scenario.world, scenario.target_faces, prior, np.zeros(2),
+                    None, start, spec.max_range_m, scenario)
+    world = _load_mesh(spec.world, "site.world", label)
+    lo, hi = world.bounds
+    if lo[2] >= 0.0:
+        raise MissionFileError(label, "site.world", f"{spec.world.name} lies entirely above "
+                               f"the sea surface (lowest z {lo[2]:g} m)",
+                               "a world with its seabed below z = 0 (z up, metres)")
+    origin = np.round(0.5 * (lo[:2] + hi[:2]))
+    world.apply_translation([-origin[0], -origin[1], 0.0])
+    if spec.target is None:
+        target = np.ones(len(world.faces), bool)
+    else:
+        target = _target_faces(world, _load_mesh(spec.target, "site.target", label), origin,
+                               spec.target.name, label)
+    if spec.prior is None:
+        prior = top_surface(world, spec.prior_spacing_m or DEFAULT_PRIOR_SPACING)
+        local_to_crs = np.eye(3)
+        local_to_crs[:2, 2] = origin
+        prior = Bathymetry(prior.z, prior.spacing, prior.origin, spec.crs, local_to_crs)
+    else:
+        prior = _local_prior(spec.prior, origin, label)
+        if spec.crs is not None and prior.crs is not None and spec.crs != prior.crs:
+            raise MissionFileError(label, "site.crs", f"{spec.crs} differs from the prior "
+                                   f"raster's {prior.crs}", f"{prior.crs} or null")
+        xmin, xmax, ymin, ymax = prior.extent
+        (wx0, wy0), (wx1, wy1) = world.bounds[:, :2]
+        if xmin > wx1 or xmax < wx0 or ymin > wy1 or ymax < wy0:
+            raise MissionFileError(label, "site.prior", f"{spec.prior.name} does not overlap "
+                                   "the world mesh", "a raster covering the world, in its frame")
+    prior = shift_prior(prior, spec.prior_error_m, seed)
+    start = None
+    if spec.start is not None:
+        xyz = np.array([spec.start[0] - origin[0], spec.start[1] - origin[1], spec.start[2]])
+        start = _state(xyz, math.radians(spec.start[3]))
+    return Site(spec.world.stem, world, target, prior, origin, prior.crs or spec.crs, start,
+                spec.max_range_m)
+
+
+def _target_faces(world: trimesh.Trimesh, target: trimesh.Trimesh, origin: np.ndarray,
+                  name: str, label: str) -> np.ndarray:
+    """World faces whose centroid lies within TARGET_TOLERANCE of the target mesh (site frame
+    `target`, moved to the local frame here)."""
+    from drake_auv.geometry.distance import mesh_distance
+
+    target.apply_translation([-origin[0], -origin[1], 0.0])
+    centroids = world.triangles_center
+    lo, hi = target.bounds[0] - TARGET_TOLERANCE, target.bounds[1] + TARGET_TOLERANCE
+    near = np.flatnonzero(np.all((centroids >= lo) & (centroids <= hi), axis=1))
+    faces = np.zeros(len(world.faces), bool)
+    if near.size:
+        faces[near] = mesh_distance(target, centroids[near]) <= TARGET_TOLERANCE
+    if not faces.any():
+        raise MissionFileError(label, "site.target", f"no face of the world lies on {name} "
+                               f"(within {TARGET_TOLERANCE} m)",
+                               "a mesh of part of the world, in the same coordinates")
+    return faces
+
+
+def _deepest(site: Site, lo, hi) -> float:
+    """Depth of the prior's deepest cell with its centre in the local box [lo, hi] (x, y),
+    m; the whole prior's when the box holds none."""
+    gx, gy = np.meshgrid(site.prior.x, site.prior.y)
+    inside = (gx >= lo[0]) & (gx <= hi[0]) & (gy >= lo[1]) & (gy <= hi[1]) & site.prior.valid
+    z = site.prior.z[inside] if inside.any() else site.prior.z[site.prior.valid]
+    return float(-z.min())
+
+
+def check_against_site(spec: MissionSpec, site: Site) -> None:
+    """Checks the mission values only the site can judge, against the prior map (what the
+    operator knows) and the world's bounds: starts inside the world and in the water, follow
+    depths above the seabed under the structure, plan offsets and contour depths that leave
+    water. Raises MissionFileError (one line) on the first problem."""
+    label = spec.source.name if spec.source is not None else spec.name
+    (x0, y0), (x1, y1) = site.world.bounds[:, :2]
+    (sx0, sy0), (sx1, sy1) = site.to_site(site.world.bounds[:, :2])
+    inside = f"x in [{sx0:.1f}, {sx1:.1f}], y in [{sy0:.1f}, {sy1:.1f}] m (site coordinates)"
+
+    def check_xy(xy_site, where: str):
+        x, y = site.to_local(xy_site)[:2]
+        if not (x0 <= x <= x1 and y0 <= y <= y1):
+            raise MissionFileError(label, where, f"({xy_site[0]:g}, {xy_site[1]:g}) is outside "
+                                   "the world", inside)
+        return x, y
+
+    if spec.site.start is not None:
+        x, y = check_xy(spec.site.start, "site.start")
+        seabed = float(site.prior.elevation_at(x, y))
+        z = spec.site.start[2]
+        if z >= 0.0 or (np.isfinite(seabed) and z <= seabed):
+            raise MissionFileError(label, "site.start", f"z = {z:g} m is not in the water",
+                                   f"z in ({seabed:.1f}, 0) m there")
+    target_lo, target_hi = site.target_mesh.bounds[:, :2]
+    for i, step in enumerate(spec.steps):
+        where = f"steps[{i}].{step.KIND}"
+        if isinstance(step, FollowStep):
+            if step.start is not None:
+                check_xy(step.start, f"{where}.start")
+            if step.depth is not None:
+                if step.start is not None:
+                    x, y = site.to_local(step.start)
+                    seabed = -float(site.prior.elevation_at(x, y))
+                    place = f"at ({step.start[0]:g}, {step.start[1]:g})"
+                else:
+                    seabed = _deepest(site, target_lo - step.offset, target_hi + step.offset)
+                    place = "under the structure"
+                if step.depth >= seabed:
+                    raise MissionFileError(label, f"{where}.depth",
+                                           f"{step.depth:g} m is below the seabed "
+                                           f"({seabed:.1f} m {place})",
+                                           f"(0, {seabed:.1f}) m")
+        elif isinstance(step, PlanStep):
+            deepest = float(-np.nanmin(site.prior.z))
+            if step.method == "coverage" and step.omega >= deepest:
+                raise MissionFileError(label, f"{where}.omega", f"{step.omega:g} m leaves no "
+                                       f"water (the prior's deepest point is {deepest:.1f} m)",
+                                       f"[0.5, {deepest:.1f}) m")
+            if step.method == "contour":
+                shallowest = float(-np.nanmax(site.prior.z))
+                if not shallowest < step.depth < deepest:
+                    raise MissionFileError(label, f"{where}.depth", f"{step.depth:g} m cuts "
+                                           "no structure in the prior map (its depths span "
+                                           f"{shallowest:.1f} to {deepest:.1f} m)",
+                                           f"({max(shallowest, 0.0):.1f}, {deepest:.1f}) m")
