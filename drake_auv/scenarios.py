@@ -88,10 +88,15 @@ def shift_prior(bathy: Bathymetry, error_m: float, seed: int) -> Bathymetry:
     if not (np.isfinite(error_m) and 0.0 <= error_m <= MAX_PRIOR_ERROR):
         raise ValueError(f"prior map: error_m must be in [0, {MAX_PRIOR_ERROR}] m, "
                          f"got {error_m}")
+    return Bathymetry(bathy.z, bathy.spacing,
+                      tuple(np.add(bathy.origin, prior_offset(error_m, seed))), bathy.crs,
+                      bathy.to_crs)
+
+
+def prior_offset(error_m: float, seed: int) -> np.ndarray:
+    """(2,) the horizontal shift of a prior map with error `error_m` (m) drawn from `seed`."""
     theta = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi)
-    offset = error_m * np.array([np.cos(theta), np.sin(theta)])
-    return Bathymetry(bathy.z, bathy.spacing, tuple(np.add(bathy.origin, offset)),
-                      bathy.crs, bathy.to_crs)
+    return error_m * np.array([np.cos(theta), np.sin(theta)])
 
 
 # ---------------------------------------------------------------- geometry builders

@@ -37,8 +37,6 @@ from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
 from drake_auv.perception.controller import ProfileFollowingController
 from drake_auv.replanning.replanner import Replanner
-from drake_auv.replanning.section import ReplanningParameters
-from drake_auv.replanning.stomp import StompParameters
 from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.sonar.profiler import FOLLOWING_SETUP, PencilBeamProfiler
 from drake_auv.vehicle.diagram import VehicleSystems, add_girona500
@@ -89,20 +87,6 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
     return multibeam, profiler
 
 
-def replanning_parameters(spec: MissionSpec, plan: MissionPlan) -> ReplanningParameters:
-    """The replanner's parameters from the mission file's `replanner` section."""
-    r = spec.replanner
-    defaults = ReplanningParameters().stomp
-    stomp = StompParameters(num_rollouts=r.rollouts or defaults.num_rollouts,
-                            max_iterations=r.iterations or defaults.max_iterations,
-                            noise_std=defaults.noise_std,
-                            smoothness_weight=defaults.smoothness_weight,
-                            patience=defaults.patience)
-    return ReplanningParameters(radius=r.R, max_waypoints=r.K, omega=plan.omega,
-                                clearance=r.clearance_m, offset_metric=plan.offset_metric,
-                                stomp=stomp)
-
-
 def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, mapper,
                    spec: MissionSpec, plan: MissionPlan, site: Site):
     """The nominal plan's source, the three behaviours, the reference switch and the
@@ -130,7 +114,7 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
         behaviours["follow"] = controller
     if plan.replan_legs:
         replanner = builder.AddNamedSystem("replanner", Replanner(
-            replanning_parameters(spec, plan), speed=plan.survey_speed,
+            spec.replanner.to_params(plan.omega, plan.method), speed=plan.survey_speed,
             period=spec.replanner.period_s,
             sensor_azimuth=SENSOR_AZIMUTH.get(spec.payload.multibeam_mount),
             seed=spec.seed, legs=plan.replan_legs))

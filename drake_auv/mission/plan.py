@@ -26,8 +26,7 @@ from drake_auv.planning.path import Path
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.vehicle.path_reference import PathLeg
 
-TIME_MARGIN = 1.4  # a leg may last this many times its nominal duration ...
-TIME_SLACK = 120.0  # ... plus this, s
+TIME_SLACK = 120.0  # s a leg may last beyond `limits.time_margin` times its nominal duration
 TRANSIT_SPEED = 0.5  # m/s
 APPROACH_MARGIN = 4.0  # m beyond offset + cross-section where following starts
 SENSOR_AZIMUTH = {"port": np.pi / 2, "starboard": -np.pi / 2}  # payload axis in the body frame
@@ -41,8 +40,8 @@ class MissionPlan:
         nominal: the nominal path of the survey (None without a plan step).
         coverage: the `CoveragePlan` when the plan step used the coverage planner.
         omega: the plan's offset, m (None without a plan step).
-        offset_metric: how the replanner measures the offset ("3d" on coverage plans, whose
-            slices follow sloping faces; "horizontal" on contours of vertical walls).
+        method: the plan step's method ("coverage" or "contour"; the replanner's offset metric
+            follows it).
         legs: every leg in order; path_legs, follow_legs, replan_legs: the parameters of the
             legs each behaviour flies, by leg index; profiler_planes: legs whose profiler
             scans the vertical plane.
@@ -54,7 +53,7 @@ class MissionPlan:
     nominal: Path | None
     coverage: object
     omega: float | None
-    offset_metric: str
+    method: str
     legs: tuple[Leg, ...]
     path_legs: dict[int, PathLeg]
     follow_legs: dict[int, FollowConfig]
@@ -66,11 +65,15 @@ class MissionPlan:
 
 
 def _plan_step(step: PlanStep, site: Site):
-    """(nominal path, coverage plan or None, offset metric) of the plan step."""
+    """(nominal path, coverage plan or None) of the plan step."""
     if step.method == "contour":
         from drake_auv.planning.contour import nominal_contour
 
-        return nominal_contour(site.prior, depth=step.depth, omega=step.omega), None, "horizontal"
+        path = nominal_contour(
+            site.prior, step.depth, step.omega, step.end_width_m,
+            end_heading=np.radians(step.end_heading_deg or 0.0),
+            **({} if step.end_overrun_m is None else {"overrun": step.end_overrun_m}))
+        return path, None
     from drake_auv.planning.coverage_plan import plan_coverage
 
     kwargs = dict(omega=step.omega, aperture_deg=step.aperture_deg, overlap=step.overlap,
@@ -79,7 +82,7 @@ def _plan_step(step: PlanStep, site: Site):
     if step.min_area_m2 is not None:
         kwargs["min_area"] = step.min_area_m2
     plan = plan_coverage(site.prior, **kwargs)
-    return plan.path, plan, "3d"
+    return plan.path, plan
 
 
 def charted_centre(site: Site) -> np.ndarray:
@@ -107,11 +110,13 @@ def approach_point(site: Site, depth: float, offset: float, previous: np.ndarray
 def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
     """Plans the mission `spec` at `site` (see the module docstring)."""
     nominal = coverage = omega = None
-    offset_metric, survey_speed = "3d", 0.5
+    method, survey_speed = "coverage", 0.5
+    margin = spec.limits.time_margin
     azimuth = SENSOR_AZIMUTH.get(spec.payload.multibeam_mount)
     for step in spec.steps:
         if isinstance(step, PlanStep):
-            nominal, coverage, offset_metric = _plan_step(step, site)
+            nominal, coverage = _plan_step(step, site)
+            method = step.method
             omega = step.omega
             survey_speed = step.speed
     start = site.start_state
@@ -123,7 +128,7 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
         else:
             xy = (site.to_local(np.asarray(first.start[:2], dtype=float))
                   if first.start is not None else charted_centre(site) + [-30.0, 0.0])
-            start[:3] = (xy[0], xy[1], -first.depth)
+            start[:3] = (xy[0], xy[1], -(first.depth or 5.0))
     legs, path_legs, follow_legs, replan_legs, planes = [], {}, {}, [], {}
     position, yaw = np.asarray(start[:3], float), float(start[5])
     budget = 0.0
@@ -137,7 +142,7 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
     def add_transit(step_index: int, target, end_yaw, speed: float) -> None:
         nonlocal position, yaw
         target = np.asarray(target, dtype=float)
-        duration = TIME_MARGIN * np.linalg.norm(target - position) / speed + TIME_SLACK
+        duration = margin * np.linalg.norm(target - position) / speed + TIME_SLACK
         index = add(Leg("transit", step_index, "path", "arrive", duration,
                         target=tuple(target), tolerance=1.5))
         path_legs[index] = PathLeg("goto", tuple(target), end_yaw, speed)
@@ -145,7 +150,7 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
 
     for k, step in enumerate(spec.steps):
         if isinstance(step, FollowStep):
-            z = -step.depth
+            z = -step.depth if step.depth is not None else float(position[2])
             if step.start is not None:
                 xy = site.to_local(np.asarray(step.start[:2], dtype=float))
             elif step.mode == "horizontal":
@@ -161,21 +166,22 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
                 side, yaw_offset = (-1 if azimuth > 0 else 1), -azimuth
             add_transit(k, (*xy, z), facing + yaw_offset, TRANSIT_SPEED)
             params = FollowingParams(offset=step.offset, speed=step.speed, side=side,
-                                     yaw_offset=yaw_offset,
+                                     yaw_offset=yaw_offset, corner_weight=step.corner_weight,
+                                     min_depth=step.min_depth_m,
                                      estimator=EstimatorParams(window=step.offset + 3.0))
             params = replace(params, warmup=360.0 / 1.8 / 30.0)  # one turn of the profiler head
             if step.mode == "horizontal":
                 radius = np.linalg.norm(xy - centre)
                 nominal_time = 2 * np.pi * radius * step.loops / step.speed
                 leg = Leg("follow", k, "follow", "loops", step.max_time_s or
-                          TIME_MARGIN * nominal_time + TIME_SLACK, centre=tuple(centre),
+                          margin * nominal_time + TIME_SLACK, centre=tuple(centre),
                           loops=step.loops)
                 config = FollowConfig("horizontal", params, depth_z=z)
             else:
                 plane = np.radians(step.heading_deg or 0.0)
                 distance = step.distance_m or 0.0
                 leg = Leg("follow", k, "follow", "distance", step.max_time_s or
-                          TIME_MARGIN * 3.0 * max(distance, 10.0) / step.speed + TIME_SLACK,
+                          margin * 3.0 * max(distance, 10.0) / step.speed + TIME_SLACK,
                           direction=(np.cos(plane), np.sin(plane)), distance=step.distance_m,
                           end_depth=step.end_depth_m)
                 config = FollowConfig("vertical", params, plane_yaw=plane)
@@ -186,7 +192,7 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             position = np.array([*xy, z])  # where the next transit is planned from
         elif isinstance(step, SurveyStep):
             add_transit(k, nominal.points[0], float(nominal.heading[0]), TRANSIT_SPEED)
-            duration = step.max_time_s or (TIME_MARGIN * nominal.times(survey_speed)[-1]
+            duration = step.max_time_s or (margin * nominal.times(survey_speed)[-1]
                                            + TIME_SLACK)
             if step.replanning:
                 index = add(Leg("survey", k, "replan", "replanner", duration))
@@ -197,7 +203,7 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             position = nominal.points[-1]
     if not legs:
         raise ValueError(f"mission {spec.name!r} has no simulated step (follow or survey)")
-    return MissionPlan(nominal, coverage, omega, offset_metric, tuple(legs), path_legs,
+    return MissionPlan(nominal, coverage, omega, method, tuple(legs), path_legs,
                        follow_legs, tuple(replan_legs), planes, survey_speed,
                        np.asarray(start, float),
                        budget)

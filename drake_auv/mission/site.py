@@ -17,7 +17,7 @@ import trimesh
 
 from drake_auv.mission.config import (FollowStep, MissionFileError, MissionSpec, PlanStep,
                                       SiteSpec)
-from drake_auv.scenarios import Scenario, get_scenario, shift_prior
+from drake_auv.scenarios import Scenario, get_scenario, prior_offset, shift_prior
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import top_surface
 
@@ -41,6 +41,8 @@ class Site:
             or None (the runner chooses).
         max_range: range of the sonars, m.
         scenario: the built-in `Scenario`, or None for a user's files.
+        prior_shift: (2,) the prior map's horizontal error, m (where the map puts things,
+            less where they are).
     """
 
     name: str
@@ -52,6 +54,7 @@ class Site:
     start_state: np.ndarray | None = None
     max_range: float = 20.0
     scenario: Scenario | None = field(default=None, repr=False)
+    prior_shift: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
     def to_local(self, points) -> np.ndarray:
         """(..., 2) or (..., 3) site coordinates -> local (x, y shifted, z unchanged), m."""
@@ -135,7 +138,8 @@ def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
         start = scenario.start_state if spec.start is None else _state(
             spec.start[:3], math.radians(spec.start[3]))
         return Site(spec.scenario, scenario.world, scenario.target_faces, prior, np.zeros(2),
-                    None, start, spec.max_range_m, scenario)
+                    None, start, spec.max_range_m, scenario,
+                    prior_offset(spec.prior_error_m, seed))
     world = _load_mesh(spec.world, "site.world", label)
     lo, hi = world.bounds
     if lo[2] >= 0.0:
@@ -170,7 +174,7 @@ def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
         xyz = np.array([spec.start[0] - origin[0], spec.start[1] - origin[1], spec.start[2]])
         start = _state(xyz, math.radians(spec.start[3]))
     return Site(spec.world.stem, world, target, prior, origin, prior.crs or spec.crs, start,
-                spec.max_range_m)
+                spec.max_range_m, prior_shift=prior_offset(spec.prior_error_m, seed))
 
 
 def _target_faces(world: trimesh.Trimesh, target: trimesh.Trimesh, origin: np.ndarray,
