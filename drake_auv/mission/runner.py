@@ -52,8 +52,14 @@ class MissionResult:
         camera_best, multibeam_best: (T,) best viewing angle per target face, rad, NaN unseen.
         replanning: (k, 6) replanning steps (`replanner.STEP_FIELDS`), planned ones only.
         scan_log: the returns recorded by the mapper; online_map: its final octree.
+        profile: (n, 7) the profile-following controller's `profile` output (NaN rows
+            without a controller; see `perception.controller`), sampled with the state.
+        reference: (n, 8) the tracker's reference.
         completed: whether the supervisor ended the dive (False: the time cap did).
         wall_s: wall time of the simulation, s.
+        diagram_dot: the Diagram's Graphviz text.
+        diagram, handles, context: the simulated Diagram, its `MissionHandles` and the root
+            Context at the end, for inspection.
     """
 
     spec: MissionSpec
@@ -73,8 +79,13 @@ class MissionResult:
     scan_log: ScanLog
     online_map: object
     completed: bool
+    profile: np.ndarray
+    reference: np.ndarray
     wall_s: float
     diagram_dot: str
+    diagram: object = None
+    handles: MissionHandles | None = None
+    context: object = None
 
     @property
     def areas(self) -> np.ndarray:
@@ -151,6 +162,9 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
         steps = steps[np.r_[True, np.diff(steps[:, 0]) != 0] & (steps[:, 5] > 0)]
         replanning = steps
     mapper_context = handles.mapper.GetMyContextFromRoot(context)
+    profile = np.full((len(times), 7), np.nan)
+    if "profile" in logs:
+        profile = logs["profile"].data().T[:len(times)]
     return MissionResult(
         spec, site, plan, times, state, estimated, distance, clearance, leg_at, phases,
         handles.supervisor.outcomes(handles.supervisor.GetMyContextFromRoot(context)),
@@ -158,5 +172,6 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
         handles.multibeam_coverage.best_angles(
             handles.multibeam_coverage.GetMyContextFromRoot(context)),
         replanning, handles.mapper.scan_log(mapper_context),
-        handles.mapper.map_output.Eval(mapper_context), completed, wall,
-        diagram.GetGraphvizString())
+        handles.mapper.map_output.Eval(mapper_context), completed, profile,
+        logs["reference"].data().T[:len(times)].copy(), wall, diagram.GetGraphvizString(),
+        diagram, handles, context)
