@@ -19,19 +19,17 @@ import time
 from dataclasses import replace
 from pathlib import Path as FilePath
 
-import contourpy
 import matplotlib
 import numpy as np
 import trimesh
 from pydrake.systems.analysis import Simulator
-from scipy import ndimage
 from tqdm import tqdm
 
 from drake_auv.diagrams.replanning import build_replanning_diagram
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.vehicle.navigation import NavigationParams
+from drake_auv.planning.contour import nominal_contour
 from drake_auv.planning.path import Path
-from drake_auv.planning.polyline import motion_heading, resample
 from drake_auv.replanning.section import ReplanningParameters
 from drake_auv.scenarios import get_scenario
 from drake_auv.visualization.octree import depth_colours, draw_octree
@@ -43,46 +41,6 @@ from matplotlib.collections import LineCollection  # noqa: E402
 
 CAMERA_APERTURE = np.radians(60.0)  # the reference's payload camera
 VEHICLE_RADIUS = 1.0  # m, GIRONA 500 half-length, the contact threshold
-
-
-def nominal_contour(prior, depth: float, omega: float, block_size: float, start,
-                    spacing: float = 1.0, overrun: float = 7.0) -> Path:
-    """The nominal path planned on the prior map: the offset-Omega contour, at `depth`, of the
-    cross-section of the structure, kept around the right-most block (x beyond its west face
-    less `overrun`, m: the largest expected map error plus 2 m, so both side faces are flown
-    past their ends wherever the error puts the block), flown counter-clockwise (structure to
-    port), with `start` prepended (the transit from the start)."""
-    solid = np.nan_to_num(prior.z, nan=-np.inf) > -depth
-    if not solid.any():
-        raise ValueError(f"the prior map has no structure above {depth} m depth")
-    cell = prior.spacing[0]
-    dist = ndimage.distance_transform_edt(~solid, sampling=(prior.spacing[1], cell))
-    # Solid cell centres lie up to half a cell inside the face: the level compensates.
-    lines = contourpy.contour_generator(prior.x, prior.y, dist).lines(omega + 0.5 * cell)
-    line = max(lines, key=len)
-    xs = prior.x[np.nonzero(solid.any(axis=0))[0]]
-    west = xs.max() + 0.5 * cell - block_size  # the right-most block's west face
-    keep = line[:, 0] >= west - overrun
-    # The kept part is one arc of the loop: roll the loop so it is contiguous.
-    if np.allclose(line[0], line[-1]):
-        line = line[:-1]
-        keep = keep[:-1]
-        first = np.flatnonzero(keep & ~np.roll(keep, 1))
-        if first.size:
-            line, keep = np.roll(line, -first[0], axis=0), np.roll(keep, -first[0])
-    arc = line[keep]
-    # Counter-clockwise around the block: the structure (centre of the arc's chord side) to port.
-    centre = np.array([xs.max() + 0.5 * cell - 0.5 * block_size, arc[:, 1].mean()])
-    rel = arc - centre
-    if np.sum(rel[:-1, 0] * rel[1:, 1] - rel[:-1, 1] * rel[1:, 0]) < 0:
-        arc = arc[::-1]
-    arc = resample(arc, spacing)
-    points = np.column_stack([arc, np.full(len(arc), -depth)])
-    points = np.vstack([np.asarray(start, dtype=float)[:3], points])
-    heading = motion_heading(points)
-    sensor = np.column_stack([-np.sin(heading), np.cos(heading), np.zeros(len(heading))])
-    return Path(points, heading, sensor, "slice")
-
 
 
 def surface_distance(world, faces: np.ndarray):

@@ -20,7 +20,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import yaml
 
@@ -307,9 +307,10 @@ class PlanStep:
         slope_threshold, aperture_deg, overlap, min_area_m2: classification and sensor
             parameters of `plan_coverage` (deg, fraction, m^2); coverage only.
         depth: depth of the contour, m; contour only, required there.
-        end_width_m, end_heading_deg: contour only: keep just the part of the contour within
-            `end_width_m` of the structure's end facing `end_heading_deg` (deg from +x,
-            None: 0), for the end of a long structure (None: the whole closed contour).
+        end_width_m, end_heading_deg, end_overrun_m: contour only: fly around the end of a
+            long structure, `end_width_m` wide, facing `end_heading_deg` (deg from +x, None:
+            0), the contour kept `end_overrun_m` further (None: 7 m, the largest prior error
+            plus 2 m); see `nominal_contour` (end_width_m None: the whole closed contour).
         speed: survey speed, m/s.
     """
 
@@ -325,6 +326,7 @@ class PlanStep:
     depth: float | None = None
     end_width_m: float | None = None
     end_heading_deg: float | None = None
+    end_overrun_m: float | None = None
     speed: float = 0.5
 
 
@@ -431,6 +433,7 @@ _CHECKS = {
         min_area_m2=_Number(0.0, unit="m^2", nullable=True), depth=_DEPTH,
         end_width_m=_Number(0.0, 1000.0, "m", low_open=True, nullable=True),
         end_heading_deg=_Number(-360.0, 360.0, "deg", nullable=True),
+        end_overrun_m=_Number(0.0, 100.0, "m", nullable=True),
         speed=_Number(0.05, 1.4, "m/s")),
     FollowStep: dict(
         mode=_Choice(("horizontal", "vertical")), offset=_Number(0.0, 20.0, "m", low_open=True),
@@ -581,7 +584,7 @@ def _plan_rule(reader: _Reader, v: dict, where: str):
     if contour and v["depth"] is None:
         reader.fail(f"{where}.depth", "missing (required by method contour)",
                     _CHECKS[PlanStep]["depth"].allowed)
-    only = ("depth", "end_width_m", "end_heading_deg") if not contour else (
+    only = ("depth", "end_width_m", "end_heading_deg", "end_overrun_m") if not contour else (
         "slice_count", "slice_spacing", "min_area_m2")
     for key in only:
         if v[key] is not None:
@@ -683,6 +686,9 @@ def _set(raw: dict, parts: list[str], value, label: str):
             return
         if rest[1] != kind:
             fail(2, f"step {index} is a {kind} step", [kind])
+        if len(rest) == 2:
+            steps[index] = {kind: value}
+            return
         if isinstance(step, str) or step[kind] is None:
             step = steps[index] = {kind: {}}
         node, keys, offset = step[kind], _CHECKS[STEP_KINDS[kind]], 3

@@ -83,7 +83,8 @@ def _state(xyz, yaw: float) -> np.ndarray:
 
 
 def _load_mesh(path, where: str, label: str) -> trimesh.Trimesh:
-    """A mesh file as one finite, non-empty Trimesh (a Scene is concatenated)."""
+    """A mesh file as one finite, non-empty Trimesh (a Scene is concatenated; coordinates as
+    stored, z up, also for GLB, whose convention is y up)."""
     if not path.is_file():
         raise MissionFileError(label, where, f"{path.name} not found ({path})",
                                "an existing PLY, OBJ, STL or GLB mesh file")

@@ -1,0 +1,130 @@
+"""Sites: built-in scenarios and a user's own files in UTM, in the local frame."""
+
+import numpy as np
+import pytest
+import trimesh
+import yaml
+
+from drake_auv.mission.config import MissionFileError, load_mission
+from drake_auv.mission.site import check_against_site, load_site
+from drake_auv.scenarios import get_scenario, shift_prior
+from sites import BOX_CENTRE, BOX_SIZE, CRS, LOCAL_ORIGIN, SEABED_Z, utm_prior, write_utm_site
+
+
+def _mission(path, **site):
+    raw = yaml.safe_load(path.read_text())
+    raw["site"].update(site)
+    path.write_text(yaml.safe_dump(raw))
+    return load_mission(path)
+
+
+def test_builtin_site_is_the_scenario():
+    spec = load_mission("boulder")
+    site = load_site(spec.site, spec.seed)
+    scenario = get_scenario("boulder")
+    assert site.name == "boulder" and site.scenario is not None and site.crs is None
+    np.testing.assert_array_equal(site.origin, [0.0, 0.0])
+    np.testing.assert_array_equal(site.target_faces, scenario.target_faces)
+    np.testing.assert_array_equal(site.start_state, scenario.start_state)
+    expected = scenario.prior_map(3.0, spec.seed)
+    assert site.prior.origin == expected.origin and site.max_range == 20.0
+    check_against_site(spec, site)  # the built-in missions fit their sites
+    for name in ("breakwater", "pool", "c_object"):
+        other = load_mission(name)
+        check_against_site(other, load_site(other.site, other.seed))
+
+
+def test_user_site_in_utm(tmp_path):
+    spec = load_mission(write_utm_site(tmp_path))
+    site = load_site(spec.site, seed=spec.seed, label="mission.yaml")
+    np.testing.assert_array_equal(site.origin, LOCAL_ORIGIN)
+    assert site.crs == CRS and site.scenario is None and site.start_state is None
+    lo, hi = site.world.bounds
+    assert np.all(np.abs(lo[:2]) <= 30.0) and np.all(np.abs(hi[:2]) <= 30.0)  # small and local
+    assert lo[2] == pytest.approx(-20.5) and hi[2] == pytest.approx(-14.5)  # z unchanged
+    # the prior: the raster in the local frame, shifted by the seeded 2 m error
+    unshifted = utm_prior()
+    expected = shift_prior(unshifted, 2.0, spec.seed)
+    shift = np.subtract(expected.origin, unshifted.origin)
+    assert np.hypot(*shift) == pytest.approx(2.0)
+    np.testing.assert_allclose(site.prior.origin, np.subtract(unshifted.origin, LOCAL_ORIGIN)
+                               + shift, atol=1e-6)
+    np.testing.assert_allclose(site.prior.z, unshifted.z)
+    np.testing.assert_allclose(site.prior.world_to_crs([[0.0, 0.0]]), [LOCAL_ORIGIN])
+    other = load_site(spec.site, seed=1)
+    assert not np.allclose(other.prior.origin, site.prior.origin)
+    # site <-> local
+    p = np.array([[500003.25, 4600001.5, -17.0], [499980.0, 4599990.0, -20.0]])
+    local = site.to_local(p)
+    np.testing.assert_allclose(local[0], [3.25, 1.5, -17.0])
+    np.testing.assert_array_equal(site.to_site(local), p)
+    np.testing.assert_array_equal(site.to_site(site.to_local(p[0, :2])), p[0, :2])
+    # the target faces are the cube's (12 triangles, 6 m sides)
+    assert site.target_faces.sum() == 12
+    centroids = site.world.triangles_center[site.target_faces]
+    np.testing.assert_allclose(centroids.mean(axis=0), site.to_local(BOX_CENTRE), atol=1e-9)
+    assert site.target_mesh.area == pytest.approx(6 * BOX_SIZE**2)
+    check_against_site(spec, site)
+
+
+def test_user_site_without_target_or_prior(tmp_path):
+    path = write_utm_site(tmp_path)
+    spec = _mission(path, target=None, prior=None, prior_error_m=0.0, prior_spacing_m=2.0,
+                    crs=CRS, start=[499990.0, 4600000.0, -10.0, 90.0])
+    site = load_site(spec.site, seed=0)
+    assert site.target_faces.all() and site.crs == CRS
+    assert site.prior.spacing == (2.0, 2.0)
+    assert np.nanmax(site.prior.z) == pytest.approx(-14.5)
+    assert np.nanmin(site.prior.z) == pytest.approx(SEABED_Z)
+    np.testing.assert_allclose(site.start_state[[0, 1, 2, 5]], [-10.0, 0.0, -10.0, np.pi / 2])
+
+
+@pytest.mark.parametrize("change, message", [
+    (dict(world="gone.ply"), "mission.yaml: site.world: gone.ply not found"),
+    (dict(target="gone.ply"), "site.target: gone.ply not found"),
+    (dict(prior="gone.tif"), "site.prior: gone.tif not found"),
+    (dict(target="far.ply"), "site.target: no face of the world lies on far.ply"),
+    (dict(world="land.ply"), "site.world: land.ply lies entirely above the sea surface"),
+    (dict(world="empty.ply"), "site.world: empty.ply is not a readable mesh"),
+    (dict(crs="EPSG:32630"), "site.crs: EPSG:32630 differs from the prior raster's EPSG:32631"),
+])
+def test_bad_site_files(tmp_path, change, message):
+    path = write_utm_site(tmp_path)
+    far = trimesh.creation.box(extents=(2, 2, 2))
+    far.apply_translation([510000.0, 4600000.0, -19.0])
+    far.export(tmp_path / "far.ply")
+    land = trimesh.creation.box(extents=(2, 2, 2))
+    land.apply_translation([500000.0, 4600000.0, 5.0])
+    land.export(tmp_path / "land.ply")
+    (tmp_path / "empty.ply").write_text("")
+    spec = _mission(path, **change)
+    with pytest.raises(MissionFileError) as info:
+        load_site(spec.site, seed=0, label=path.name)
+    assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_mission_values_only_the_site_can_judge(tmp_path):
+    path = write_utm_site(tmp_path)
+    site = load_site(load_mission(path).site, seed=0)
+
+    def error(*overrides) -> str:
+        spec = load_mission(path, overrides=overrides)
+        with pytest.raises(MissionFileError) as info:
+            check_against_site(spec, site)
+        assert "\n" not in str(info.value)
+        return str(info.value)
+
+    follow = "steps.1={follow: {mode: horizontal, depth: 25, offset: 3}}"
+    assert error(follow) == ("mission.yaml: steps[1].follow.depth: 25 m is below the seabed "
+                             "(20.0 m under the structure); allowed: (0, 20.0) m")
+    assert "steps[1].follow.start: (600000, 4.6e+06) is outside the world; allowed: x in " \
+           "[499970.0, 500030.0]" in error(
+               "steps.1={follow: {mode: horizontal, depth: 15, offset: 3, start: [600000, "
+               "4600000]}}")
+    assert "steps[0].plan.omega: 25 m leaves no water" in error("steps.0.plan.omega=25")
+    assert "site.start: z = -25 m is not in the water; allowed: z in (-20.0, 0) m there" in error(
+        "site.start=[499990, 4600000, -25, 0]")
+    assert "steps[0].plan.depth: 22 m cuts no structure" in error(
+        "steps.0.plan={method: contour, omega: 3, depth: 22}")
+    load_mission(path, overrides=[follow.replace("25", "16")])  # above the seabed: fine
+    check_against_site(load_mission(path, overrides=[follow.replace("25", "16")]), site)
