@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle, _decode
+from drake_auv.mapping.octree_map import OctreeMap, _decode
 
 
 def _fan(n=480, aperture=np.radians(120.0), tilt=0.0):
@@ -86,11 +86,6 @@ def test_kdtree_is_rebuilt_only_when_the_map_changed():
     assert omap.kdtree is tree
     omap.insert_scan(np.zeros(3), d, np.full(len(d), 8.0), 20.0)
     assert omap.kdtree is not tree
-
-
-def test_handle_deepcopy_shares_the_map():
-    handle = OctreeMapHandle(OctreeMap(resolution=0.5))
-    assert copy.deepcopy(handle).map is handle.map
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -1,23 +1,19 @@
-"""OctreeMapper and Replanner as Drake systems, alone and in the breakwater diagram."""
+"""The OctreeMapper and the Replanner as Drake systems: all their state in the Context, each
+Context its own map, the nominal plan through a port, the replanner's steps as an output."""
 
 import copy
-import sys
-from pathlib import Path as FilePath
 
 import numpy as np
 import pytest
 from pydrake.common.value import AbstractValue
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.diagrams.replanning import build_replanning_diagram
-from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle
-from drake_auv.scenarios import get_scenario
+from drake_auv.mapping.mapper import OctreeMapper, OnlineMap
+from drake_auv.mapping.octree_map import OctreeMap
+from drake_auv.mapping.scan_log import ScanBatch, ScanLog
+from drake_auv.planning.path import Path
+from drake_auv.replanning.replanner import STEP_FIELDS, Replanner
 from drake_auv.sonar.returns import SonarReturns
-from drake_auv.mapping.mapper import OctreeMapper
-from drake_auv.replanning.replanner import Replanner
-
-sys.path.insert(0, str(FilePath(__file__).resolve().parents[1] / "examples"))
-from breakwater_replanning import nominal_contour  # noqa: E402
 
 
 def _wall_returns(sequence, x_wall=8.0):
@@ -29,20 +25,65 @@ def _wall_returns(sequence, x_wall=8.0):
                         20.0, sequence)
 
 
-def test_mapper_inserts_each_update_once_and_shares_the_map():
+def test_mapper_records_each_update_once_and_maps_it():
     mapper = OctreeMapper(resolution=0.5, period=0.1, multibeam_stride=1)
     context = mapper.CreateDefaultContext()
     mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(1)))
     simulator = Simulator(mapper, context)
     simulator.AdvanceTo(0.35)  # four updates, one new scan
-    omap = mapper.octree_map
-    assert omap.num_scans == 1
-    handle = mapper.map_output.Eval(context)
-    assert handle.map is omap and copy.deepcopy(handle).map is omap
-    assert np.all(np.abs(omap.occupied_points()[:, 0] - 8.0) <= 0.5)
-    mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(2)))
+    assert mapper.scan_log(context).count == 1
+    online = mapper.map_output.Eval(context)
+    assert online.map.num_scans == 1
+    assert np.all(np.abs(online.map.occupied_points()[:, 0] - 8.0) <= 0.5)
+    mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(2, 9.0)))
     simulator.AdvanceTo(0.55)
-    assert omap.num_scans == 2
+    again = mapper.map_output.Eval(context)
+    assert again is online and again.map.num_scans == 2  # caught up, not rebuilt
+    assert mapper.scan_log_output.Eval(context).count == 2
+
+
+def test_each_context_has_its_own_map():
+    mapper = OctreeMapper(resolution=0.5)
+    first, second = mapper.CreateDefaultContext(), mapper.CreateDefaultContext()
+    for context in (first, second):
+        mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(1)))
+    Simulator(mapper, first).AdvanceTo(0.25)
+    assert len(mapper.map_output.Eval(first).map.occupied_points()) > 0
+    assert mapper.scan_log(second).count == 0
+    assert len(mapper.map_output.Eval(second).map.occupied_points()) == 0
+    # A copy of an advanced Context rebuilds the same map from its log, sharing nothing.
+    clone = first.Clone()
+    copied = mapper.map_output.Eval(clone)
+    assert copied is not mapper.map_output.Eval(first)
+    np.testing.assert_array_equal(np.sort(copied.map.occupied_points(), axis=0),
+                                  np.sort(mapper.map_output.Eval(first).map.occupied_points(),
+                                          axis=0))
+
+
+def test_scan_log_versions_are_immutable_and_share_their_past():
+    batch = ScanBatch.make(0.0, "profiler", np.zeros(3), [[1.0, 0.0, 0.0]], [4.0], 20.0)
+    empty = ScanLog()
+    one = empty.append(batch)
+    two = one.append(batch)
+    assert copy.deepcopy(two) is two and empty.count == 0 and two.parent is one
+    assert two.since(one) == [batch] and len(two.batches()) == 2
+    assert one.since(two) is None  # not its past: a consumer must start again
+    with pytest.raises(ValueError):
+        batch.ranges[0] = 1.0
+    np.testing.assert_allclose(batch.points(), [[4.0, 0.0, 0.0]])
+
+
+def test_online_map_copy_rebuilds_its_own_octree():
+    online = OnlineMap(0.5)
+    log = ScanLog().append(ScanBatch.make(0.0, "multibeam", np.zeros(3),
+                                          _wall_returns(1).directions_nav,
+                                          _wall_returns(1).ranges, 20.0))
+    online.catch_up(log)
+    clone = copy.deepcopy(online)
+    assert clone.map is not online.map and clone.version is log
+    assert len(clone.map.occupied_points()) == len(online.map.occupied_points()) > 0
+    online.catch_up(log.append(log.batch))
+    assert clone.map.num_scans == 1 and online.map.num_scans == 2
 
 
 def test_mapper_rejects_bad_parameters():
@@ -50,16 +91,25 @@ def test_mapper_rejects_bad_parameters():
         OctreeMapper(period=0.0)
     with pytest.raises(ValueError, match="multibeam_stride"):
         OctreeMapper(multibeam_stride=0)
+    with pytest.raises(ValueError, match="resolution"):
+        OctreeMapper(resolution=0.0)
+
+
+def _replanner_context(replanner, waypoints, state):
+    context = replanner.CreateDefaultContext()
+    replanner.state_input.FixValue(context, state)
+    replanner.map_input.FixValue(context, AbstractValue.Make(OnlineMap(0.5)))
+    replanner.nominal_input.FixValue(context, AbstractValue.Make(
+        Path(waypoints, 0.0, (0.0, 1.0, 0.0))))
+    return context
 
 
 def test_replanner_flies_towards_the_waypoints_at_survey_speed():
     waypoints = np.stack([np.arange(1.0, 11.0), np.zeros(10), np.full(10, -5.0)], axis=1)
-    replanner = Replanner(waypoints, speed=0.5, period=1.0)
-    context = replanner.CreateDefaultContext()
+    replanner = Replanner(speed=0.5, period=1.0)
     state = np.zeros(12)
     state[2] = -5.0
-    replanner.state_input.FixValue(context, state)
-    replanner.map_input.FixValue(context, AbstractValue.Make(OctreeMapHandle(OctreeMap(0.5))))
+    context = _replanner_context(replanner, waypoints, state)
     simulator = Simulator(replanner, context)
     simulator.AdvanceTo(0.5)
     ref = replanner.reference_output.Eval(context)
@@ -67,43 +117,41 @@ def test_replanner_flies_towards_the_waypoints_at_survey_speed():
     assert ref[:3] == pytest.approx([0.25, 0.0, -5.0], abs=1e-6)
     assert ref[4:7] == pytest.approx([0.5, 0.0, 0.0], abs=1e-6)
     assert ref[3] == pytest.approx(0.0, abs=1e-9)
-    assert len(replanner.log) == 1 and replanner.log[0].plan.indices.tolist() == [0, 1, 2, 3]
+    assert replanner.section(context).indices.tolist() == [0, 1, 2, 3]
+    step = dict(zip(STEP_FIELDS, replanner.step_output.Eval(context)))
+    assert step["planned"] == 1.0 and step["time"] == 0.0 and step["wall_time"] > 0
+    assert replanner.status_output.Eval(context).tolist() == [0.0, 0.0, 0.0]
+
+
+def test_replanner_reports_the_leg_finished_after_the_last_waypoint():
+    waypoints = np.array([[1.0, 0.0, -5.0], [2.0, 0.0, -5.0]])
+    replanner = Replanner(speed=0.5, period=1.0)
+    state = np.zeros(12)
+    state[:3] = (2.0, 0.0, -5.0)
+    context = _replanner_context(replanner, waypoints, state)
+    Simulator(replanner, context).AdvanceTo(12.0)
+    leg, finished, next_index = replanner.status_output.Eval(context)
+    assert (leg, finished, next_index) == (0.0, 1.0, 2.0)
+
+
+def test_replanner_does_nothing_on_legs_it_does_not_fly():
+    waypoints = np.array([[5.0, 0.0, -5.0]])
+    replanner = Replanner(legs=(1,))
+    context = _replanner_context(replanner, waypoints, np.zeros(12))
+    replanner.leg_input.FixValue(context, [0.0, 0.0])
+    Simulator(replanner, context).AdvanceTo(3.0)
+    assert replanner.section(context) is None
+    assert replanner.status_output.Eval(context)[0] == -1.0
+    replanner.leg_input.FixValue(context, [1.0, 3.0])
+    Simulator(replanner, context).AdvanceTo(4.0)
+    assert replanner.section(context) is not None
 
 
 def test_replanner_rejects_bad_parameters():
-    with pytest.raises(ValueError, match="waypoints"):
-        Replanner(np.zeros((0, 3)))
     with pytest.raises(ValueError, match="speed"):
-        Replanner(np.zeros((2, 3)), speed=0.0)
+        Replanner(speed=0.0)
     with pytest.raises(ValueError, match="period"):
-        Replanner(np.zeros((2, 3)), period=100.0)
-
-
-def test_breakwater_replanning_keeps_the_offset_without_contact():
-    scenario = get_scenario("breakwater")
-    p = scenario.params
-    prior = scenario.prior_map(error_m=4.0, seed=2)
-    nominal = nominal_contour(prior, p["depth"], p["omega"], p["block_size"],
-                              scenario.start_state[:3])
-    diagram, handles = build_replanning_diagram(scenario.world, nominal, scenario.start_state,
-                                                speed=p["speed"], seed=0)
-    simulator = Simulator(diagram)
-    simulator.AdvanceTo(90.0)
-    context = simulator.get_context()
-    xyz = handles.state_log.FindLog(context).data()[:3].T
-    # Horizontal distance to the row of blocks (the right-most centred on the origin).
-    pitch = p["block_size"] + p["block_gap"]
-    centres = -pitch * np.arange(20)
-    q = np.abs(np.stack([xyz[:, None, 0] - centres, np.broadcast_to(xyz[:, None, 1],
-                                                                    (len(xyz), 20))], axis=2))
-    distance = np.linalg.norm(np.maximum(q - p["block_size"] / 2, 0.0), axis=2).min(axis=1)
-    assert distance.min() > 1.0 + 2.0  # vehicle radius plus a margin
-    # Once at the block (after the transit from the start), the offset Omega is kept.
-    near = distance < 12.0
-    assert near.sum() > 300
-    assert abs(distance[near][100:].mean() - p["omega"]) < 1.0
-    assert len(handles.mapper.octree_map.occupied_points()) > 500
-    assert len(handles.replanner.log) == 90  # at initialisation, then at 1, 2, ..., 89 s
+        Replanner(period=100.0)
 
 
 def test_octree_is_drawn_as_one_point_cloud():
@@ -113,8 +161,7 @@ def test_octree_is_drawn_as_one_point_cloud():
 
     meshcat = Meshcat(MeshcatParams(host="localhost"))
     omap = OctreeMap(0.5)
-    r = _wall_returns(1)
-    omap.insert_returns(r)
+    omap.insert_returns(_wall_returns(1))
     assert draw_octree(meshcat, "/drake_auv/octree", omap) == len(omap.occupied_points()) > 0
     assert meshcat.HasPath("/drake_auv/octree")
     colours = depth_colours(np.array([-10.0, -5.0, 0.0]))

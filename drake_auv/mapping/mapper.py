@@ -5,9 +5,9 @@ All of it lives in the Context. The state is the log of the returns received so 
 history is its own), written at `period` by an unrestricted update. The `map` output is the
 octree of that log: an `OnlineMap` held in the output port's cache, which is per Context.
 Evaluating it brings the octree up to the Context's log by inserting only the batches it has
-not seen (OctoMap insertion is incremental); a cache that cannot (a fresh copy of the Context,
-or a log that is not its future) rebuilds from the whole log. So two Contexts of one diagram
-never share a map, and copying one costs a rebuild, not a shared mutable object.
+not seen (OctoMap insertion is incremental), or rebuilds from the whole log when the log is
+not its future (a state set by hand). Copying a Context rebuilds its octree from the log
+(`OnlineMap.__deepcopy__`). So two Contexts of one diagram never share a map.
 
 Ports: inputs `multibeam_returns`, `profiler_returns` (`SonarReturns`; either may be left
 unconnected); outputs `map` (`OnlineMap`) and `scan_log` (`ScanLog`, the recorded returns).
@@ -27,8 +27,8 @@ from drake_auv.sonar.returns import SonarReturns
 class OnlineMap:
     """The octree of a `ScanLog` up to `version` (None: nothing inserted yet).
 
-    A cache value: its deep copy is an empty map of the same resolution, which the next
-    evaluation of the `map` port rebuilds from the log, never a second owner of this octree.
+    A cache value: its deep copy (a Context's copy) rebuilds the octree from the same log
+    version, so the copy holds an equal map of its own, never a second owner of this one.
     """
 
     def __init__(self, resolution: float):
@@ -36,7 +36,10 @@ class OnlineMap:
         self.version: ScanLog | None = None
 
     def __deepcopy__(self, memo):
-        return OnlineMap(self.map.resolution)
+        clone = OnlineMap(self.map.resolution)
+        if self.version is not None:
+            clone.catch_up(self.version)
+        return clone
 
     def catch_up(self, log: ScanLog) -> None:
         """Inserts the batches of `log` this map has not seen (all of them if its version is
