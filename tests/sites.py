@@ -6,7 +6,7 @@ near 4600 km, z up, sea surface z = 0):
   top at -14.5 m), centred at (BOX_CENTRE);
 - target.ply: the cube alone;
 - prior.tif: a 1 m GeoTIFF of the same site seen from above;
-- mission.yaml: a plan + survey mission on those files, capped at 60 s of simulated time;
+- mission.yaml: a plan, follow and survey mission on those files, capped at 90 s simulated;
 and returns the mission file's path.
 """
 
@@ -65,8 +65,10 @@ def write_utm_site(tmp_path) -> Path:
         navigation=dict(heading_bias_deg=1.0, dvl_scale_error=0.01, random_walk=0.02),
         sonar_noise="clean", replanner=dict(optimizer="stomp", R=5.0, K=10),
         payload=dict(multibeam_mount="port", camera_range_m=12),
-        limits=dict(max_time_s=60.0),
-        steps=[dict(plan=dict(omega=3.0, slice_count=1)), dict(survey=dict(replanning=True))])
+        limits=dict(max_time_s=90.0),
+        steps=[dict(plan=dict(omega=3.0, slice_count=1)),
+               dict(follow=dict(mode="horizontal", depth=17.0, offset=3.0, loops=0.5)),
+               dict(survey=dict(replanning=True))])
     path = folder / "mission.yaml"
     path.write_text(yaml.safe_dump(mission, sort_keys=False))
     return path

@@ -1,74 +1,184 @@
-"""The all-together boulder mission: short runs of the real pipeline (plan, profile following,
-replanning), its report and recording, and its determinism."""
+"""One mission Diagram: the supervisor flies every step in one dive, on built-in sites and on
+a user's own files, deterministically, and bad mission files get one clear line."""
 
 import base64
+import csv
 import json
 import re
 
 import numpy as np
 import pytest
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import InputPortIndex
 
 from drake_auv.cli import main
-from drake_auv.mission import VEHICLE_RADIUS, MissionConfig, run_mission
-from drake_auv.mission_report import angle_stats, summarise
+from drake_auv.mission.config import load_mission
+from drake_auv.mission.diagram import build_mission_diagram
+from drake_auv.mission.legs import Leg
+from drake_auv.mission.report import summarise
+from drake_auv.mission.runner import run_mission
+from drake_auv.mission.site import load_site
+from drake_auv.mission.supervisor import MissionSupervisor
+from sites import LOCAL_ORIGIN, write_utm_site
 
-SHORT = dict(follow_loops=0.2, replan_time=80.0)
+# The boulder mission cut short: the transit, most of the loop of profile following.
+SHORT_BOULDER = ["limits.max_time_s=150", "steps.1.follow.loops=0.5"]
 
 
-def test_demo_writes_report_figures_and_recording(tmp_path):
-    out = tmp_path / "demo"
-    assert main(["demo", "--out", str(out), "--follow-loops", "0.2", "--replan-time", "80",
-                 "--quiet"]) == 0
-    for name in ("report.md", "report.json", "plan.png", "coverage.png", "distance.png"):
-        assert (out / name).stat().st_size > 1000, name
-    html = (out / "mission.html").read_text()
-    commands = [base64.b64decode(b64) for b64 in re.findall(
-        r'data:application/octet-binary;base64,([A-Za-z0-9+/=]+)"', html)]
-    animation = [c for c in commands if b"set_animation" in c]
-    assert len(animation) == 1 and b"/drake_auv/vehicle" in animation[0]
-    # Both dives left a trail, and the end-of-mission layers are in the scene.
-    assert b"/drake_auv/vehicle_trail/0" in b"".join(commands)
-    assert b"/drake_auv/vehicle_trail/1" in b"".join(commands)
-    assert any(b"/drake_auv/coverage" in c for c in commands)
-    assert any(b"/drake_auv/octree" in c for c in commands)
-    summary = json.loads((out / "report.json").read_text())
-    r = summary["results"]
-    assert r["plan"]["high_slope_regions"] == 1
-    assert r["plan"]["length_by_label_m"]["slice"] > 100.0
-    assert not r["mission"]["contact"]
-    assert r["mission"]["clearance_min_m"] > VEHICLE_RADIUS
-    # Navigation drifts (compass bias, DVL scale error): the dive ends with a position error.
-    assert 0.1 < r["replan"]["navigation_error_max_m"] < 5.0
-    # The profile-following dive has started to image the boulder; the report says so.
-    assert 0.02 < r["profile"]["camera_coverage"] < 1.0
-    assert "Whole mission" in (out / "report.md").read_text()
+@pytest.fixture(scope="module")
+def boulder_run():
+    spec = load_mission("boulder", overrides=SHORT_BOULDER)
+    return run_mission(spec, progress=False)
+
+
+def test_one_dive_carries_vehicle_navigation_and_map_across_legs(boulder_run):
+    result = boulder_run
+    names = [p.name for p in result.phases]
+    assert names[:2] == ["transit", "follow"]
+    follow = next(p for p in result.phases if p.name == "follow")
+    assert result.outcomes[0] == "goal" and follow.start_s > 5.0
+    # One dive: the vehicle never jumps, the navigation error keeps growing across the legs.
+    step = np.linalg.norm(np.diff(result.state[:, :3], axis=0), axis=1)
+    assert step.max() < 0.2  # 0.1 s samples at <= 1.4 m/s
+    error = np.linalg.norm(result.estimated[:, :3] - result.state[:, :3], axis=1)
+    at_follow = np.searchsorted(result.times, follow.start_s)
+    assert error[at_follow] > 0.05 and error[-1] > error[at_follow]
+    # The map is fed from t = 0 by both sonars, the profiler through the following leg.
+    sources = {b.source for b in result.scan_log.batches()}
+    assert sources == {0, 1}
+    assert len(result.online_map.map.occupied_points()) > 100
+    # Profile following holds its offset once it found the boulder.
+    settled = (result.times > follow.start_s + 40.0) & (result.times < follow.end_s)
+    assert np.all(np.abs(result.distance[settled] - 3.0) < 1.5)
+    assert result.clearance.min() > 1.0
+
+
+def test_unselected_behaviours_do_no_work(boulder_run):
+    # No survey leg flew: the replanner never planned; the controller only on its leg.
+    assert len(boulder_run.replanning) == 0
+    follow = next(p for p in boulder_run.phases if p.name == "follow")
+    during = (boulder_run.times >= follow.start_s) & (boulder_run.times < follow.end_s)
+    valid = boulder_run.profile[:, 5] == 1.0
+    assert valid[during].any() and not valid[boulder_run.times < follow.start_s - 1.0].any()
+
+
+def test_two_contexts_of_one_diagram_have_their_own_maps():
+    spec = load_mission("boulder")
+    site = load_site(spec.site, spec.seed)
+    diagram, handles = build_mission_diagram(site, spec)
+    mapper = handles.mapper
+    flown, untouched = diagram.CreateDefaultContext(), diagram.CreateDefaultContext()
+    Simulator(diagram, flown).AdvanceTo(3.0)
+    fed = mapper.map_output.Eval(mapper.GetMyContextFromRoot(flown))
+    assert len(fed.map.occupied_points()) > 0
+    other = mapper.GetMyContextFromRoot(untouched)
+    assert mapper.scan_log(other).count == 0
+    assert len(mapper.map_output.Eval(other).map.occupied_points()) == 0
 
 
 def test_same_seed_same_numbers_and_the_seed_matters():
-    first = summarise(run_mission(MissionConfig(seed=3, **SHORT), progress=False))["results"]
-    again = summarise(run_mission(MissionConfig(seed=3, **SHORT), progress=False))["results"]
-    assert json.dumps(first) == json.dumps(again)  # as report.json writes them (NaN too)
-    other = summarise(run_mission(MissionConfig(seed=4, **SHORT), progress=False))["results"]
-    assert other["plan"] != first["plan"]  # another prior-map error, another plan
+    overrides = ["limits.max_time_s=40"]
+
+    def numbers(seed):
+        summary = summarise(run_mission(load_mission("breakwater", seed=seed,
+                                                     overrides=overrides), progress=False))
+        summary.pop("timing")
+        return json.dumps(summary)
+
+    first = numbers(3)
+    assert numbers(3) == first
+    assert numbers(4) != first  # another prior-map error and drift
 
 
-def test_profile_following_holds_its_offset_in_the_mission():
-    result = run_mission(MissionConfig(follow_loops=0.3, replan_time=5.0), progress=False)
-    profile = result.phases[0]
-    settled = profile.times > profile.times[0] + 30.0  # after the approach
-    assert np.all(np.abs(profile.distance[settled] - 3.0) < 1.5)
-    assert profile.clearance.min() > VEHICLE_RADIUS
+def test_supervisor_sequences_legs_switches_and_terminates():
+    legs = (Leg("transit", 0, "path", "arrive", 100.0, target=(0.0, 0.0, -5.0)),
+            Leg("survey", 1, "replan", "replanner", 100.0))
+    supervisor = MissionSupervisor(legs, {"path": 0, "replan": 1})
+    context = supervisor.CreateDefaultContext()
+    state = np.zeros(12)
+    state[2] = -5.0
+    supervisor.state_input.FixValue(context, state)
+    supervisor.path_status_input.FixValue(context, [0.0, 2.0])  # leg 0's path ends at 2 s
+    supervisor.replanner_status_input.FixValue(context, [-1.0, 0.0, 0.0])
+    simulator = Simulator(supervisor, context)
+    simulator.AdvanceTo(1.0)
+    assert supervisor.leg_output.Eval(context).tolist() == [0.0, 0.0]
+    assert supervisor.behaviour_output.Eval(context) == InputPortIndex(0)
+    simulator.AdvanceTo(2.6)
+    assert supervisor.leg_output.Eval(context).tolist() == [1.0, 2.0]
+    assert supervisor.behaviour_output.Eval(context) == InputPortIndex(1)
+    supervisor.replanner_status_input.FixValue(context, [1.0, 1.0, 9.0])
+    simulator.set_monitor(supervisor.monitor)
+    status = simulator.AdvanceTo(50.0)
+    assert status.reason() == status.ReturnReason.kReachedTerminationCondition
+    assert context.get_time() < 4.0 and supervisor.outcomes(context) == ["goal", "goal"]
 
 
-def test_angle_stats_weight_by_area():
-    best = np.radians([10.0, 30.0, np.nan])
-    mean, sd = angle_stats(best, np.array([3.0, 1.0, 5.0]))
-    assert mean == pytest.approx(15.0) and sd == pytest.approx(np.sqrt(75.0))
+def test_a_leg_that_never_arrives_times_out():
+    legs = (Leg("transit", 0, "path", "arrive", 3.0, target=(50.0, 0.0, -5.0)),)
+    supervisor = MissionSupervisor(legs, {"path": 0})
+    context = supervisor.CreateDefaultContext()
+    supervisor.state_input.FixValue(context, np.zeros(12))
+    supervisor.path_status_input.FixValue(context, [0.0, 1.0])
+    simulator = Simulator(supervisor, context)
+    simulator.set_monitor(supervisor.monitor)
+    simulator.AdvanceTo(20.0)
+    assert supervisor.outcomes(context) == ["timed out"] and 3.0 <= context.get_time() <= 3.5
 
 
-@pytest.mark.parametrize("field, value", [("prior_error_m", 6.0), ("omega", 0.0),
-                                          ("slice_count", 0), ("follow_depth", 50.0),
-                                          ("replan_time", -1.0), ("seed", -1)])
-def test_bad_configuration_is_named(field, value):
-    with pytest.raises(ValueError, match=field):
-        MissionConfig(**{field: value})
+def test_a_mission_on_the_users_own_files_in_utm(tmp_path):
+    mission = write_utm_site(tmp_path)
+    out = tmp_path / "out"
+    assert main(["run", str(mission), "-o", str(out), "--quiet", "--no-html"]) == 0
+    summary = json.loads((out / "report.json").read_text())
+    for key in ("multibeam", "camera"):
+        assert 0.0 <= summary["coverage"][key] <= 1.0
+    assert summary["coverage"]["multibeam"] > 0.05
+    assert summary["contact"] is False and summary["min_clearance_m"] > 1.0
+    assert {"mean_m", "sd_m", "min_m", "map_mean_m"} <= set(summary["distance_to_target"])
+    assert [p["name"] for p in summary["phases"]][:2] == ["transit", "follow"]
+    assert all(p["start_s"] <= p["end_s"] for p in summary["phases"])
+    with open(out / "trajectory.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0]) == ["t", "x", "y", "z", "roll", "pitch", "yaw", "est_x", "est_y",
+                             "est_z"]
+    east = np.array([float(r["x"]) for r in rows])
+    assert np.all(np.abs(east - LOCAL_ORIGIN[0]) < 100.0)  # back in UTM eastings
+    assert "mission_supervisor" in (out / "diagram.dot").read_text()
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda raw: raw.update(colour="red"), "colour"),
+    (lambda raw: raw["steps"].insert(0, {"survey": {"replanning": True}}), "steps"),
+    (lambda raw: raw["steps"].append({"follow": {"mode": "horizontal", "offset": -1.0,
+                                                  "depth": 15.0}}), "offset"),
+    (lambda raw: raw["steps"].append({"follow": {"mode": "horizontal", "offset": 2.0,
+                                                  "depth": 45.0}}), "seabed"),
+    (lambda raw: raw["site"].update(world="missing.ply"), "missing.ply"),
+])
+def test_bad_mission_files_exit_with_one_line(tmp_path, capsys, change, message):
+    import yaml
+
+    mission = write_utm_site(tmp_path)
+    raw = yaml.safe_load(mission.read_text())
+    change(raw)
+    mission.write_text(yaml.safe_dump(raw))
+    assert main(["run", str(mission), "-o", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err and "Traceback" not in err
+
+
+def test_demo_writes_every_output(tmp_path):
+    out = tmp_path / "demo"
+    assert main(["demo", "-o", str(out), "--quiet", "--set", "limits.max_time_s=30"]) == 0
+    for name in ("report.md", "report.json", "plan.png", "coverage.png", "distance.png",
+                 "trajectory.csv", "diagram.dot", "mission.html"):
+        assert (out / name).stat().st_size > 500, name
+    html = (out / "mission.html").read_text()
+    commands = b"".join(base64.b64decode(b64) for b64 in re.findall(
+        r'data:application/octet-binary;base64,([A-Za-z0-9+/=]+)"', html))
+    for layer in (b"/drake_auv/world", b"/drake_auv/nominal_path", b"/drake_auv/vehicle",
+                  b"/drake_auv/vehicle_trail/0", b"/drake_auv/octree", b"/drake_auv/coverage",
+                  b"set_animation"):
+        assert layer in commands, layer
+    assert b"/Cameras/default" in commands and b"set_target" in commands  # framed
