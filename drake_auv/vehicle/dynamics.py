@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RollPitchYaw
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import LeafSystem
 
 from drake_auv.vehicle.model import NUM_THRUSTERS, STATE_SIZE, Girona500Model, Girona500Params
 
@@ -27,34 +27,31 @@ class Girona500Dynamics(LeafSystem):
         self.model = Girona500Model(params)
         self.params = self.model.params
         self.time_step = float(time_step)
-        initial = np.zeros(STATE_SIZE + NUM_THRUSTERS)
-        if initial_state is not None:
-            initial[:STATE_SIZE] = _checked_state(initial_state)
+        initial = np.zeros(STATE_SIZE) if initial_state is None else _checked_state(initial_state)
         self.thrust_input = self.DeclareVectorInputPort("thrust", NUM_THRUSTERS)
-        self._xd = self.DeclareDiscreteState(BasicVector(initial))
+        # Two discrete-state groups: the 12-state, and the thrusters' lagged forces (N).
+        self._state = self.DeclareDiscreteState(initial)
+        self._thrust = self.DeclareDiscreteState(NUM_THRUSTERS)
         self.DeclarePeriodicDiscreteUpdateEvent(self.time_step, 0.0, self._update_state)
-        self.state_output = self.DeclareVectorOutputPort(
-            "state", STATE_SIZE, self._calc_state, prerequisites_of_calc={self.xd_ticket()})
+        self.state_output = self.DeclareStateOutputPort("state", self._state)
         self.pose_output = self.DeclareAbstractOutputPort(
             "pose", lambda: AbstractValue.Make(RigidTransform()), self._calc_pose,
-            prerequisites_of_calc={self.xd_ticket()})
+            prerequisites_of_calc={self.discrete_state_ticket(self._state)})
 
     def set_state(self, context, state) -> None:
         """Sets the 12-state (thrusts to zero) in this system's context."""
-        x = np.zeros(STATE_SIZE + NUM_THRUSTERS)
-        x[:STATE_SIZE] = _checked_state(state)
-        context.SetDiscreteState(self._xd, x)
+        context.SetDiscreteState(self._state, _checked_state(state))
+        context.SetDiscreteState(self._thrust, np.zeros(NUM_THRUSTERS))
 
     def _update_state(self, context, discrete_state):
-        x = context.get_discrete_state(self._xd).get_value()
-        command = self.thrust_input.Eval(context)
-        discrete_state.set_value(self._xd, self.model.step(x, command, self.time_step))
-
-    def _calc_state(self, context, output):
-        output.SetFromVector(context.get_discrete_state(self._xd).get_value()[:STATE_SIZE])
+        x = np.concatenate([context.get_discrete_state(self._state).get_value(),
+                            context.get_discrete_state(self._thrust).get_value()])
+        x = self.model.step(x, self.thrust_input.Eval(context), self.time_step)
+        discrete_state.set_value(self._state, x[:STATE_SIZE])
+        discrete_state.set_value(self._thrust, x[STATE_SIZE:])
 
     def _calc_pose(self, context, output):
-        x = context.get_discrete_state(self._xd).get_value()
+        x = context.get_discrete_state(self._state).get_value()
         output.set_value(RigidTransform(RollPitchYaw(x[3:6]), x[:3]))
 
 
