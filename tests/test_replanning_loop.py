@@ -1,12 +1,13 @@
 """The replanning loop closed around an ideal vehicle (no Drake): octree map from a ray-cast
-side-looking fan, STOMP sections at 1 Hz, the vehicle flying each plan at survey speed."""
+side-looking fan, STOMP sections at 1 Hz (warm-started), the vehicle flying each plan at
+survey speed; against the same loop without the optimiser."""
 
 import numpy as np
 import pytest
 import trimesh
 
 from drake_auv.mapping.octree_map import OctreeMap
-from drake_auv.replanning.section import ReplanningParameters, collect_section, replan_section
+from drake_auv.replanning.section import ReplanningParameters, replan_section
 
 OMEGA, SPEED, DT, PERIOD = 6.0, 0.5, 0.1, 1.0
 BLOCK_CENTRE, BLOCK_HALF = np.array([0.0, 0.0, -4.0]), np.array([2.5, 2.5, 6.0])
@@ -38,7 +39,8 @@ def _nominal(shift):
     return np.hstack([xy, np.full((len(xy), 1), -5.0)])
 
 
-def _fly(shift, replan, seed=0):
+def _fly(shift, optimizer, seed=0):
+    """The block's distance along the flown trail, and the steps flown (1500: unfinished)."""
     world, waypoints = _world(), _nominal(np.asarray(shift, dtype=float))
     omap, params = OctreeMap(0.5), ReplanningParameters()
     x = waypoints[0] + [-3.0, -3.0, 0.0]
@@ -47,20 +49,12 @@ def _fly(shift, replan, seed=0):
         if step % round(PERIOD / DT) == 0:
             if plan is not None:
                 next_index = plan.next_index(SPEED * PERIOD)
-            if replan:
-                plan = replan_section(x, waypoints, next_index, omap.occupied_points(), params,
-                                      seed=seed + step)
-                if plan is None:
-                    break
-                traj = plan.trajectory
-            else:  # nominal only: fly the waypoints as planned on the prior map
-                while next_index < len(waypoints) and np.linalg.norm(
-                        waypoints[next_index] - x) < SPEED * PERIOD:
-                    next_index += 1
-                idx = collect_section(x, waypoints, next_index, 5.0, 10)
-                if len(idx) == 0:
-                    break
-                traj = np.vstack([x, waypoints[idx]])
+            plan = replan_section(x, waypoints, next_index, omap, params, seed=seed + step,
+                                  optimizer=optimizer,
+                                  previous=None if plan is None else plan.trajectory)
+            if plan is None:
+                break
+            traj = plan.trajectory
             s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(traj, axis=0),
                                                                 axis=1))])
             flown = 0.0
@@ -82,9 +76,12 @@ def _fly(shift, replan, seed=0):
 
 @pytest.mark.parametrize("shift", [(-4.0, 0.0), (3.0, -3.0)])
 def test_replanning_keeps_the_offset_where_the_nominal_path_does_not(shift):
-    d_replan, steps = _fly(shift, replan=True)
-    d_nominal, _ = _fly(shift, replan=False)
-    assert steps < 1499, "the replanned mission did not finish the semicircle"
+    # STOMP alone keeps the offset (no waypoint is moved before it runs); "none" flies the
+    # same sections' initial trajectories, through the wrong waypoints.
+    d_replan, steps = _fly(shift, "stomp")
+    d_nominal, steps_nominal = _fly(shift, "none")
+    assert steps < 1499 and steps_nominal < 1499, "a mission did not finish the semicircle"
     assert d_replan.min() > 1.0 + 3.0  # vehicle radius plus a margin: no contact
-    assert abs(d_replan.mean() - OMEGA) < 1.0
-    assert np.abs(d_replan - OMEGA).mean() < 0.5 * np.abs(d_nominal - OMEGA).mean()
+    flown = slice(100, None)  # after the approach from 8 m out
+    assert abs(d_replan[flown].mean() - OMEGA) < 0.5
+    assert np.abs(d_replan - OMEGA).mean() < 0.35 * np.abs(d_nominal - OMEGA).mean()

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from drake_auv.replanning.section import (ReplanningParameters, SliceMap, collect_section,
-                                           initial_trajectory, replan_section,
-                                           resample_polyline)
+from drake_auv.replanning.section import (ReplanningCost, ReplanningParameters, SliceMap,
+                                           collect_section, initial_trajectory, passed_index,
+                                           replan_section, resample_polyline)
 
 WAYPOINTS = np.stack([np.zeros(20), np.arange(20.0), np.full(20, -5.0)], axis=1)
 
@@ -55,39 +55,101 @@ def test_resample_polyline_is_even_and_keeps_ends():
     assert np.allclose(steps, steps[0], atol=1e-9) and steps[0] <= 0.5
 
 
-def test_initial_trajectory_moves_waypoints_onto_the_offset():
-    slice_map = SliceMap(_wall(), (-5.0, -5.0), depth_band=1.5, clearance=3.0)
+def test_initial_trajectory_is_the_polyline_through_the_waypoints():
     x = np.array([3.0, 0.0, -5.0])
     waypoints = np.array([[3.0, 2.0, -5.0], [3.0, 4.0, -5.0]])  # prior map 3 m off
-    traj, fraction = initial_trajectory(x, waypoints, slice_map, omega=6.0, spacing=0.5)
-    assert np.allclose(traj[0], x)
-    assert np.allclose(traj[-1], [6.0, 4.0, -5.0])
-    assert np.all(np.diff(fraction) > 0) and fraction[-1] == pytest.approx(1.0)
-    # Nothing mapped near: the waypoints stay where they are.
-    empty = SliceMap(np.zeros((0, 3)), (-5.0, -5.0), 1.5, 3.0)
-    traj, _ = initial_trajectory(x, waypoints, empty, omega=6.0, spacing=0.5)
-    assert np.allclose(traj[-1], waypoints[-1])
+    traj = initial_trajectory(x, waypoints, spacing=0.5)
+    assert np.allclose(traj[[0, -1]], [x, waypoints[-1]])
+    assert np.allclose(traj[:, 0], 3.0) and len(traj) == 9
+
+
+def test_passed_index_follows_the_projection_not_the_nearness():
+    nominal = WAYPOINTS + [3.0, 0.0, 0.0]
+    # 3 m beside the path, level with waypoint 5: waypoints up to 5 are passed.
+    assert passed_index([6.0, 5.0, -5.0], nominal, 1, 10) == 6
+    assert passed_index([6.0, 5.0, -5.0], nominal, 0, 10) == 6
+    # Before the path's start: the first waypoint is passed only when reached.
+    assert passed_index([6.0, -2.0, -5.0], nominal, 0, 10) == 0
+    assert passed_index([3.2, -0.1, -5.0], nominal, 0, 10) == 1
 
 
 def test_replan_section_keeps_the_offset_from_a_wall_and_ignores_the_seabed():
+    # Planned 3 m too close to the wall: every waypoint, the section's end included, is
+    # wrong; STOMP alone (free end, offset on the distance field) moves the trajectory out.
     params = ReplanningParameters()
-    nominal = WAYPOINTS + [3.0, 0.0, 0.0]  # planned 3 m too close to the wall
+    nominal = WAYPOINTS + [3.0, 0.0, 0.0]
     x = np.array([4.5, -1.0, -5.0])
     plan = replan_section(x, nominal, 0, _wall(), params, seed=0)
     assert plan.indices.tolist() == [0, 1, 2, 3]
     traj = plan.trajectory
     assert np.allclose(traj[0], x)
     assert np.all(traj[:, 0] > params.clearance)
-    # Past the first 2 m (the vehicle starts 1.5 m too close), the offset Omega is kept.
-    far = np.linalg.norm(traj - x, axis=1) > 2.0
-    assert np.all(np.abs(traj[far, 0] - params.omega) < 0.4)
+    # Past the first 2.5 m (the vehicle starts 1.5 m too close), the offset Omega is kept, to
+    # the section's (free) end.
+    far = np.linalg.norm(traj - x, axis=1) > 2.5
+    assert np.all(np.abs(traj[far, 0] - params.omega) < 0.6)
+    assert abs(traj[-1, 0] - params.omega) < 0.4 and traj[-1, 1] > 2.5
     assert np.all(np.abs(traj[:, 2] + 5.0) < 0.3)  # the seabed 5 m below does not pull
-    assert plan.cost <= plan.initial_cost
+    assert plan.cost < 0.2 * plan.initial_cost
     # The wall (x = 0) lies in -x from every point: facing it is a yaw of pi.
     assert np.allclose(np.abs(np.angle(np.exp(1j * (plan.facing - np.pi)))), 0.0, atol=0.1)
     # Progress along the plan marks waypoints visited.
     assert plan.next_index(0.0, capture_radius=0.1) == 0
     assert plan.next_index(np.inf) == 4
+    # Unoptimised, the same section flies into the offset: the ablation's baseline.
+    none = replan_section(x, nominal, 0, _wall(), params, seed=0, optimizer="none")
+    assert np.array_equal(none.trajectory, none.initial) and none.iterations == 0
+    assert none.trajectory[-1, 0] == pytest.approx(3.0)
+    with pytest.raises(ValueError, match="optimizer"):
+        replan_section(x, nominal, 0, _wall(), params, optimizer="chomp")
+
+
+def test_one_outlier_voxel_does_not_repel_the_path_but_a_confirmed_one_does():
+    params = ReplanningParameters()
+    nominal = WAYPOINTS + [6.0, 0.0, 0.0]  # on the offset
+    wall = _wall(with_seabed=False)
+    outlier = np.array([[8.0, 4.0, -5.0]])  # 2 m outside the path, within the clearance
+    occupied = np.vstack([wall, outlier])
+    x = np.array([6.0, 0.0, -5.0])
+    hit_once = np.append(np.full(len(wall), 3.5), 0.85)  # OctoMap: one hit is 0.85
+    confirmed = np.append(np.full(len(wall), 3.5), 3.5)
+    kept = replan_section(x, nominal, 0, occupied, params, seed=2, log_odds=hit_once)
+    assert np.all(np.abs(kept.trajectory[:, 0] - params.omega) < 0.25)
+    avoided = replan_section(x, nominal, 0, occupied, params, seed=2, log_odds=confirmed)
+    assert np.linalg.norm(avoided.trajectory - outlier, axis=1).min() > 2.4
+    # Without log-odds every voxel counts.
+    assert np.linalg.norm(replan_section(x, nominal, 0, occupied, params, seed=2).trajectory
+                          - outlier, axis=1).min() > 2.4
+
+
+def test_progress_past_a_wrong_waypoint_inside_the_offset():
+    # One waypoint in the section, on the prior map 3 m too close to the wall; the vehicle
+    # already flies at the offset beside it. Hovering costs (progress term); the free end
+    # advances along the route at the offset instead of diving to the waypoint.
+    params = ReplanningParameters(radius=3.0)
+    nominal = WAYPOINTS[::4] + [3.0, 0.0, 0.0]  # waypoints 4 m apart
+    x = np.array([6.0, 1.0, -5.0])
+    plan = replan_section(x, nominal, 1, _wall(), params, seed=3)
+    assert plan.indices.tolist() == [1]
+    end = plan.trajectory[-1]
+    assert abs(end[0] - params.omega) < 0.4
+    assert end[1] > x[1] + 2.5  # advanced along the wall
+    slice_map = SliceMap(_wall(), (-5.0, -5.0), params.depth_band, params.clearance)
+    route = np.vstack([x, nominal[1:3]])
+    advancing = np.linspace(x, x + [0.0, 3.0, 0.0], 7)
+    cost = ReplanningCost(slice_map, route, advancing, params, goal=3.0)
+    hovering = np.repeat(x[None], 7, axis=0)
+    assert cost(hovering[None]).sum() > cost(advancing[None]).sum() + 1.0
+
+
+def test_offset_is_a_distance_field_that_does_not_saturate():
+    y, z = np.meshgrid(np.arange(-4.75, 25.0, 0.5), np.arange(-9.75, 2.0, 0.5))
+    wall = np.stack([np.full(y.size, 0.25), y.ravel(), z.ravel()], axis=1)  # voxel centres
+    slice_map = SliceMap(wall, (-5.0, -5.0), depth_band=1.5, clearance=3.0)
+    points = np.stack([np.linspace(0.6, 14.0, 40), np.full(40, 10.0), np.full(40, -5.0)], 1)
+    assert np.allclose(slice_map.offset(points), points[:, 0] - 0.25, atol=0.02)
+    empty = SliceMap(np.zeros((0, 3)), (-5.0, -5.0), 1.5, 3.0)
+    assert np.all(np.isinf(empty.offset(points)))
 
 
 def test_replan_section_is_deterministic_and_none_when_done():
@@ -110,14 +172,17 @@ def test_slice_map_clearance_is_the_exact_3d_distance_within_the_bound():
     assert np.all(np.isinf(got[~within]))
 
 
-def test_only_waypoints_marked_keep_offset_are_moved():
-    slice_map = SliceMap(_wall(), (-5.0, -5.0), depth_band=1.5, clearance=3.0)
-    x = np.array([3.0, 0.0, -5.0])
-    waypoints = np.array([[3.0, 2.0, -5.0], [3.0, 4.0, -5.0]])
-    traj, _ = initial_trajectory(x, waypoints, slice_map, omega=6.0, spacing=0.5,
-                                 keep_offset=[True, False])
-    assert np.allclose(traj[-1], waypoints[-1])  # a lane or transit waypoint is not moved
-    assert traj[:, 0].max() == pytest.approx(6.0, abs=0.3)  # the contour one is, to x = 6
+def test_only_points_marked_keep_offset_keep_it_the_others_follow_the_route():
+    nominal = WAYPOINTS + [4.5, 0.0, 0.0]  # 1.5 m inside the offset, outside the clearance
+    x = np.array([4.5, 0.0, -5.0])
+    params = ReplanningParameters()
+    wall = _wall()
+    contour = replan_section(x, nominal, 0, wall, params, seed=4)
+    transit = replan_section(x, nominal, 0, wall, params, seed=4,
+                             keep_offset=np.zeros(len(nominal), bool))
+    assert abs(contour.trajectory[-1, 0] - params.omega) < 0.4
+    assert np.all(np.abs(transit.trajectory[:, 0] - 4.5) < 0.3)
+    assert np.all(np.isnan(transit.facing))  # the yaw follows the motion there
 
 
 def _slope():
@@ -145,21 +210,24 @@ def test_3d_offset_metric_keeps_omega_along_the_normal_of_a_sloping_face():
         ReplanningParameters(offset_metric="vertical")
 
 
-def test_offset_is_queried_only_where_it_is_weighted_and_the_cost_is_unchanged():
-    from drake_auv.replanning.section import ReplanningCost, ReplanningParameters, SliceMap
-
+def test_cost_is_the_weighted_sum_of_its_terms_with_the_terminal_goal_on_the_last_point():
     rng = np.random.default_rng(11)
     wall = np.column_stack([rng.uniform(-5, 5, 400), np.full(400, 6.0), rng.uniform(-3, 3, 400)])
     params = ReplanningParameters(omega=5.0, offset_metric="3d")
     slice_map = SliceMap(wall, (-1.0, 1.0), params.depth_band, params.clearance, metric="3d")
     keep = np.array([1, 1, 0, 0, 1, 0, 1, 1], bool)
-    cost = ReplanningCost(slice_map, np.zeros(len(keep)), params, keep)
-    rollouts = rng.normal(0.0, 2.0, (5, len(keep), 3))
-    # The cost term by term, querying every point.
-    d, _ = slice_map.offset(rollouts, 2.0 * params.omega)
-    expected = (params.offset_weight * keep * np.minimum(np.abs(d - params.omega), params.omega)
-                + params.obstacle_weight * np.maximum(
-                    0.0, params.clearance - slice_map.clearance(rollouts, params.clearance)) ** 2
-                + params.depth_weight * rollouts[..., 2] ** 2)
+    initial = np.column_stack([np.linspace(-3, 3, 8), np.zeros(8), np.zeros(8)])
+    cost = ReplanningCost(slice_map, initial[[0, -1]], initial, params, keep)
+    rollouts = initial + rng.normal(0.0, 1.0, (5, len(keep), 3))
+    t = cost.terms(rollouts)
+    d = np.linalg.norm(rollouts[..., None, :] - wall, axis=-1).min(axis=-1)
+    assert np.allclose(t["offset"][..., keep], np.where(np.abs(d - 5.0) <= 1.0, (d - 5.0) ** 2,
+                                                        2.0 * np.abs(d - 5.0) - 1.0)[..., keep])
+    assert np.all(t["offset"][..., ~keep] == 0) and np.all(t["route"][..., keep] == 0)
+    expected = (params.offset_weight * t["offset"] + params.obstacle_weight * t["obstacle"]
+                + params.depth_weight * ~keep * t["depth"] + params.route_weight * t["route"]
+                + params.progress_weight * t["progress"])
+    expected[..., -1] += params.terminal_weight * (params.offset_weight * t["offset"][..., -1]
+                                                   + params.progress_weight
+                                                   * t["progress"][..., -1])
     assert np.allclose(cost(rollouts), expected, rtol=1e-12, atol=1e-12)
-    assert np.allclose(cost(rollouts[0]), expected[0], rtol=1e-12, atol=1e-12)

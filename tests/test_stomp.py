@@ -30,6 +30,33 @@ def test_matrices():
     assert np.allclose(cov, np.linalg.inv(m.R) / np.linalg.inv(m.R).max())
 
 
+def test_free_end_matrices_sample_the_end_and_are_regular():
+    m = StompMatrices(N, free_end=True)
+    assert m.A.shape == (N - 2, N - 1) and m.variables == slice(1, N)
+    assert np.all(np.linalg.eigvalsh(m.R) > 0)
+    cov = m.noise_factor @ m.noise_factor.T
+    assert cov[-1, -1] == pytest.approx(cov.max())  # the end moves most, the start not at all
+    assert np.allclose(m.smoothing.max(axis=0), 1.0 / N)
+
+
+def test_a_free_end_reaches_a_goal_set_a_fixed_end_cannot():
+    # Terminal cost only: the end should lie on the plane y = 3 (a goal set, any x).
+    def goal_plane(trajectories):
+        cost = np.zeros(trajectories.shape[:2])
+        cost[:, -1] = 10.0 * (trajectories[:, -1, 1] - 3.0) ** 2
+        return cost
+
+    params = StompParameters(max_iterations=100, noise_std=1.0, patience=30)
+    free = stomp(LINE, goal_plane, params, seed=0, free_end=True)
+    assert free.trajectory[-1, 1] == pytest.approx(3.0, abs=0.3)
+    assert np.array_equal(free.trajectory[0], LINE[0])
+    assert np.abs(accelerations(free.trajectory)).max() < 0.2  # it swings, smoothly
+    fixed = stomp(LINE, goal_plane, params, seed=0)
+    assert np.array_equal(fixed.trajectory[-1], LINE[-1])
+    with pytest.raises(ValueError, match="free_end"):
+        stomp(LINE, goal_plane, params, matrices=StompMatrices(N), free_end=True)
+
+
 def test_free_field_keeps_the_straight_line():
     result = stomp(LINE, free_field, StompParameters(), seed=0)
     assert np.allclose(result.trajectory, LINE, atol=1e-9)

@@ -241,7 +241,9 @@ class ReplannerSpec:
     """The realtime replanner (see `drake_auv.replanning.section`).
 
     Attributes:
-        optimizer: "stomp", or "none" (the nominal plan is flown as planned).
+        optimizer: "stomp" (each section optimised against the on-line map), or "none"
+            (each section's initial trajectory, through the nominal waypoints from the
+            vehicle's position, flown unoptimised: the ablation baseline).
         R: sections gather the waypoints within this radius of the vehicle, m.
         K: most waypoints in one section.
         clearance_m: obstacle margin of the cost, m.

@@ -117,7 +117,7 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
             spec.replanner.to_params(plan.omega, plan.method), speed=plan.survey_speed,
             period=spec.replanner.period_s,
             sensor_azimuth=SENSOR_AZIMUTH.get(spec.payload.multibeam_mount),
-            seed=spec.seed, legs=plan.replan_legs))
+            seed=spec.seed, legs=plan.replan_legs, optimizer=spec.replanner.optimizer))
         builder.Connect(mapper.map_output, replanner.map_input)
         builder.Connect(source.get_output_port(), replanner.nominal_input)
         builder.Connect(replanner.status_output, supervisor.replanner_status_input)

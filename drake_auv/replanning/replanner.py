@@ -3,9 +3,11 @@
 At each replanning step (every `period` s while one of its legs flies) it takes the estimated
 position, marks the nominal waypoints the previous plan has flown past as visited, collects
 the next section (waypoints within R, at most K), optimises it with STOMP against the current
-octree map (`drake_auv.replanning.section.replan_section`) and times it at the survey speed
-as a `PiecewisePolynomial` of [x, y, z, yaw], which the `reference` output evaluates. After
-the last waypoint it holds the end of the last plan and reports the leg finished.
+octree map, warm-started from the last plan (`drake_auv.replanning.section.replan_section`;
+`optimizer` "none" flies the section's initial trajectory unoptimised) and times it at the
+survey speed as a `PiecewisePolynomial` of [x, y, z, yaw], which the `reference` output
+evaluates. After the last waypoint it holds the end of the last plan and reports the leg
+finished.
 
 The nominal plan is an input (`nominal`, a `Path` from a source system), the map another
 (`map`, the mapper's `OnlineMap`). State, all in the Context: the plan and its trajectory
@@ -33,7 +35,8 @@ from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import motion_heading
-from drake_auv.replanning.section import ReplanningParameters, SectionPlan, replan_section
+from drake_auv.replanning.section import (OPTIMIZERS, ReplanningParameters, SectionPlan,
+                                          replan_section)
 from drake_auv.vehicle.model import STATE_SIZE
 from drake_auv.vehicle.path_reference import trajectory_reference
 
@@ -74,13 +77,18 @@ class Replanner(LeafSystem):
         offset_labels: labels of the nominal samples that follow a wall at Omega (slicing
             contours); the others (lanes, transits) keep only clearance and depth.
         legs: the mission legs this replanner flies (default: leg 0, so it runs unsupervised).
+        optimizer: "stomp" (each section optimised against the map) or "none" (each
+            section's initial trajectory, through the nominal waypoints, flown as it is).
     """
 
     def __init__(self, params: ReplanningParameters | None = None, speed: float = 0.3,
                  period: float = 1.0, sensor_azimuth: float | None = np.pi / 2,
                  heading_offset: float = 0.0, yaw_rate: float = np.radians(15.0),
-                 seed: int = 0, offset_labels=("slice",), legs=(0,)):
+                 seed: int = 0, offset_labels=("slice",), legs=(0,), optimizer: str = "stomp"):
         super().__init__()
+        if optimizer not in OPTIMIZERS:
+            raise ValueError(f"optimizer must be one of {OPTIMIZERS}, got {optimizer!r}")
+        self.optimizer = optimizer
         if not (np.isfinite(speed) and speed > 0):
             raise ValueError(f"speed must be > 0 m/s, got {speed}")
         if not (np.isfinite(period) and 0.05 <= period <= 30.0):
@@ -144,12 +152,15 @@ class Replanner(LeafSystem):
         start, start_cpu = time.perf_counter(), time.thread_time()
         plan = replan_section(x[:3], nominal.points, int(next_index),
                               online.map if online is not None else np.zeros((0, 3)),
-                              self.params, seed=self.seed + int(steps), keep_offset=keep_offset)
+                              self.params, seed=self.seed + int(steps), keep_offset=keep_offset,
+                              optimizer=self.optimizer,
+                              previous=None if current.plan is None else current.plan.trajectory)
         wall, cpu = time.perf_counter() - start, time.thread_time() - start_cpu
         if plan is None:  # every waypoint visited: hold the end of the last plan
-            finished = 1.0
+            finished, next_index = 1.0, len(nominal.points)
             new = current
-        else:
+        else:  # the section starts at the first waypoint not passed
+            next_index = int(plan.indices[0])
             new = _Plan(plan, self._timed(plan, x, t))
         state.get_mutable_abstract_state(self._plan_index).set_value(new)
         state.get_mutable_discrete_state(self._progress).set_value(

@@ -3,21 +3,24 @@
 At each replanning step, with the vehicle at x (navigation frame):
 1. `collect_section`: nominal waypoints w_i, in order from the next unvisited one, while
    |x - w_i| < R and at most K of them;
-2. `initial_trajectory`: a polyline from x through them, each moved onto the offset Omega
-   from the mapped structure, resampled evenly;
-3. `ReplanningCost` + `stomp`: the trajectory optimised against the on-line map;
-4. `SectionPlan.next_index`: once part of the trajectory has been flown, the waypoints it
-   has passed are marked visited (progress along the plan, not nearness to the waypoints,
-   which the vehicle may never approach when the prior map is wrong).
-`replan_section` runs 1-3. Names: the on-line map is `octree_map` (the reference's M);
+2. `initial_trajectory`: the polyline from x through them (planned on the prior map, which may
+   be wrong by metres), resampled evenly;
+3. `SliceMap` + `ReplanningCost` + `stomp`: the trajectory, its end free, optimised against
+   the on-line map: STOMP alone moves it onto the offset Omega from the mapped structure, clear
+   of it, and along the nominal path (`optimizer="none"` flies the initial trajectory);
+4. `SectionPlan.next_index` and `passed_index`: the waypoints the flown part of the plan, or
+   the vehicle's projection on the nominal path, has passed are marked visited (progress, not
+   nearness to the waypoints, which the vehicle may never approach when the prior map is
+   wrong).
+`replan_section` runs `passed_index` and 1-3. Names: the on-line map is `octree_map` (the reference's M);
 STOMP's smoothing matrix is `StompMatrices.smoothing`.
 
 Choices the reference leaves open (docs/replanning.md): the offset Omega is kept in the
 horizontal plane against occupied voxels within a depth band around the trajectory (the slice
-plane of a contour path, so the seabed below does not count as the wall to follow), clearance
-counts every occupied voxel in 3D; the waypoints (planned on the wrong prior map) are moved
-onto the offset before the polyline is built, so the fixed end point is a feasible one; a depth
-term keeps the nominal depth.
+plane of a contour path, so the seabed below does not count as the wall to follow), measured
+on a 2D distance transform of that band; clearance counts every voxel in 3D; only voxels whose
+log-odds reach `min_log_odds` count (an outlier hit once does not); a depth term keeps the
+nominal depth, a progress term the advance along the nominal path.
 """
 
 from __future__ import annotations
@@ -27,15 +30,18 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
+from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from drake_auv.planning.polyline import length, resample
 from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 
+OPTIMIZERS = ("stomp", "none")
+
 
 @dataclass(frozen=True)
 class ReplanningParameters:
-    """Parameters of the replanning loop.
+    """Parameters of the replanning loop (cost weights: docs/replanning.md, "Cost").
 
     Attributes:
         radius: R, waypoints closer than this to the vehicle form the section, m (> 0).
@@ -48,7 +54,13 @@ class ReplanningParameters:
             "3d": the 3D distance to any voxel, the offset along the surface normal of the
             slicing planner (sloping faces, as on the boulder).
         spacing: distance between trajectory points, m (> 0).
-        offset_weight, obstacle_weight, depth_weight: cost weights (>= 0).
+        margin: how far the optimised trajectory may leave the initial one (the largest
+            prior-map plus navigation error the plan assumes), m (> 0); sizes the map query.
+        min_log_odds: log-odds a voxel needs to count in the cost (1.5: two hits more than
+            the misses, with OctoMap's 0.7 / 0.4 model one hit is 0.85), >= 0.
+        huber: |d - Omega| beyond which the offset cost grows linearly, m (> 0).
+        offset_weight, obstacle_weight, depth_weight, route_weight, progress_weight,
+        terminal_weight: cost weights (>= 0), per trajectory point.
         stomp: `StompParameters` (rollouts, iterations, noise, smoothness weight).
     """
 
@@ -59,19 +71,27 @@ class ReplanningParameters:
     depth_band: float = 1.5
     offset_metric: str = "horizontal"
     spacing: float = 0.5
-    offset_weight: float = 1.0
+    margin: float = 6.0
+    min_log_odds: float = 1.5
+    huber: float = 1.0
+    offset_weight: float = 3.0
     obstacle_weight: float = 50.0
     depth_weight: float = 1.0
+    route_weight: float = 1.0
+    progress_weight: float = 0.1
+    terminal_weight: float = 3.0
     stomp: StompParameters = field(default_factory=lambda: StompParameters(
         num_rollouts=10, max_iterations=40, noise_std=0.5, smoothness_weight=50.0,
         patience=8))
 
     def __post_init__(self):
-        for name in ("radius", "omega", "clearance", "depth_band", "spacing"):
+        for name in ("radius", "omega", "clearance", "depth_band", "spacing", "margin",
+                     "huber"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be > 0 m, got {value}")
-        for name in ("offset_weight", "obstacle_weight", "depth_weight"):
+        for name in ("min_log_odds", "offset_weight", "obstacle_weight", "depth_weight",
+                     "route_weight", "progress_weight", "terminal_weight"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be >= 0, got {value}")
@@ -111,6 +131,27 @@ def collect_section(position, waypoints, next_index: int, radius: float,
     return np.arange(next_index, next_index + max(count, 1))
 
 
+def passed_index(position, waypoints, next_index: int, window: int,
+                 capture_radius: float = 0.5) -> int:
+    """`next_index` advanced past the waypoints the vehicle has passed along the nominal path:
+    those whose arclength on the polyline w_(next-1) .. w_(next+window) is at most the
+    vehicle's projection on it plus `capture_radius` (m). With a wrong prior map the vehicle
+    flies parallel to the nominal path, metres from its waypoints, and may never come near
+    them: its projection still advances with it."""
+    x = _check_position(position)
+    waypoints = np.asarray(waypoints, dtype=float)
+    next_index = int(next_index)
+    first = max(next_index - 1, 0)
+    local = waypoints[first:min(next_index + window + 1, len(waypoints))]
+    if len(local) < 2:
+        return next_index
+    s_x, _ = polyline_progress(x[None], local)
+    if s_x[0] <= 0.0:  # level with or before the polyline's start: passed only when near
+        return next_index + int(np.linalg.norm(x - waypoints[next_index]) <= capture_radius)
+    s_w = _arclength(local)[next_index - first:]
+    return next_index + int(np.count_nonzero(s_w <= s_x[0] + capture_radius))
+
+
 def resample_polyline(points, spacing: float) -> np.ndarray:
     """(N, 3) points evenly spaced by at most `spacing` along the polyline, ends kept, N >= 3
     (STOMP needs an interior point)."""
@@ -126,27 +167,75 @@ DEPTH_MARGIN = 1.0  # m, how far rollouts may stray from the section's depths (s
 
 def _kdtree(points: np.ndarray) -> cKDTree:
     """KD-tree of voxel centres, built for this use: rebuilt at every step and queried from
-    metres away (the offset is ~Omega), where the voxels of a surface are nearly equidistant
-    and a default tree visits many small leaves. Large, unbalanced (sliding-midpoint) leaves
-    answer the same nearest neighbours 2-4x faster here and build faster."""
+    metres away, where the voxels of a surface are nearly equidistant and a default tree
+    visits many small leaves. Large, unbalanced (sliding-midpoint) leaves answer the same
+    nearest neighbours 2-4x faster here and build faster."""
     return cKDTree(points, leafsize=64, balanced_tree=False, compact_nodes=False)
 
 
-class SliceMap:
-    """Occupied voxels of the on-line map near a section, queried for the replanning cost.
+def voxel_log_odds(octree_map, points: np.ndarray) -> np.ndarray:
+    """(m,) log-odds of the octree's voxels at `points` (m, 3), read from its leaves."""
+    tree = octree_map.tree
+    return np.fromiter((tree.search(p).getLogOdds() for p in points), dtype=float,
+                       count=len(points))
 
-    Built once per replanning step from the voxels within reach of the section:
-    - `band_tree`: for the offset, voxels within `depth_band` of the section's depths in 2D
-      (metric "horizontal"), or every voxel in 3D (metric "3d"); `dims` says which;
-    - the clearance slab: voxels within `clearance + margin` of the section's depths, the only
-      ones that can be nearer than `clearance` to a point of the section (rollouts stay within
-      `margin` of its depths: the depth cost holds them). A 2D KD-tree of the slab rules most
-      points out (horizontal distance >= clearance), a 3D one measures the rest exactly.
+
+class _DistanceField2D:
+    """Euclidean distance transform (`scipy.ndimage.distance_transform_edt`) of voxel
+    columns (m, 2) on the voxel grid over the box [lo, hi] (m), cell centres on the voxel
+    centres; distances from the box's voxels to the nearest column, m."""
+
+    def __init__(self, points: np.ndarray, lo: np.ndarray, hi: np.ndarray, resolution: float):
+        self.origin = (np.floor(lo / resolution) + 0.5) * resolution  # the first cell's centre
+        self.cell = resolution
+        shape = np.floor((hi - self.origin) / resolution).astype(int) + 2
+        cells = np.round((points - self.origin) / resolution).astype(int)
+        cells = cells[np.all((cells >= 0) & (cells < shape), axis=1)]
+        free = np.ones(shape, bool)
+        free[cells[:, 0], cells[:, 1]] = False
+        self.field = (ndimage.distance_transform_edt(free, sampling=resolution) if len(cells)
+                      else np.full(shape, np.inf))
+
+    def _coords(self, points: np.ndarray) -> np.ndarray:
+        return ((points[:, :2] - self.origin) / self.cell).T
+
+    def interpolate(self, points: np.ndarray) -> np.ndarray:
+        """(n,) bilinear interpolation at `points` (n, >= 2); the box's edge beyond it."""
+        return ndimage.map_coordinates(self.field, self._coords(points), order=1,
+                                       mode="nearest")
+
+    def lower_bound(self, points: np.ndarray) -> np.ndarray:
+        """(n,) at most the distance from `points` (inside the box) to the nearest column:
+        the nearest cell's value less half a cell diagonal."""
+        idx = np.rint(self._coords(points)).astype(int)
+        for k, n in enumerate(self.field.shape):
+            np.clip(idx[k], 0, n - 1, out=idx[k])
+        return self.field[idx[0], idx[1]] - self.cell * np.sqrt(0.5)
+
+
+class SliceMap:
+    """The on-line map near a section, as the fields the replanning cost reads.
+
+    Built once per replanning step from the occupied voxels in the section's box whose
+    log-odds reach `min_log_odds` (all of them when no log-odds are given):
+    - offset, metric "horizontal": a 2D Euclidean distance transform (`scipy.ndimage`) of the
+      voxels within `depth_band` of the section's depths, on the voxel grid over the box,
+      read by bilinear interpolation; metric "3d": the exact 3D distance to any voxel (a
+      KD-tree: a 3D transform of the box costs 10-30 ms here). inf where none is mapped;
+    - clearance: the exact 3D distance to the voxels within `clearance + margin` of the
+      section's depths, the only ones that can be nearer than `clearance` to a point of the
+      section (rollouts stay within `margin` of its depths: the depth cost holds them); a 2D
+      distance transform of that slab rules most points out, a 3D KD-tree measures the rest;
+    - `band_points` / `nearest_band`: the band's voxels, for the yaw that faces them.
     """
 
     def __init__(self, occupied: np.ndarray, z_range: tuple[float, float], depth_band: float,
-                 clearance: float, margin: float = DEPTH_MARGIN, metric: str = "horizontal"):
+                 clearance: float, margin: float = DEPTH_MARGIN, metric: str = "horizontal",
+                 log_odds: np.ndarray | None = None, min_log_odds: float = 0.0,
+                 box: tuple | None = None, resolution: float = 0.5):
         occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)
+        if log_odds is not None:
+            occupied = occupied[np.asarray(log_odds, dtype=float) >= min_log_odds]
         z = occupied[:, 2]
         if metric == "3d":
             self.dims = 3
@@ -156,107 +245,173 @@ class SliceMap:
             in_band = (z >= z_range[0] - depth_band) & (z <= z_range[1] + depth_band)
             self.band_points = occupied[in_band, :2]
         self.band_tree = _kdtree(self.band_points) if len(self.band_points) else None
+        if box is None:  # the occupied voxels' box, widened by the reach of the offset
+            box = (occupied.min(axis=0) - 15.0, occupied.max(axis=0) + 15.0) if len(
+                occupied) else (np.zeros(3), np.zeros(3))
+        lo, hi = np.asarray(box[0], dtype=float)[:2], np.asarray(box[1], dtype=float)[:2]
+        self._field = (_DistanceField2D(self.band_points, lo, hi, resolution)
+                       if self.dims == 2 and len(self.band_points) else None)
         reach = clearance + margin
         slab = occupied[(z >= z_range[0] - reach) & (z <= z_range[1] + reach)]
-        self.slab_tree_2d = _kdtree(slab[:, :2]) if len(slab) else None
+        # Horizontal distance to the slab: a lower bound of the 3D one that rules most points
+        # out before the exact 3D query.
+        self._slab_field = _DistanceField2D(slab[:, :2], lo, hi, resolution) if len(
+            slab) else None
         self.slab_tree_3d = _kdtree(slab) if len(slab) else None
 
     def clearance(self, points: np.ndarray, upper_bound: float) -> np.ndarray:
-        """3D distance to the nearest occupied voxel centre, inf beyond `upper_bound`, m."""
+        """3D distance to the nearest counted voxel centre, inf beyond `upper_bound`, m."""
         flat = points.reshape(-1, 3)
         d = np.full(len(flat), np.inf)
-        if self.slab_tree_2d is None:
+        if self._slab_field is None:
             return d.reshape(points.shape[:-1])
-        d_h, _ = self.slab_tree_2d.query(flat[:, :2], distance_upper_bound=upper_bound)
-        near = np.isfinite(d_h)  # the 3D distance is at least the horizontal one
+        near = self._slab_field.lower_bound(flat) < upper_bound
         if near.any():
             d[near], _ = self.slab_tree_3d.query(flat[near], distance_upper_bound=upper_bound)
         return d.reshape(points.shape[:-1])
 
-    def offset(self, points: np.ndarray, upper_bound: float):
-        """Distance to, and index of, the nearest voxel of the band (horizontal or 3D), m."""
+    def offset(self, points: np.ndarray) -> np.ndarray:
+        """Distance from `points` (..., 3) to the band's voxels (horizontal or 3D), m; inf
+        where the band holds none."""
+        shape = points.shape[:-1]
         if self.band_tree is None:
-            shape = points.shape[:-1]
-            return np.full(shape, np.inf), np.full(shape, -1)
-        d, i = self.band_tree.query(points[..., :self.dims].reshape(-1, self.dims),
-                                    distance_upper_bound=upper_bound)
-        return d.reshape(points.shape[:-1]), i.reshape(points.shape[:-1])
+            return np.full(shape, np.inf)
+        if self._field is None:
+            d, _ = self.band_tree.query(points.reshape(-1, 3))
+            return d.reshape(shape)
+        return self._field.interpolate(points.reshape(-1, 3)).reshape(shape)
+
+    def nearest_band(self, points: np.ndarray, upper_bound: float):
+        """Distance to, and index in `band_points` of, the nearest band voxel, m (inf, and
+        len(band_points), beyond `upper_bound`)."""
+        if self.band_tree is None:
+            n = len(points)
+            return np.full(n, np.inf), np.zeros(n, dtype=int)
+        return self.band_tree.query(points[:, :self.dims], distance_upper_bound=upper_bound)
+
+
+class Polyline:
+    """A polyline (M >= 2, 3) prepared for projections: `project(points)` gives the arclength
+    (m) of the nearest point on it to each of `points` (..., 3), and the distance to it (m)."""
+
+    def __init__(self, points: np.ndarray):
+        points = np.asarray(points, dtype=float)
+        self.a, self.ab = points[:-1], np.diff(points, axis=0)
+        self.seg_sq = np.maximum(np.einsum("mk,mk->m", self.ab, self.ab), 1e-12)
+        self.seg_len = np.sqrt(self.seg_sq)
+        self.s0 = np.concatenate([[0.0], np.cumsum(self.seg_len)])[:-1]
+        self.length = float(self.seg_len.sum())
+
+    def project(self, points: np.ndarray):
+        flat = points.reshape(-1, 1, 3) - self.a  # (n, m, 3)
+        t = np.clip(np.einsum("nmk,mk->nm", flat, self.ab) / self.seg_sq, 0.0, 1.0)
+        off = flat - t[..., None] * self.ab
+        gap_sq = np.einsum("nmk,nmk->nm", off, off)
+        best = np.argmin(gap_sq, axis=1)
+        rows = np.arange(len(best))
+        s = self.s0[best] + t[rows, best] * self.seg_len[best]
+        return (s.reshape(points.shape[:-1]),
+                np.sqrt(gap_sq[rows, best]).reshape(points.shape[:-1]))
+
+
+def polyline_progress(points: np.ndarray, polyline: np.ndarray):
+    """Arclength along `polyline` (M >= 2, 3) of the nearest point to each of `points`
+    (..., 3), and the distance to it, m."""
+    return Polyline(polyline).project(np.asarray(points, dtype=float))
+
+
+def _huber(x: np.ndarray, delta: float) -> np.ndarray:
+    """x^2 within delta, 2 delta |x| - delta^2 beyond (same value and slope at delta)."""
+    a = np.abs(x)
+    return np.where(a <= delta, a * a, 2.0 * delta * a - delta * delta)
 
 
 class ReplanningCost:
-    """Per-timestep state cost of STOMP rollouts (K, N, 3) -> (K, N).
+    """Per-timestep state cost of STOMP rollouts (K, N, 3) -> (K, N), the sum of `terms`.
 
-    offset_weight * min(|d_h - Omega|, Omega) + obstacle_weight * max(0, clearance - d)^2
-    + depth_weight * (z - z_ref)^2, with d_h the horizontal distance to the band's voxels
-    (saturated so that an unmapped area pulls nowhere) and d the 3D distance to any voxel.
+    Per point i (weights in `ReplanningParameters`; docs/replanning.md says why each):
+    - offset (points that keep it): huber(d_i - Omega), d the `SliceMap.offset` field;
+      0 where nothing is mapped;
+    - obstacle: max(0, clearance - c_i)^2, c the 3D distance to the counted voxels;
+    - depth: (z_i - z_ref_i)^2 (horizontal metric; 3D metric: points without offset only);
+    - route (points without offset: lanes, transits): squared distance to the route;
+    - progress: max(0, s_ref_i - s_i)^2, s_i the arclength of point i projected on the
+      route (the vehicle, the section's waypoints and the next ones) and s_ref_i an even
+      advance from the vehicle (0) to `goal` (the section's last waypoint), so lagging
+      (hovering) costs;
+    - terminal (last point only, times `terminal_weight`): its offset and progress terms
+      again, the goal set of the free end.
+
+    `initial` (N, 3) is the initial trajectory (its depths are z_ref); `route` (M >= 2, 3)
+    the nominal path from the vehicle's position; `goal` the arclength along it (m) that the
+    trajectory's end should reach.
     """
 
-    def __init__(self, slice_map: SliceMap, z_ref: np.ndarray, params: ReplanningParameters,
-                 keep_offset: np.ndarray | None = None):
+    def __init__(self, slice_map: SliceMap, route: np.ndarray, initial: np.ndarray,
+                 params: ReplanningParameters, keep_offset: np.ndarray | None = None,
+                 goal: float | None = None):
         self.slice_map = slice_map
-        self.z_ref = np.asarray(z_ref, dtype=float)
+        self.route = route if isinstance(route, Polyline) else Polyline(route)
+        initial = np.asarray(initial, dtype=float)
+        self.z_ref = initial[:, 2]
         self.params = params
-        # Per trajectory point: weight of the offset term (0 where the plan does not follow
-        # a wall, e.g. a terrain-following lane or a transit).
-        self.offset_weight = params.offset_weight * (
-            np.ones(len(self.z_ref)) if keep_offset is None
-            else np.asarray(keep_offset, dtype=float))
+        n = len(self.z_ref)
+        self.keep = (np.ones(n, bool) if keep_offset is None
+                     else np.asarray(keep_offset, dtype=bool))
+        self.s_ref = np.linspace(0.0, self.route.length if goal is None else goal, n)
+        depth = np.full(n, params.depth_weight)
+        if params.offset_metric == "3d":
+            depth[self.keep] = 0.0  # the offset along the normal sets the depth there
+        self.depth_weight = depth
+
+    def terms(self, trajectories: np.ndarray) -> dict:
+        """The unweighted per-point terms (K, N) of `trajectories` (K, N, 3)."""
+        p = self.params
+        zero = np.zeros(trajectories.shape[:-1])
+        offset = zero.copy()
+        if self.keep.any():
+            d = self.slice_map.offset(trajectories[..., self.keep, :])
+            offset[..., self.keep] = np.where(np.isfinite(d), _huber(d - p.omega, p.huber), 0.0)
+        c = self.slice_map.clearance(trajectories, p.clearance)
+        s, gap = self.route.project(trajectories)
+        route = np.where(self.keep, 0.0, gap ** 2)
+        progress = np.maximum(0.0, self.s_ref - s) ** 2
+        return dict(offset=offset, obstacle=np.maximum(0.0, p.clearance - c) ** 2,
+                    depth=(trajectories[..., 2] - self.z_ref) ** 2, route=route,
+                    progress=progress)
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
-        p = self.params
-        # The offset is measured only at the points that keep it (weight > 0): elsewhere it
-        # adds nothing, and the nearest-voxel query is the costliest part of the cost.
-        offset = np.zeros(trajectories.shape[:-1])
-        weighted = self.offset_weight > 0
-        if weighted.any():
-            d_h, _ = self.slice_map.offset(trajectories[..., weighted, :], 2.0 * p.omega)
-            offset[..., weighted] = np.minimum(np.abs(d_h - p.omega), p.omega)
-        d = self.slice_map.clearance(trajectories, p.clearance)
-        obstacle = np.maximum(0.0, p.clearance - d) ** 2
-        depth = (trajectories[..., 2] - self.z_ref) ** 2
-        return self.offset_weight * offset + p.obstacle_weight * obstacle + p.depth_weight * depth
+        p, t = self.params, self.terms(trajectories)
+        cost = (p.offset_weight * t["offset"] + p.obstacle_weight * t["obstacle"]
+                + self.depth_weight * t["depth"] + p.route_weight * t["route"]
+                + p.progress_weight * t["progress"])
+        cost[..., -1] += p.terminal_weight * (p.offset_weight * t["offset"][..., -1]
+                                              + p.progress_weight * t["progress"][..., -1])
+        return cost
 
 
-def project_to_offset(point, slice_map: SliceMap, omega: float) -> np.ndarray:
-    """`point` moved onto the offset `omega` from the nearest band voxel (horizontally, or in
-    3D with the "3d" metric).
-
-    Unchanged when no band voxel lies within 2 * omega (nothing mapped there yet).
-    """
-    point = np.array(point, dtype=float)
-    d, i = slice_map.offset(point[None], 2.0 * omega)
-    if not np.isfinite(d[0]) or d[0] < 1e-6:
-        return point
-    q, k = slice_map.band_points[i[0]], slice_map.dims
-    point[:k] = q + (point[:k] - q) * (omega / d[0])
-    return point
-
-
-def initial_trajectory(position, section_points, slice_map: SliceMap | None, omega: float,
-                       spacing: float, keep_offset=None) -> tuple[np.ndarray, np.ndarray]:
-    """Polyline from the vehicle through the section's waypoints, resampled every `spacing`.
-
-    The waypoints were placed on the prior map, which may be wrong by metres: each is first
-    moved onto the offset from the on-line map where that map sees structure near it, so the
-    polyline does not lead the vehicle back to a wrong waypoint, and the end point (fixed
-    during optimisation) is not left inside the clearance margin.
-
-    `keep_offset` (one bool per waypoint, default all True) says which waypoints follow a
-    wall at the offset; the others (terrain-following lanes, transits) are not moved.
-
-    Returns the (N, 3) trajectory and, per waypoint, its fraction of the polyline's length.
-    """
+def initial_trajectory(position, section_points, spacing: float) -> np.ndarray:
+    """(N, 3) polyline from the vehicle through the section's waypoints (as planned on the
+    prior map), resampled every `spacing` m."""
     x = _check_position(position)
     section_points = np.asarray(section_points, dtype=float).reshape(-1, 3)
     if len(section_points) == 0:
         raise ValueError("a section needs at least one waypoint")
-    points = np.vstack([x, section_points])
-    keep = np.ones(len(section_points), bool) if keep_offset is None else np.asarray(keep_offset)
-    if slice_map is not None:
-        for i in np.flatnonzero(keep) + 1:
-            points[i] = project_to_offset(points[i], slice_map, omega)
-    s = _arclength(points)
-    return resample_polyline(points, spacing), s[1:] / max(s[-1], 1e-9)
+    return resample_polyline(np.vstack([x, section_points]), spacing)
+
+
+def warm_start(position, previous: np.ndarray, route: Polyline, section_points: np.ndarray,
+               waypoint_s: np.ndarray, spacing: float) -> np.ndarray:
+    """STOMP's initial trajectory from the last step's optimised one (receding horizon): from
+    the vehicle, the part of `previous` (N', 3) ahead of it, then the section's waypoints
+    whose arclength along `route` (`waypoint_s`, m) lies beyond that part's end; resampled
+    every `spacing` m."""
+    x = _check_position(position)
+    s_x, _ = Polyline(previous).project(x[None])
+    ahead = previous[_arclength(previous) > s_x[0] + 0.5 * spacing]
+    s_end = route.project(ahead[-1:])[0][0] if len(ahead) else 0.0
+    extra = section_points[waypoint_s > s_end + spacing]
+    return resample_polyline(np.vstack([x, ahead, extra]), spacing)
 
 
 def _arclength(points: np.ndarray) -> np.ndarray:
@@ -265,7 +420,7 @@ def _arclength(points: np.ndarray) -> np.ndarray:
 
 @lru_cache(maxsize=64)
 def _matrices(num_points: int) -> StompMatrices:
-    return StompMatrices(num_points)
+    return StompMatrices(num_points, free_end=True)
 
 
 @dataclass(frozen=True)
@@ -276,8 +431,8 @@ class SectionPlan:
         indices: the section's waypoint indices.
         initial, trajectory: (N, 3) initial and optimised trajectories, from the vehicle.
         waypoint_arclength: (len(indices),) where each waypoint falls along `trajectory`, m.
-        initial_cost, cost, iterations: STOMP's.
-        query_time: wall time of the map query (occupied voxels in the section's box), s.
+        initial_cost, cost, iterations: STOMP's (iterations 0 with optimizer "none").
+        query_time: wall time of the map query (voxels and their log-odds in the box), s.
         facing: (N,) yaw of the horizontal direction from each trajectory point to its nearest
             mapped voxel of the depth band, rad; NaN where none lies within 2 Omega.
     """
@@ -304,66 +459,91 @@ class SectionPlan:
 
 def replan_section(position, waypoints, next_index: int, occupied,
                    params: ReplanningParameters = ReplanningParameters(),
-                   seed: int = 0, keep_offset=None) -> SectionPlan | None:
-    """One replanning step: section, initial trajectory, STOMP against the occupied voxels.
+                   seed: int = 0, keep_offset=None, optimizer: str = "stomp",
+                   log_odds=None, previous=None) -> SectionPlan | None:
+    """One replanning step: section, initial trajectory, STOMP against the on-line map.
 
-    `occupied` is the on-line map (an `OctreeMap`, queried in the section's box only) or the
-    (m, 3) centres of its occupied voxels; only those within reach of the section are used.
+    `occupied` is the on-line map (an `OctreeMap`, queried in the section's box only, with
+    each voxel's log-odds) or the (m, 3) centres of its occupied voxels, with their
+    `log_odds` (m,) (None: all count); only those within reach of the section are used.
     `keep_offset` (one bool per waypoint, default all True) marks the waypoints that follow a
-    wall at Omega (slicing contours); elsewhere (lanes, transits) only clearance and depth
-    shape the trajectory, and the yaw follows the motion. Returns None when every waypoint
-    was visited.
+    wall at Omega (slicing contours); elsewhere (lanes, transits) clearance, depth and the
+    nominal route shape the trajectory, and the yaw follows the motion. `optimizer` "none"
+    returns the initial trajectory (the polyline through the section's waypoints)
+    unoptimised; with "stomp", `previous` (the last step's optimised trajectory, (N', 3))
+    warm-starts STOMP (`warm_start`). Returns None when every waypoint was visited.
     """
+    if optimizer not in OPTIMIZERS:
+        raise ValueError(f"optimizer must be one of {OPTIMIZERS}, got {optimizer!r}")
     x = _check_position(position)
     waypoints = np.asarray(waypoints, dtype=float)
+    next_index = passed_index(x, waypoints, next_index, params.max_waypoints)
     idx = collect_section(x, waypoints, next_index, params.radius, params.max_waypoints)
     if len(idx) == 0:
         return None
     section = waypoints[idx]
     pts = np.vstack([x, section])
-    # Within reach: the offset's horizontal range (2 Omega) plus the clearance, and the depths
-    # of the offset band and of the clearance slab.
-    reach = 2.0 * params.omega + params.clearance
+    # Within reach: where the trajectory may go (the points plus the margin), plus the
+    # offset's range (Omega + 1 m) or the clearance, and the depths of the offset band and
+    # of the clearance slab.
+    reach = params.margin + max(params.omega + 1.0, params.clearance)
     z_reach = max(params.depth_band, params.clearance + DEPTH_MARGIN)
     if params.offset_metric == "3d":
-        z_reach = max(z_reach, 2.0 * params.omega)
+        z_reach = max(z_reach, reach)
     lo = pts.min(axis=0) - [reach, reach, z_reach]
     hi = pts.max(axis=0) + [reach, reach, z_reach]
     start = time.perf_counter()
+    resolution = 0.5
     if hasattr(occupied, "occupied_points"):
         local = occupied.occupied_points(lo, hi)
+        log_odds = voxel_log_odds(occupied, local)
+        resolution = occupied.resolution
     else:
         occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)
-        local = occupied[np.all((occupied >= lo) & (occupied <= hi), axis=1)]
+        inside = np.all((occupied >= lo) & (occupied <= hi), axis=1)
+        local = occupied[inside]
+        if log_odds is not None:
+            log_odds = np.asarray(log_odds, dtype=float)[inside]
     query_time = time.perf_counter() - start
     slice_map = SliceMap(local, (pts[:, 2].min(), pts[:, 2].max()), params.depth_band,
-                         params.clearance, metric=params.offset_metric)
+                         params.clearance, metric=params.offset_metric, log_odds=log_odds,
+                         min_log_odds=params.min_log_odds, box=(lo, hi),
+                         resolution=resolution)
     keep = (np.ones(len(waypoints), bool) if keep_offset is None
             else np.asarray(keep_offset, dtype=bool))[idx]
-    theta0, fraction = initial_trajectory(x, section, slice_map, params.omega, params.spacing,
-                                          keep)
-    # A trajectory point keeps the offset when the waypoint it leads to does.
-    keep_points = keep[np.minimum(np.searchsorted(fraction, np.linspace(0.0, 1.0, len(theta0))),
-                                  len(keep) - 1)]
-    # The depth to hold: the nominal polyline's before any offset correction (horizontal
-    # metric: the slice plane), or the corrected one (3D metric: the offset moves depth too).
-    if params.offset_metric == "3d":
-        z_ref = theta0[:, 2]
+    # The path of the progress and route terms: from the vehicle through the section and on
+    # through the next 3 waypoints, so that the section's end is not the end of progress.
+    route = Polyline(np.vstack([x, waypoints[int(idx[0]):min(int(idx[-1]) + 4,
+                                                            len(waypoints))]]))
+    waypoint_s = np.append(route.s0, route.length)[1:len(idx) + 1]
+    if optimizer == "stomp" and previous is not None and len(previous) >= 2:
+        theta0 = warm_start(x, np.asarray(previous, dtype=float), route, section, waypoint_s,
+                            params.spacing)
     else:
-        z_ref = resample_polyline(pts, params.spacing)
-        z_ref = np.interp(np.linspace(0, 1, len(theta0)), np.linspace(0, 1, len(z_ref)),
-                          z_ref[:, 2])
-    cost = ReplanningCost(slice_map, z_ref, params, keep_points)
-    result = stomp(theta0, cost, params.stomp, seed=seed, matrices=_matrices(len(theta0)))
-    # Trajectory points are evenly spaced along the polyline, so a waypoint's fraction of it
-    # maps to the same fraction of the optimised trajectory's points.
-    s_opt = _arclength(result.trajectory)
-    at = np.interp(fraction, np.linspace(0.0, 1.0, len(s_opt)), s_opt)
-    d_h, nearest = slice_map.offset(result.trajectory, 2.0 * params.omega)
+        theta0 = initial_trajectory(x, section, params.spacing)
+    # A trajectory point keeps the offset when the waypoint it leads to does.
+    keep_points = keep[np.minimum(np.searchsorted(waypoint_s, route.project(theta0)[0]),
+                                  len(keep) - 1)]
+    cost = ReplanningCost(slice_map, route, theta0, params, keep_points,
+                          goal=float(waypoint_s[-1]))
+    if optimizer == "stomp":
+        result = stomp(theta0, cost, params.stomp, seed=seed, matrices=_matrices(len(theta0)),
+                       free_end=True)
+        trajectory, initial_cost = result.trajectory, result.initial_cost
+        final_cost, iterations = result.cost, result.iterations
+    else:
+        trajectory, iterations = theta0, 0
+        initial_cost = final_cost = float(cost(theta0[None]).sum())
+    # A waypoint is passed where the trajectory's progress along the route reaches it (the
+    # trajectory need not come near it: the prior map may have put it inside the structure).
+    progress = np.maximum.accumulate(route.project(trajectory)[0])
+    s_opt = _arclength(trajectory)
+    at = np.interp(waypoint_s, progress, s_opt, right=np.inf)
+    d_h, nearest = slice_map.nearest_band(trajectory, 2.0 * params.omega)
     facing = np.full(len(d_h), np.nan)
     seen = np.isfinite(d_h) & (d_h > 1e-6) & keep_points
     if seen.any():
-        to = slice_map.band_points[nearest[seen], :2] - result.trajectory[seen, :2]
+        to = slice_map.band_points[nearest[seen], :2] - trajectory[seen, :2]
         facing[seen] = np.arctan2(to[:, 1], to[:, 0])
-    return SectionPlan(idx, theta0, result.trajectory, at, result.initial_cost, result.cost,
-                       result.iterations, query_time, facing)
+    return SectionPlan(idx, theta0, trajectory, at, initial_cost, final_cost, iterations,
+                       query_time, facing)

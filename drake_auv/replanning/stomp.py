@@ -1,7 +1,8 @@
 """STOMP: Stochastic Trajectory Optimization for Motion Planning (Kalakrishnan et al. 2011).
 
-A trajectory is N points in D dimensions (rows are timesteps) with its first and last point
-fixed; the N - 2 interior points are optimised. Pure numpy; the cost is a callable so the
+A trajectory is N points in D dimensions (rows are timesteps) with its first point fixed and
+its last one fixed or free (a goal set: the state cost prices where it ends); the other points
+are optimised. Pure numpy; the cost is a callable so the
 same optimiser serves any map. Checked against the description in REFERENCE-NOTES (ros-industrial
 implementation): finite-difference acceleration matrix A (rows 1, -2, 1), R = A^T A, rollout
 noise from N(0, R^-1), per-timestep probabilities with sensitivity h, update smoothed by
@@ -13,7 +14,11 @@ Choices the paper leaves open (see docs/replanning.md):
 - the smoothness cost of a timestep is 0.5 * w * |acceleration|^2 of that timestep, with the
   fixed end points entering the differences, so a straight evenly spaced line costs 0;
 - the trajectory with the lowest total cost seen is returned, so the result never costs more
-  than the initial trajectory.
+  than the initial trajectory;
+- a free end (`StompMatrices(N, free_end=True)`): the last point becomes a variable, the
+  acceleration rows are the same (no acceleration at the end), and R = A^T A, singular along
+  the straight-line swing of the trajectory about its start, gets a ridge mu I with mu the
+  smallest eigenvalue of the fixed-end R, so that mode is sampled like the smoothest bend.
 """
 
 from __future__ import annotations
@@ -71,7 +76,8 @@ class StompResult:
     """What `stomp` returns.
 
     Attributes:
-        trajectory: (N, D) the lowest-cost trajectory found (ends equal to the input's).
+        trajectory: (N, D) the lowest-cost trajectory found (fixed points equal to the
+            input's).
         cost: its total cost (state costs plus smoothness).
         initial_cost: total cost of the initial trajectory.
         cost_history: (iterations + 1,) best total cost after each iteration, starting with
@@ -89,20 +95,30 @@ class StompResult:
 class StompMatrices:
     """The fixed matrices of STOMP for `num_points` trajectory points (ends included).
 
-    Built once per trajectory length and reused: `A` (n x n, n = num_points - 2) maps interior
-    points to accelerations at the interior timesteps; `R = A^T A`; `noise_factor` is a Cholesky
-    factor of R^-1 normalised to a maximum entry of 1; `smoothing` is STOMP's M (R^-1 with
-    each column scaled so its largest entry is 1/num_points).
+    Built once per trajectory length and reused: the variables are the points `variables`
+    (1 .. N-2, or 1 .. N-1 with `free_end`); `A` ((N-2) x n) maps them to accelerations at the
+    interior timesteps; `R = A^T A` (plus the free end's ridge, see the module); `noise_factor`
+    is a Cholesky factor of R^-1 normalised to a maximum entry of 1; `smoothing` is STOMP's M
+    (R^-1 with each column scaled so its largest entry is 1/num_points).
     """
 
-    def __init__(self, num_points: int):
+    def __init__(self, num_points: int, free_end: bool = False):
         if int(num_points) != num_points or num_points < 3:
             raise ValueError(f"a STOMP trajectory needs num_points >= 3, got {num_points}")
-        n = num_points - 2
-        self.num_points = num_points
-        self.A = (np.diag(np.full(n, -2.0)) + np.diag(np.ones(n - 1), 1)
-                  + np.diag(np.ones(n - 1), -1))
-        self.R = self.A.T @ self.A
+        m = num_points - 2
+        self.num_points, self.free_end = num_points, bool(free_end)
+        interior = (np.diag(np.full(m, -2.0)) + np.diag(np.ones(m - 1), 1)
+                    + np.diag(np.ones(m - 1), -1))
+        if self.free_end:
+            last = np.zeros((m, 1))
+            last[-1] = 1.0
+            self.A = np.hstack([interior, last])
+            self.R = self.A.T @ self.A + np.linalg.eigvalsh(interior.T @ interior)[0] * np.eye(
+                m + 1)
+        else:
+            self.A = interior
+            self.R = self.A.T @ self.A
+        self.variables = slice(1, num_points if self.free_end else num_points - 1)
         R_inv = np.linalg.inv(self.R)
         R_inv = 0.5 * (R_inv + R_inv.T)
         self.noise_factor = np.linalg.cholesky(R_inv / R_inv.max())
@@ -124,8 +140,9 @@ def smoothness_costs(trajectories: np.ndarray, weight: float) -> np.ndarray:
 
 def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
           params: StompParameters = StompParameters(), seed: int = 0,
-          matrices: StompMatrices | None = None) -> StompResult:
-    """Optimises `initial` (N, D) against `state_cost`, keeping its first and last point.
+          matrices: StompMatrices | None = None, free_end: bool = False) -> StompResult:
+    """Optimises `initial` (N, D) against `state_cost`, keeping its first point (and its last
+    unless `free_end`).
 
     Args:
         initial: (N, D) initial trajectory, N >= 3, finite.
@@ -135,7 +152,8 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
             previous iteration produced, appended as row K), and once on the initial one.
         params: `StompParameters`.
         seed: seed of the rollout noise; the same seed gives the same result.
-        matrices: `StompMatrices(N)` to reuse across calls (built here when None).
+        matrices: `StompMatrices(N, free_end)` to reuse across calls (built here when None).
+        free_end: the last point is optimised too (its cost is the state cost's last column).
     """
     theta = np.array(initial, dtype=float)
     if theta.ndim != 2 or theta.shape[0] < 3:
@@ -144,10 +162,12 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
         raise ValueError("initial trajectory must be finite (no NaN or inf)")
     num_points, dim = theta.shape
     if matrices is None:
-        matrices = StompMatrices(num_points)
-    elif matrices.num_points != num_points:
-        raise ValueError(f"matrices were built for {matrices.num_points} points, "
-                         f"the trajectory has {num_points}")
+        matrices = StompMatrices(num_points, free_end)
+    elif matrices.num_points != num_points or matrices.free_end != bool(free_end):
+        raise ValueError(f"matrices were built for {matrices.num_points} points "
+                         f"(free_end={matrices.free_end}), the trajectory has {num_points} "
+                         f"(free_end={bool(free_end)})")
+    var = matrices.variables
     std = np.broadcast_to(np.asarray(params.noise_std, dtype=float), (dim,))
     rng = np.random.default_rng(seed)
     K, w = params.num_rollouts, params.smoothness_weight
@@ -173,10 +193,10 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
     pending = False
     for iterations in range(1, params.max_iterations + 2):
         if iterations <= params.max_iterations:
-            # Rollout noise eps[k] ~ N(0, R^-1) per dimension, zero at the fixed ends.
+            # Rollout noise eps[k] ~ N(0, R^-1) per dimension, zero at the fixed points.
             eps = np.zeros((K, num_points, dim))
-            z = rng.standard_normal((K, num_points - 2, dim))
-            eps[:, 1:-1, :] = np.einsum("ij,kjd->kid", matrices.noise_factor, z) * std
+            z = rng.standard_normal((K, len(matrices.R), dim))
+            eps[:, var, :] = np.einsum("ij,kjd->kid", matrices.noise_factor, z) * std
             rollouts = theta[None] + eps
             batch = np.concatenate([rollouts, theta[None]]) if pending else rollouts
         else:
@@ -199,7 +219,7 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
         spread = np.where(hi - lo > 0, hi - lo, 1.0)
         prob = np.exp(-params.h * (costs - lo) / spread)
         prob /= prob.sum(axis=0, keepdims=True)
-        dtheta = np.einsum("ki,kid->id", prob, eps)[1:-1]
-        theta[1:-1] += matrices.smoothing @ dtheta
+        dtheta = np.einsum("ki,kid->id", prob, eps)[var]
+        theta[var] += matrices.smoothing @ dtheta
         pending = True
     return StompResult(best, best_cost, history[0], np.array(history), iterations)
