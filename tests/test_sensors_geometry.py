@@ -173,18 +173,76 @@ def test_noise_off_by_default_and_deterministic_under_seed():
         scan(caster, model, angles, s, s)
 
 
-def test_sea_surface_reflections():
-    caster = RayCaster(_flat_seabed(-30.0))
-    angles = np.radians(np.arange(-90.0, 90.1, 5.0))
-    s = _state(z=-4.0)
-    model = SonarModel(SonarMount.named("vertical"),
-                       noise=SonarNoise(surface_prob=1.0))
+def _box(lo, hi):
+    box = trimesh.creation.box(extents=np.subtract(hi, lo))
+    box.apply_translation(np.add(lo, hi) / 2.0)
+    return box
+
+
+def test_surface_multipath_returns_the_path_length_along_the_beam():
+    # A wall x >= 15 from z = -30 to -3, the sonar 2 m deep scanning the vertical plane.
+    caster = RayCaster(_box((15.0, -30.0, -30.0), (16.0, 30.0, -3.0)))
+    angles = np.radians(np.arange(2.0, 60.0, 2.0))
+    s = _state(z=-2.0)
+    model = SonarModel(SonarMount.named("vertical"), noise=SonarNoise(surface_prob=1.0))
     ret = scan(caster, model, angles, s, s, rng=np.random.default_rng(0))
-    up = np.sin(angles) > np.sin(np.radians(11.6))  # surface within 20 m: 4 / sin(a) <= 20
-    np.testing.assert_allclose(ret.points_nav[up, 2], 0.0, atol=1e-9)
-    assert np.isnan(ret.ranges[(angles > 0) & ~up]).all()
-    clean = scan(caster, SonarModel(SonarMount.named("vertical")), angles, s, s)
-    np.testing.assert_array_equal(ret.ranges[angles <= 0], clean.ranges[angles <= 0])
+    # An upward beam reaching the surface first is mirrored: it meets the wall at
+    # z = -(15 tan a - 2), within it for tan a >= 1/3, in range for 15 / cos a <= 20.
+    t = np.tan(angles)
+    ghost = (2.0 / t < 15.0) & (t >= 1.0 / 3.0) & (15.0 / np.cos(angles) <= 20.0)
+    assert ghost.sum() >= 5
+    np.testing.assert_allclose(ret.ranges[ghost], 15.0 / np.cos(angles[ghost]), atol=1e-4)
+    # Every surface-first return is the mirror image (z -> -z) of a point of the wall (its
+    # face or its top): a straight ray into the mirrored world.
+    up = 2.0 / t < 15.0
+    hits = ret.points_nav[up & np.isfinite(ret.ranges)]
+    assert np.all((hits[:, 0] > 15.0 - 1e-6) & (hits[:, 0] < 16.0 + 1e-6))
+    assert np.all((-hits[:, 2] > -30.0) & (-hits[:, 2] < -3.0 + 1e-6))
+    never = SonarModel(SonarMount.named("vertical"), noise=SonarNoise(surface_prob=1e-9))
+    assert np.isnan(scan(caster, never, angles[ghost], s, s,
+                         rng=np.random.default_rng(0)).ranges).all()
+    # A pencil beam whose axis sees nothing: its upward side lobe, mirrored, meets a ledge
+    # (z -6 to -3) that the axis passes over and the lower lobe under; the echo comes back
+    # at the path length 15 / cos 20 deg and is placed on the axis, in the water column.
+    ledge = RayCaster(_box((15.0, -30.0, -6.0), (16.0, 30.0, -3.0)))
+    lobe = SonarNoise(surface_prob=1.0, side_lobe_deg=20.0, side_lobe_gain=1.0)
+    pencil = SonarModel(SonarMount.named("horizontal"), noise=lobe)
+    ret = scan(ledge, pencil, [0.0], s, s, rng=np.random.default_rng(1))
+    assert ret.ranges[0] == pytest.approx(15.0 / np.cos(np.radians(20.0)), abs=1e-3)
+    np.testing.assert_allclose(ret.points_nav[0], [15.96, 0.0, -2.0], atol=0.01)
+    dry = SonarModel(SonarMount.named("horizontal"),
+                     noise=SonarNoise(side_lobe_deg=20.0, side_lobe_gain=1.0))
+    assert np.isnan(scan(ledge, dry, [0.0], s, s, rng=np.random.default_rng(1)).ranges[0])
+
+
+def test_echo_threshold_loses_grazing_echoes_and_a_side_lobe_reports_a_far_wall():
+    caster = RayCaster(_wall(4.0))
+    s = _state()
+    weak = SonarModel(SonarMount.named("horizontal"), noise=SonarNoise(echo_threshold=0.1))
+    ret = scan(caster, weak, np.radians([0.0, 70.0, 75.0]), s, s, rng=np.random.default_rng(0))
+    # cos^2(70 deg) = 0.117 is detected, cos^2(75 deg) = 0.067 is not.
+    np.testing.assert_allclose(ret.ranges[:2], 4.0 / np.cos(np.radians([0.0, 70.0])), atol=1e-4)
+    assert np.isnan(ret.ranges[2])
+    # Ahead and below, a narrow ramp (|y| < 0.8 m, top z = -0.5) and a far wall x = 8: the
+    # beam, 10 deg down in the vertical plane, meets the ramp at 80 deg (too weak); its side
+    # lobes 20 deg to either side pass beside the ramp and meet the wall nearly normally,
+    # and that echo is reported along the axis: a point below the ramp (the pool's ramp and
+    # far wall confused, the reference's Figure 85).
+    ramp = _box((-1.0, -0.8, -1.5), (7.9, 0.8, -0.5))
+    far = _box((8.0, -30.0, -30.0), (9.0, 30.0, 30.0))
+    both = RayCaster(trimesh.util.concatenate([ramp, far]))
+    down = -np.radians(10.0)
+    clean = scan(both, SonarModel(SonarMount.named("vertical")), [down], s, s)
+    assert clean.ranges[0] == pytest.approx(0.5 / np.sin(np.radians(10.0)), abs=1e-3)
+    lobed = SonarModel(SonarMount.named("vertical"), noise=SonarNoise(
+        echo_threshold=0.05, side_lobe_deg=20.0, side_lobe_gain=0.08))
+    ret = scan(both, lobed, [down], s, s, rng=np.random.default_rng(0))
+    assert ret.ranges[0] == pytest.approx(8.0 / (np.cos(np.radians(10.0))
+                                                 * np.cos(np.radians(20.0))), abs=1e-3)
+    assert ret.points_nav[0, 2] < -1.0 and np.abs(ret.points_nav[0, 1]) < 0.8  # in the ramp
+    faint = SonarModel(SonarMount.named("vertical"), noise=SonarNoise(
+        echo_threshold=0.05, side_lobe_deg=20.0, side_lobe_gain=0.04))
+    assert np.isnan(scan(both, faint, [down], s, s, rng=np.random.default_rng(0)).ranges[0])
 
 
 def test_bad_input_raises():
@@ -200,6 +258,10 @@ def test_bad_input_raises():
         SonarNoise(range_sigma=-0.1)
     with pytest.raises(ValueError, match="dropout_prob"):
         SonarNoise(dropout_prob=1.5)
+    with pytest.raises(ValueError, match="side_lobe_deg"):
+        SonarNoise(side_lobe_deg=120.0)
+    with pytest.raises(ValueError, match="echo_threshold"):
+        SonarNoise(echo_threshold=1.0)
     with pytest.raises(ValueError, match="mount"):
         SonarMount.named("upside-down")
     with pytest.raises(ValueError, match="rotation"):

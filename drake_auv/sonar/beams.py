@@ -5,6 +5,12 @@ d_S = (cos a, sin a, 0). The mount places S on the vehicle: p_BS (body frame, m)
 `scan` casts the beams against the true world from the true pose, applies the error model,
 and expresses the returns in the body and navigation frames (navigation = estimated pose), so
 navigation drift reaches the map exactly as it would at sea. R_WB = Rz(yaw) Ry(pitch) Rx(roll).
+
+A beam is a bundle of rays with gains (its pattern): the axis (1), six rays on the edge of
+its cone (0.5: the beam width is the -3 dB width) and, with a side lobe, two rays at the
+side-lobe angle across the scan plane (up and down for a horizontal profiler: they reach the
+sea surface and the seabed); each ray's echo has intensity gain * cos^2(incidence) and the beam reports,
+along its axis, the nearest echo above the detection threshold (`SonarNoise`).
 """
 
 from __future__ import annotations
@@ -69,9 +75,10 @@ class SonarModel:
     Attributes:
         mount: where the sensor frame sits on the vehicle.
         max_range: m, > 0.
-        beam_width: full cone angle of each beam, rad, in [0, pi/6]; 0 casts the axis only,
-            otherwise the axis and 6 rays on the cone's edge are cast and the nearest echo
-            wins, as a real transducer reports the first strong echo inside its beam.
+        beam_width: full -3 dB cone angle of each beam, rad, in [0, pi/6]; 0 casts the axis
+            only, otherwise the axis and 6 rays on the cone's edge are cast and the nearest
+            detected echo wins, as a real transducer reports the first strong echo inside its
+            beam (see the module).
         max_incidence: largest angle between beam and surface normal that still returns an
             echo, rad, in (0, pi/2]; grazing beams scatter away and return nothing.
         noise: error options (off by default).
@@ -120,18 +127,27 @@ def head_angles(ping_indices, sector: tuple[float, float], step: float) -> np.nd
     return lo + np.where(s <= width, s, 2 * width - s)
 
 
-def _beam_rays(directions_s: np.ndarray, half_angle: float) -> np.ndarray:
-    """(n, m, 3) the axis and 6 cone-edge rays per beam (m = 1 when half_angle is 0)."""
-    if half_angle <= 0:
+EDGE_GAIN = 0.5  # two-way intensity on the edge of the -3 dB cone
+
+
+def _beam_rays(directions_s: np.ndarray, half_angle: float,
+               side_lobe: float = 0.0) -> np.ndarray:
+    """(n, m, 3) rays per beam: the axis, 6 on the cone's edge when `half_angle` > 0, and 2
+    at `side_lobe` rad across the scan plane (on either side of it) when that is > 0."""
+    rings = [(half_angle, np.arange(6) * np.pi / 3)] if half_angle > 0 else []
+    if side_lobe > 0:
+        rings.append((side_lobe, np.array([0.5, 1.5]) * np.pi))
+    if not rings:
         return directions_s[:, None, :]
     a = np.arctan2(directions_s[:, 1], directions_s[:, 0])
     e1 = np.column_stack([-np.sin(a), np.cos(a), np.zeros_like(a)])  # in the scan plane
     e2 = np.tile([0.0, 0.0, 1.0], (len(a), 1))  # out of it
-    phi = np.arange(6) * np.pi / 3
-    ring = (np.cos(half_angle) * directions_s[:, None, :]
-            + np.sin(half_angle) * (np.cos(phi)[None, :, None] * e1[:, None, :]
-                                    + np.sin(phi)[None, :, None] * e2[:, None, :]))
-    return np.concatenate([directions_s[:, None, :], ring], axis=1)
+    rays = [directions_s[:, None, :]]
+    for angle, phi in rings:
+        rays.append(np.cos(angle) * directions_s[:, None, :]
+                    + np.sin(angle) * (np.cos(phi)[None, :, None] * e1[:, None, :]
+                                       + np.sin(phi)[None, :, None] * e2[:, None, :]))
+    return np.concatenate(rays, axis=1)
 
 
 @dataclass(frozen=True)
@@ -139,13 +155,15 @@ class BeamGeometry:
     """Beams of one update in the body frame, precomputable when the angles repeat.
 
     angles (n,) rad; directions_body (n, 3) beam axes; rays_body (n * m, 3) the rays cast
-    (m per beam: the axis, plus the cone edge when the beam has a width).
+    (m per beam: the axis, the cone edge when the beam has a width, the side lobe when it has
+    one); ray_gains (m,) their two-way gains.
     """
 
     angles: np.ndarray
     directions_body: np.ndarray
     rays_body: np.ndarray
     rays_per_beam: int
+    ray_gains: np.ndarray
 
 
 def beam_geometry(model: SonarModel, angles) -> BeamGeometry:
@@ -153,9 +171,13 @@ def beam_geometry(model: SonarModel, angles) -> BeamGeometry:
     angles = np.asarray(angles, dtype=float).ravel()
     d_s = np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
     rotation = model.mount.rotation
-    rays = _beam_rays(d_s, 0.5 * model.beam_width)
+    noise = model.noise
+    side_lobe = np.radians(noise.side_lobe_deg) if noise.side_lobe else 0.0
+    rays = _beam_rays(d_s, 0.5 * model.beam_width, side_lobe)
+    gains = np.concatenate([[1.0], np.full(6 if model.beam_width > 0 else 0, EDGE_GAIN),
+                            np.full(2 if side_lobe > 0 else 0, noise.side_lobe_gain)])
     return BeamGeometry(angles, d_s @ rotation.T, rays.reshape(-1, 3) @ rotation.T,
-                        rays.shape[1])
+                        rays.shape[1], gains)
 
 
 def pose(state) -> tuple[np.ndarray, np.ndarray]:
@@ -166,6 +188,32 @@ def pose(state) -> tuple[np.ndarray, np.ndarray]:
     return state[:3].copy(), rotation_world_body(*state[3:6])
 
 
+def _surface_multipath(caster: RayCaster, origin: np.ndarray, rays: np.ndarray,
+                       ranges: np.ndarray, faces: np.ndarray, max_range: float,
+                       probability: float, rng: np.random.Generator):
+    """Rays (world frame) that reach the sea surface z = 0 before any echo end there: with
+    `probability` they are mirrored and cast on for the rest of the range, their echo coming
+    back the same way at the total path length; the others are scattered away (no echo).
+    Returns the ranges (path lengths, m), the faces hit and the directions of the rays as they
+    meet those faces."""
+    ranges, faces, rays = ranges.copy(), faces.copy(), rays.copy()
+    if origin[2] >= 0:
+        return ranges, faces, rays
+    t = np.full(len(rays), np.inf)
+    up = rays[:, 2] > 1e-9
+    t[up] = -origin[2] / rays[up, 2]
+    at_surface = (t < max_range) & ~(ranges <= t)  # NaN (no hit) compares False
+    reflected = at_surface & (rng.random(len(rays)) < probability)
+    ranges[at_surface], faces[at_surface] = np.nan, -1
+    if reflected.any():
+        mirrored = rays[reflected] * [1.0, 1.0, -1.0]
+        t_r = t[reflected]
+        r2, f2 = caster.cast_unit(origin + t_r[:, None] * rays[reflected], mirrored,
+                                  max_range - t_r)
+        ranges[reflected], faces[reflected], rays[reflected] = t_r + r2, f2, mirrored
+    return ranges, faces, rays
+
+
 def scan(caster: RayCaster, model: SonarModel, angles, true_state, estimated_state,
          rng: np.random.Generator | None = None, time: float = 0.0, sequence: int = 0,
          geometry: BeamGeometry | None = None) -> SonarReturns:
@@ -174,7 +222,8 @@ def scan(caster: RayCaster, model: SonarModel, angles, true_state, estimated_sta
 
     Args:
         caster: ray caster of the true world.
-        model: mount, range, beam width, grazing limit and noise.
+        model: mount, range, beam width, grazing limit and noise (beam pattern, threshold,
+            surface multipath, clutter, dropouts, range noise).
         angles: (n,) beam angles, rad (ignored when `geometry` is given).
         true_state, estimated_state: 12-vectors.
         rng: generator for the noise (required if model.noise is enabled).
@@ -186,17 +235,29 @@ def scan(caster: RayCaster, model: SonarModel, angles, true_state, estimated_sta
     mount = model.mount
     origin_w = p_wb + r_wb @ mount.position
     rays_w = g.rays_body @ r_wb.T
+    noise = model.noise
+    if noise.enabled and rng is None:
+        raise ValueError("scan: a seeded rng is required when noise is enabled")
     ranges, faces = caster.cast_unit(origin_w, rays_w, model.max_range)
-    # Grazing beams scatter away: no echo beyond max_incidence from the normal.
-    cos_inc = np.abs(np.einsum("ij,ij->i", caster.face_normals[np.maximum(faces, 0)], rays_w))
-    ranges[cos_inc < np.cos(model.max_incidence) - 1e-12] = np.nan
+    if noise.surface_prob > 0:
+        ranges, faces, rays_echo = _surface_multipath(caster, origin_w, rays_w, ranges, faces,
+                                                      model.max_range, noise.surface_prob, rng)
+    else:
+        rays_echo = rays_w
+    # Grazing rays scatter away: no echo beyond max_incidence from the normal; weak echoes
+    # (gain * cos^2 of the incidence) stay below the detection threshold.
+    cos_inc = np.abs(np.einsum("ij,ij->i", caster.face_normals[np.maximum(faces, 0)],
+                               rays_echo))
+    lost = cos_inc < np.cos(model.max_incidence) - 1e-12
+    if noise.echo_threshold > 0:
+        gains = np.tile(g.ray_gains, len(g.angles))
+        lost |= gains * cos_inc ** 2 < noise.echo_threshold
+    ranges[lost] = np.nan
     if g.rays_per_beam > 1:  # the nearest echo inside the beam (fmin skips NaN)
         ranges = np.fmin.reduce(ranges.reshape(-1, g.rays_per_beam), axis=1)
     d_b = g.directions_body
-    if model.noise.enabled:
-        if rng is None:
-            raise ValueError("scan: a seeded rng is required when noise is enabled")
-        ranges = apply_noise(ranges, origin_w, d_b @ r_wb.T, model.max_range, model.noise, rng)
+    if noise.enabled:
+        ranges = apply_noise(ranges, model.max_range, noise, rng)
     points_b = mount.position + ranges[:, None] * d_b
     return SonarReturns(
         time=float(time),

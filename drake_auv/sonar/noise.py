@@ -1,7 +1,10 @@
-"""Sonar error models: range noise, dropouts, spurious returns, sea-surface reflections.
+"""Sonar error models: the beam's side lobes and detection threshold, sea-surface multipath,
+clutter, dropouts and range noise.
 
 All are off by default and draw from a generator the caller seeds, so a run is repeatable.
-The order of application: surface reflection, spurious return, dropout, then range noise.
+The beam pattern, the threshold and the surface multipath act on the rays of each beam in
+`drake_auv.sonar.beams.scan` (they need the ray casting); `apply_noise` then adds, in order,
+spurious returns, dropouts and range noise to the beams' ranges.
 """
 
 from __future__ import annotations
@@ -20,52 +23,60 @@ class SonarNoise:
         dropout_prob: probability that a return is lost, in [0, 1].
         spurious_prob: probability that a beam reports a random range, uniform in
             (0, max_range), whatever it hit (water-column clutter), in [0, 1].
-        surface_prob: probability that a beam reaching the sea surface (z = 0) before any
-            other return echoes from it, in [0, 1] (the outliers of the reference's maps).
+        surface_prob: probability that a ray of a beam reaching the sea surface (z = 0) before
+            anything else is reflected there (mirrored) and goes on (the rest is scattered
+            away), in [0, 1]; an echo of the reflected ray comes back along the same path and
+            is reported at the total path length along the beam's axis, i.e. in the water
+            column (the outliers of the reference's breakwater map).
+        side_lobe_deg: angle of the beam's side lobe from its axis, deg, in [0, 90]; two
+            rays, across the scan plane on either side of it, are cast there.
+        side_lobe_gain: the side lobe's two-way intensity relative to the axis, in [0, 1]
+            (0: no side lobe).
+        echo_threshold: detection threshold on a ray's echo intensity, gain * cos^2(incidence)
+            (Lambertian backscatter, after the sonar's time-varied gain has removed the
+            spreading loss), relative to an on-axis echo at normal incidence, in [0, 1); the
+            beam reports the first detected echo. 0: every echo is detected.
     """
 
     range_sigma: float = 0.0
     dropout_prob: float = 0.0
     spurious_prob: float = 0.0
     surface_prob: float = 0.0
+    side_lobe_deg: float = 0.0
+    side_lobe_gain: float = 0.0
+    echo_threshold: float = 0.0
 
     def __post_init__(self):
         if not (np.isfinite(self.range_sigma) and self.range_sigma >= 0):
             raise ValueError(f"SonarNoise.range_sigma must be >= 0 m, got {self.range_sigma}")
-        for name in ("dropout_prob", "spurious_prob", "surface_prob"):
+        for name in ("dropout_prob", "spurious_prob", "surface_prob", "side_lobe_gain"):
             value = getattr(self, name)
             if not (np.isfinite(value) and 0.0 <= value <= 1.0):
                 raise ValueError(f"SonarNoise.{name} must be in [0, 1], got {value}")
+        if not (np.isfinite(self.side_lobe_deg) and 0.0 <= self.side_lobe_deg <= 90.0):
+            raise ValueError(f"SonarNoise.side_lobe_deg must be in [0, 90] deg, got "
+                             f"{self.side_lobe_deg}")
+        if not (np.isfinite(self.echo_threshold) and 0.0 <= self.echo_threshold < 1.0):
+            raise ValueError(f"SonarNoise.echo_threshold must be in [0, 1), got "
+                             f"{self.echo_threshold}")
 
     @property
     def enabled(self) -> bool:
         return bool(self.range_sigma or self.dropout_prob or self.spurious_prob
-                    or self.surface_prob)
+                    or self.surface_prob or self.side_lobe_gain or self.echo_threshold)
+
+    @property
+    def side_lobe(self) -> bool:
+        """Whether side-lobe rays are cast."""
+        return self.side_lobe_gain > 0 and self.side_lobe_deg > 0
 
 
-def apply_noise(ranges: np.ndarray, origin_world: np.ndarray, directions_world: np.ndarray,
-                max_range: float, noise: SonarNoise, rng: np.random.Generator) -> np.ndarray:
-    """Noisy copy of `ranges` (n,), NaN for no return.
-
-    Args:
-        ranges: true first-hit ranges, m, NaN for no hit.
-        origin_world: (3,) true sensor origin (world frame, sea surface at z = 0).
-        directions_world: (n, 3) unit beam directions in the world frame.
-        max_range: m; noisy ranges beyond it are dropped, below zero clipped to zero.
-        noise: the error options.
-        rng: seeded generator.
-    """
+def apply_noise(ranges: np.ndarray, max_range: float, noise: SonarNoise,
+                rng: np.random.Generator) -> np.ndarray:
+    """Noisy copy of the beams' `ranges` (n,), m, NaN for no return: clutter, dropouts, range
+    noise (noisy ranges beyond `max_range` are dropped, below zero clipped to zero)."""
     out = np.array(ranges, dtype=float)
-    if not noise.enabled:
-        return out
     n = len(out)
-    if noise.surface_prob > 0 and origin_world[2] < 0:
-        up = directions_world[:, 2] > 1e-9
-        t = np.full(n, np.inf)
-        t[up] = -origin_world[2] / directions_world[up, 2]
-        first = (t < max_range) & ~(out <= t)  # NaN (no hit) compares False: surface first
-        reflect = first & (rng.random(n) < noise.surface_prob)
-        out[reflect] = t[reflect]
     if noise.spurious_prob > 0:
         spurious = rng.random(n) < noise.spurious_prob
         out[spurious] = rng.uniform(0.0, max_range, size=int(spurious.sum()))
