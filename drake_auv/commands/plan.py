@@ -2,15 +2,25 @@
 
     drake-auv plan map.tif -o out/                         whole grid, Omega = 2 m
     drake-auv plan map.tif --roi 500,200,600,450 --omega 2 --aperture 60 -o out/
+    drake-auv plan map.tif --export cola2,qgc,geojson -o out/   missions a vehicle runs
     drake-auv plan caldera -o out/                         the synthetic caldera-rim site
 
-Writes path.csv (world frame), path.geojson and lawnmower.geojson (3D, in the map's CRS),
-report.md and report.json (the Table 3 comparison) and PNG figures into OUTDIR.
+Writes path.csv (world frame), report.md and report.json (the Table 3 comparison), PNG figures
+and the --export formats (default geojson when the grid is georeferenced): mission.xml (COLA2),
+mission.plan (QGroundControl, ArduSub), path.geojson and lawnmower.geojson (WGS 84) into OUTDIR.
 """
 
 from __future__ import annotations
 
 from pathlib import Path as FilePath
+
+
+def _lonlat(text: str) -> tuple[float, float]:
+    try:
+        lon, lat = (float(v) for v in text.split(","))
+    except ValueError:
+        raise ValueError(f"--origin-lonlat: expected 'LON,LAT' in degrees, got {text!r}") from None
+    return lon, lat
 
 
 def add_parser(subparsers) -> None:
@@ -40,6 +50,17 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
                         help="on high-slope regions look along the inward normal (default) or "
                              "with one fixed tilt per region")
+    parser.add_argument("--min-depth", type=float, default=1.0,
+                        help="minimum operating depth, m, >= 0: no sample above it, shallower "
+                             "cells are no-go (default 1)")
+    parser.add_argument("--export", default=None,
+                        help="comma-separated: cola2 (mission.xml), qgc (mission.plan), "
+                             "geojson (WGS 84) (default: geojson when georeferenced)")
+    parser.add_argument("--origin-lonlat", default=None,
+                        help="WGS 84 'LON,LAT' of the world origin, for grids without a CRS "
+                             "(the caldera site defaults to the Santorini caldera)")
+    parser.add_argument("--speed", type=float, default=0.5,
+                        help="mission surge speed, m/s, > 0 (default 0.5)")
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     parser.add_argument("-o", "--outdir", required=True, help="output directory")
     parser.set_defaults(func=run)
@@ -47,13 +68,17 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     from drake_auv.planning.coverage_plan import plan_coverage
-    from drake_auv.planning.export import table3_markdown, write_outputs
+    from drake_auv.planning.export import parse_exports, table3_markdown, write_outputs
     from drake_auv.terrain.roi import parse_roi
 
+    exports = parse_exports(args.export) if args.export is not None else None
+    origin = _lonlat(args.origin_lonlat) if args.origin_lonlat is not None else None
     if args.bathymetry == "caldera" and not FilePath("caldera").exists():
+        from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
         from drake_auv.terrain.synthetic import caldera_site
 
         bathy = caldera_site()
+        origin = CALDERA_ORIGIN_LONLAT if origin is None else origin
     else:
         from drake_auv.terrain.readers import read_bathymetry
 
@@ -63,8 +88,9 @@ def run(args) -> int:
                          overlap=args.overlap, slope_threshold=args.slope_threshold,
                          sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
                          slice_count=args.slice_count, slice_sensor=args.slice_sensor,
-                         progress=True)
-    files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True)
+                         min_depth=args.min_depth, progress=True)
+    files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
+                          exports=exports, origin_lonlat=origin, surge_velocity=args.speed)
     print(table3_markdown(plan.metrics))
     print(f"wrote {len(files)} files to {args.outdir}")
     return 0

@@ -15,7 +15,8 @@ import numpy as np
 from drake_auv.planning.boustrophedon import (Decomposition, best_sweep_angle,
                                               boustrophedon_waypoints, cell_lanes, decompose,
                                               exhaustive_walk, sliver_cells, sweep_raster)
-from drake_auv.planning.lawnmower import check_sensor_parameters, lane_spacing, plan_lawnmower
+from drake_auv.planning.lawnmower import (check_omega_fits, check_sensor_parameters, lane_spacing,
+                                          plan_lawnmower, wet_grid)
 from drake_auv.planning.path import Path
 from drake_auv.planning.route import RouteBuilder
 from drake_auv.planning.slicing import (Contour, fixed_depression, order_contours, slice_levels,
@@ -78,7 +79,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                   closing_radius: float | None = None, opening_radius: float | None = None,
                   min_area: float | None = None, sample_spacing: float | None = None,
                   sensor_range: float | None = None, slice_sensor: str = "normal",
-                  baseline: bool = True,
+                  min_depth: float = 1.0, baseline: bool = True,
                   compute_metrics: bool = True, progress: bool = False) -> CoveragePlan:
     """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) at offset `omega`.
 
@@ -98,6 +99,9 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         sensor_range: largest range at which the sensor sees, m (default 2 Omega), for metrics.
         slice_sensor: on high-slope regions the sensor looks along the inward surface normal
             ("normal") or keeps one tilt per region matched to its median slope ("fixed-tilt").
+        min_depth: minimum operating depth, m (>= 0). Cells shallower than it are no-go; no
+            sample lies above z = -min_depth (where Omega above the seabed would be, the path
+            runs at the minimum depth instead; `report_dict` says how much of it).
         baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
         compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
         progress: show a tqdm bar over the stages.
@@ -120,9 +124,11 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
     if sensor_range is not None and not (np.isfinite(sensor_range) and sensor_range > 0):
         raise ValueError(f"sensor_range must be > 0 m, got {sensor_range}")
-    bar = tqdm(total=6, desc="plan", disable=not progress, leave=False)
     if roi is not None:
         bathy = crop_to_roi(bathy, roi)
+    check_omega_fits(omega, bathy)
+    bathy = wet_grid(bathy, min_depth)
+    bar = tqdm(total=6, desc="plan", disable=not progress, leave=False)
     labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
     bar.update()
     surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0))
@@ -149,7 +155,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     positions = np.array(positions).reshape(-1, 2)
     order = exhaustive_walk(adjacency, positions, 0)
     bar.update()
-    route = RouteBuilder(surface, omega, ds)
+    route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth))
     contours_done: list[Contour] = []
     visit = []
     slivers = sliver_cells(dec, 0.5 * spacing ** 2)
@@ -180,14 +186,14 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     lawn = None
     if baseline:
         lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=aperture_deg, overlap=overlap,
-                              sample_spacing=ds, surface=surface)
+                              sample_spacing=ds, surface=surface, min_depth=min_depth)
     bar.update()
     params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
                   slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
                   slice_spacing=slice_spacing, slice_count=slice_count, lane_spacing=spacing,
                   sample_spacing=ds,
                   sensor_range=2.0 * omega if sensor_range is None else float(sensor_range),
-                  slice_sensor=slice_sensor)
+                  slice_sensor=slice_sensor, min_depth=float(min_depth))
     plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                         None, surface)
     if compute_metrics and baseline:

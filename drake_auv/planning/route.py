@@ -1,10 +1,12 @@
-"""Assembling a `Path` from coverage pieces: terrain-following legs, transits, clearance.
+"""Assembling a `Path` from coverage pieces: terrain-following legs, transits, clearance,
+the water column.
 
 A transit is the straight line between two pieces, lifted where needed to at least Omega above
 the terrain below it; after assembly every sample is kept over the grid and lifted where it is
 closer than Omega to the surface (3D distance, not just altitude:
 `TerrainSurface.enforce_clearance`). Samples are at most `sample_spacing` apart, so the clearance
-holds along the segments to within that spacing.
+holds along the segments to within that spacing. No sample lies above the ceiling (world z = -the
+minimum operating depth): where the water is too shallow for Omega the path runs at it.
 """
 
 from __future__ import annotations
@@ -21,10 +23,12 @@ DOWN = np.array([0.0, 0.0, -1.0])
 class RouteBuilder:
     """Accumulates labelled pieces in order, then builds one `Path`."""
 
-    def __init__(self, surface: TerrainSurface, omega: float, sample_spacing: float):
+    def __init__(self, surface: TerrainSurface, omega: float, sample_spacing: float,
+                 ceiling: float = 0.0):
         self.surface = surface
         self.omega = float(omega)
         self.ds = float(sample_spacing)
+        self.ceiling = float(ceiling)
         self._points, self._sensor, self._labels, self._facing = [], [], [], []
 
     @property
@@ -78,7 +82,9 @@ class RouteBuilder:
         self._add(line, np.tile(DOWN, (len(line), 1)), "transit", np.full(len(line), np.nan))
 
     def build(self, enforce_clearance: bool = True) -> Path:
-        """The assembled path; every sample at least Omega from the terrain if asked."""
+        """The assembled path; every sample at least Omega from the terrain if asked, and
+        none above `ceiling` (the minimum operating depth, world z, m), which wins where the
+        two conflict (water shallower than Omega plus the minimum depth)."""
         if not self._points:
             raise ValueError("the route is empty: nothing to cover")
         points = np.vstack(self._points)
@@ -87,5 +93,6 @@ class RouteBuilder:
         facing = np.concatenate(self._facing)
         if enforce_clearance:
             points = self.surface.enforce_clearance(points, self.omega)
+        points[:, 2] = np.minimum(points[:, 2], self.ceiling)
         heading = np.where(np.isnan(facing), motion_heading(points), facing)
         return Path(points, heading, sensor, labels)
