@@ -50,6 +50,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
                         help="on high-slope regions look along the inward normal (default) or "
                              "with one fixed tilt per region")
+    parser.add_argument("--min-area", type=float, default=None,
+                        help="smallest high-slope region kept, m^2, >= 0 (default 100, at "
+                             "least 4 cells; it does not grow with the ROI)")
     parser.add_argument("--min-depth", type=float, default=1.0,
                         help="minimum operating depth, m, >= 0: no sample above it, shallower "
                              "cells are no-go (default 1)")
@@ -88,7 +91,7 @@ def run(args) -> int:
                          overlap=args.overlap, slope_threshold=args.slope_threshold,
                          sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
                          slice_count=args.slice_count, slice_sensor=args.slice_sensor,
-                         min_depth=args.min_depth, progress=True)
+                         min_area=args.min_area, min_depth=args.min_depth, progress=True)
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
                           exports=exports, origin_lonlat=origin, surge_velocity=args.speed)
     print(table3_markdown(plan.metrics))

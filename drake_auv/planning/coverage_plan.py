@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import ndimage
 
 from drake_auv.planning.boustrophedon import (Decomposition, best_sweep_angle,
                                               boustrophedon_waypoints, cell_lanes, decompose,
@@ -148,10 +149,10 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         adjacency[c].append(n_cells + r - 1)
         adjacency[n_cells + r - 1].append(c)
     positions = [c.centroid(dec.frame) for c in dec.cells]
-    xx, yy = np.meshgrid(bathy.x, bathy.y)
-    for r in range(1, labels.n_regions + 1):
-        m = labels.regions == r
-        positions.append(np.array([xx[m].mean(), yy[m].mean()]))
+    if labels.n_regions:
+        rc = np.array(ndimage.center_of_mass(labels.high, labels.regions,
+                                             np.arange(1, labels.n_regions + 1)))
+        positions += list(np.asarray(bathy.origin) + rc[:, ::-1] * np.asarray(bathy.spacing))
     positions = np.array(positions).reshape(-1, 2)
     order = exhaustive_walk(adjacency, positions, 0)
     bar.update()

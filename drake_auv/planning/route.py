@@ -44,7 +44,7 @@ class RouteBuilder:
                 return
         self._points.append(points)
         self._sensor.append(sensor)
-        self._labels.append(np.full(len(points), label, dtype=object))
+        self._labels.append((label, len(points)))
         self._facing.append(facing)
 
     def add_terrain_following(self, xy_waypoints: np.ndarray, label: str) -> None:
@@ -84,15 +84,22 @@ class RouteBuilder:
     def build(self, enforce_clearance: bool = True) -> Path:
         """The assembled path; every sample at least Omega from the terrain if asked, and
         none above `ceiling` (the minimum operating depth, world z, m), which wins where the
-        two conflict (water shallower than Omega plus the minimum depth)."""
+        two conflict (water shallower than Omega plus the minimum depth). Consumes the
+        pieces (their memory is released before the path is built)."""
         if not self._points:
             raise ValueError("the route is empty: nothing to cover")
+        # Each list is dropped as soon as it is joined, so the peak holds one copy plus one field.
         points = np.vstack(self._points)
+        self._points = []
         sensor = np.vstack(self._sensor)
-        labels = np.concatenate(self._labels)
+        self._sensor = []
+        names, counts = zip(*self._labels)
+        labels = np.repeat(np.array(names, dtype=object), counts)
+        self._labels = []
         facing = np.concatenate(self._facing)
+        self._facing = []
         if enforce_clearance:
-            points = self.surface.enforce_clearance(points, self.omega)
+            points = self.surface.enforce_clearance(points, self.omega, copy=False)
         points[:, 2] = np.minimum(points[:, 2], self.ceiling)
         heading = np.where(np.isnan(facing), motion_heading(points), facing)
-        return Path(points, heading, sensor, labels)
+        return Path.adopt(points, heading, sensor, labels)
