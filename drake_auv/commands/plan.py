@@ -32,6 +32,11 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--roi", help="region of interest in map coordinates: "
                                       "'xmin,ymin,xmax,ymax' or a polygon 'x1,y1;x2,y2;x3,y3;...' "
                                       "(write --roi=-123,... when it starts with a minus sign)")
+    parser.add_argument("--roi-file", help="region of interest as polygons (holes allowed) in a "
+                                           "GeoJSON, Shapefile or GeoPackage, any CRS")
+    parser.add_argument("--no-go", action="append", default=[], metavar="FILE",
+                        help="no-go zones (polygons: GeoJSON, Shapefile, GeoPackage, any CRS); "
+                             "nothing comes within Omega of them; repeatable")
     parser.add_argument("--omega", type=float, default=2.0,
                         help="offset to the terrain, m, > 0 (default 2)")
     parser.add_argument("--slope-threshold", type=float, default=0.5,
@@ -86,12 +91,25 @@ def run(args) -> int:
         from drake_auv.terrain.readers import read_bathymetry
 
         bathy = read_bathymetry(args.bathymetry)
+    if args.roi and args.roi_file:
+        raise ValueError("give --roi or --roi-file, not both")
     roi = parse_roi(args.roi) if args.roi else None
+    no_go = None
+    if args.roi_file or args.no_go:
+        import shapely
+
+        from drake_auv.terrain.zones import read_zones
+
+        if args.roi_file:
+            roi = read_zones(args.roi_file, bathy, "region of interest")
+        if args.no_go:
+            no_go = shapely.union_all([read_zones(f, bathy) for f in args.no_go])
     plan = plan_coverage(bathy, roi=roi, omega=args.omega, aperture_deg=args.aperture,
                          overlap=args.overlap, slope_threshold=args.slope_threshold,
                          sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
                          slice_count=args.slice_count, slice_sensor=args.slice_sensor,
-                         min_area=args.min_area, min_depth=args.min_depth, progress=True)
+                         min_area=args.min_area, min_depth=args.min_depth, no_go=no_go,
+                         progress=True)
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
                           exports=exports, origin_lonlat=origin, surge_velocity=args.speed)
     print(table3_markdown(plan.metrics))

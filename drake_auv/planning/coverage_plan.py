@@ -73,6 +73,27 @@ def _region_adjacency(dec: Decomposition, bathy: Bathymetry, regions: np.ndarray
     return sorted(pairs)
 
 
+def _apply_no_go(bathy: Bathymetry, no_go, omega: float):
+    """The grid with the cells within Omega of the zones made no-data, and the `NoGo`."""
+    from drake_auv.planning.nogo import NoGo
+    from drake_auv.terrain.zones import check_inside_grid, zones_to_world
+
+    zones = zones_to_world(no_go, bathy)
+    check_inside_grid(zones, bathy, "--no-go")
+    nogo = NoGo(zones, omega, bathy.extent)
+    xx, yy = np.meshgrid(bathy.x, bathy.y)
+    blocked = nogo.inside(np.column_stack([xx.ravel(), yy.ravel()])).reshape(bathy.shape)
+    if (bathy.valid & ~blocked).sum() == 0:
+        raise ValueError("the no-go zones plus Omega cover every cell of the grid")
+    return bathy.with_z(np.where(blocked, np.nan, bathy.z)), nogo
+
+
+def _exterior_rings(geom) -> list[list[list[float]]]:
+    """Exterior rings of a (Multi)Polygon as [[x, y], ...] lists (world frame, m)."""
+    polys = [geom] if geom.geom_type == "Polygon" else list(geom.geoms)
+    return [np.round(np.asarray(p.exterior.coords), 3).tolist() for p in polys]
+
+
 def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_deg: float = 60.0,
                   overlap: float = 0.1, slope_threshold: float = 0.5,
                   sweep_angle_deg: float | None = None, slice_spacing: float | None = None,
@@ -80,7 +101,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                   closing_radius: float | None = None, opening_radius: float | None = None,
                   min_area: float | None = None, sample_spacing: float | None = None,
                   sensor_range: float | None = None, slice_sensor: str = "normal",
-                  min_depth: float = 1.0, baseline: bool = True,
+                  min_depth: float = 1.0, no_go=None, baseline: bool = True,
                   compute_metrics: bool = True, progress: bool = False) -> CoveragePlan:
     """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) at offset `omega`.
 
@@ -103,6 +124,9 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         min_depth: minimum operating depth, m (>= 0). Cells shallower than it are no-go; no
             sample lies above z = -min_depth (where Omega above the seabed would be, the path
             runs at the minimum depth instead; `report_dict` says how much of it).
+        no_go: shapely (Multi)Polygon of no-go zones in the map coordinates of the grid's CRS
+            (`terrain.zones.read_zones`); no lane, contour or transit comes within Omega of
+            them, transits go around them (`planning.nogo`).
         baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
         compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
         progress: show a tqdm bar over the stages.
@@ -129,6 +153,9 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         bathy = crop_to_roi(bathy, roi)
     check_omega_fits(omega, bathy)
     bathy = wet_grid(bathy, min_depth)
+    nogo = None
+    if no_go is not None:
+        bathy, nogo = _apply_no_go(bathy, no_go, omega)
     bar = tqdm(total=6, desc="plan", disable=not progress, leave=False)
     labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
     bar.update()
@@ -156,7 +183,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     positions = np.array(positions).reshape(-1, 2)
     order = exhaustive_walk(adjacency, positions, 0)
     bar.update()
-    route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth))
+    route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
     contours_done: list[Contour] = []
     visit = []
     slivers = sliver_cells(dec, 0.5 * spacing ** 2)
@@ -187,14 +214,17 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     lawn = None
     if baseline:
         lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=aperture_deg, overlap=overlap,
-                              sample_spacing=ds, surface=surface, min_depth=min_depth)
+                              sample_spacing=ds, surface=surface, min_depth=min_depth,
+                              nogo=nogo)
     bar.update()
     params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
                   slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
                   slice_spacing=slice_spacing, slice_count=slice_count, lane_spacing=spacing,
                   sample_spacing=ds,
                   sensor_range=2.0 * omega if sensor_range is None else float(sensor_range),
-                  slice_sensor=slice_sensor, min_depth=float(min_depth))
+                  slice_sensor=slice_sensor, min_depth=float(min_depth),
+                  unreachable_pieces=route.unreachable,
+                  no_go_rings=[] if nogo is None else _exterior_rings(nogo.zones))
     plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                         None, surface)
     if compute_metrics and baseline:

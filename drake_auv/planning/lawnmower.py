@@ -74,7 +74,8 @@ def wet_grid(bathy: Bathymetry, min_depth: float) -> Bathymetry:
 def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float = 60.0,
                    overlap: float = 0.1, sweep_angle_deg: float | None = None,
                    sample_spacing: float | None = None, enforce_clearance: bool = True,
-                   surface: TerrainSurface | None = None, min_depth: float = 1.0) -> Path:
+                   surface: TerrainSurface | None = None, min_depth: float = 1.0,
+                   nogo=None) -> Path:
     """Lawnmower over the valid cells of `bathy`; labels "lawnmower" and "transit".
 
     Args:
@@ -85,6 +86,7 @@ def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float
         sample_spacing: largest distance between samples, m (default Omega / 4).
         surface: a prebuilt `TerrainSurface` of `bathy` to reuse.
         min_depth: minimum operating depth, m (>= 0): no sample above z = -min_depth.
+        nogo: a `planning.nogo.NoGo` the lanes keep out of and the transits go around.
     """
     check_sensor_parameters(omega, aperture_deg, overlap)
     check_min_depth(min_depth)
@@ -100,7 +102,7 @@ def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float
              else np.radians(float(sweep_angle_deg)))
     dec = decompose(bathy, valid, angle)
     centroids = np.array([c.centroid(dec.frame) for c in dec.cells])
-    route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth))
+    route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
     slivers = sliver_cells(dec, 0.5 * spacing ** 2)
     for k in exhaustive_walk(dec.adjacency(), centroids, 0):
         if k in slivers:
