@@ -55,6 +55,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
                         help="on high-slope regions look along the inward normal (default) or "
                              "with one fixed tilt per region")
+    parser.add_argument("--order", default=None,
+                        help="IHO S-44 ed. 6 survey order: exclusive (200 %% coverage), special, "
+                             "1a (100 %%), 1b, 2 (5 %%); sets the lane spacing")
     parser.add_argument("--min-area", type=float, default=None,
                         help="smallest high-slope region kept, m^2, >= 0 (default 100, at "
                              "least 4 cells; it does not grow with the ROI)")
@@ -109,6 +112,7 @@ def run(args) -> int:
                          sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
                          slice_count=args.slice_count, slice_sensor=args.slice_sensor,
                          min_area=args.min_area, min_depth=args.min_depth, no_go=no_go,
+                         order=args.order,
                          progress=True)
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
                           exports=exports, origin_lonlat=origin, surge_velocity=args.speed)

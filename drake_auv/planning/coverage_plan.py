@@ -101,7 +101,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                   closing_radius: float | None = None, opening_radius: float | None = None,
                   min_area: float | None = None, sample_spacing: float | None = None,
                   sensor_range: float | None = None, slice_sensor: str = "normal",
-                  min_depth: float = 1.0, no_go=None, baseline: bool = True,
+                  min_depth: float = 1.0, no_go=None, order: str | None = None,
+                  baseline: bool = True,
                   compute_metrics: bool = True, progress: bool = False) -> CoveragePlan:
     """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) at offset `omega`.
 
@@ -127,6 +128,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         no_go: shapely (Multi)Polygon of no-go zones in the map coordinates of the grid's CRS
             (`terrain.zones.read_zones`); no lane, contour or transit comes within Omega of
             them, transits go around them (`planning.nogo`).
+        order: IHO S-44 survey order ("exclusive", "special", "1a", "1b", "2"): the lane
+            spacing is divided by its coverage factor (`planning.orders`); None: 100 %.
         baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
         compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
         progress: show a tqdm bar over the stages.
@@ -134,6 +137,11 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     from tqdm import tqdm
 
     check_sensor_parameters(omega, aperture_deg, overlap)
+    survey = None
+    if order is not None:
+        from drake_auv.planning.orders import survey_order
+
+        survey = survey_order(order)
     if not isinstance(bathy, Bathymetry):
         raise ValueError(f"plan_coverage needs a Bathymetry, got {type(bathy).__name__}")
     if slice_spacing is not None and not (np.isfinite(slice_spacing) and slice_spacing > 0):
@@ -160,7 +168,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
     bar.update()
     surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0))
-    spacing = lane_spacing(omega, aperture_deg, overlap)
+    spacing = lane_spacing(omega, aperture_deg, overlap) / (1.0 if survey is None else survey.coverage)
     planar = labels.planar
     if planar.any():
         angle = (best_sweep_angle(bathy, planar, spacing) if sweep_angle_deg is None
@@ -214,6 +222,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     lawn = None
     if baseline:
         lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=aperture_deg, overlap=overlap,
+                              lane_spacing_m=spacing,
                               sample_spacing=ds, surface=surface, min_depth=min_depth,
                               nogo=nogo)
     bar.update()
@@ -224,6 +233,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                   sensor_range=2.0 * omega if sensor_range is None else float(sensor_range),
                   slice_sensor=slice_sensor, min_depth=float(min_depth),
                   unreachable_pieces=route.unreachable,
+                  order=None if survey is None else survey.name,
                   no_go_rings=[] if nogo is None else _exterior_rings(nogo.zones))
     plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                         None, surface)

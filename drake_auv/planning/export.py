@@ -103,6 +103,29 @@ def _water_column_line(wc: dict) -> str:
     return line + "."
 
 
+def _order(plan) -> dict | None:
+    if plan.parameters.get("order") is None:
+        return None
+    from drake_auv.planning.orders import order_report, survey_order
+
+    return order_report(plan, survey_order(plan.parameters["order"]))
+
+
+def _order_line(o: dict | None) -> str:
+    if o is None:
+        return "Survey order: none asked for (lanes one footprint apart, 100 % nominal)."
+    req = ("no feature detection required" if o["required_feature_m"] is None else
+           f"the order asks for {o['required_feature_m']:.2f} m "
+           f"({'met' if o['meets_feature_detection'] else 'NOT met'})")
+    return (f"Survey order: IHO S-44 {o['order']}, coverage target {o['coverage_target_percent']:g} % "
+            f"(lanes {o['lane_spacing_m']:.2f} m apart); achieved {o['achieved_percent']:.1f} % of "
+            f"the area seen by at least {o['passes_needed']} pass(es), "
+            f"{o['mean_passes_per_cell']:.2f} passes per cell on average; the footprint supports "
+            f"features of {o['detectable_feature_m']:.2f} m and larger (largest gap "
+            f"{o['largest_gap_m']:.2f} m, sounding resolution {o['sounding_resolution_m']:.2f} m); "
+            f"{req}.")
+
+
 def _fmt(value: float | None) -> str:
     return "n/a" if value is None else f"{value:.2f}"
 
@@ -124,6 +147,7 @@ def report_dict(plan) -> dict:
         "visit_order": [f"{kind} {k}" for kind, k in plan.visit_order],
         "path_length_by_label": plan.path.length_by_label(),
         "water_column": water_column_summary(plan),
+        "survey_order": _order(plan),
         "reference_table3": REFERENCE_TABLE3,
     }
     if plan.metrics is not None:
@@ -163,7 +187,7 @@ def report_markdown(plan) -> str:
              f"slope {rep['classification']['slope_min']:.3f} to "
              f"{rep['classification']['slope_max']:.3f}. Planar area: {rep['cells']} boustrophedon "
              f"cells. High-slope area: {rep['contours']} contour pieces.", "",
-             _water_column_line(rep["water_column"]), ""]
+             _water_column_line(rep["water_column"]), "", _order_line(rep["survey_order"]), ""]
     if plan.metrics is not None:
         r = rep["ratios"]
         lines += ["## Comparison with a standard lawnmower (Table 3)", "",

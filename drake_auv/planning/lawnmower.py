@@ -75,7 +75,7 @@ def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float
                    overlap: float = 0.1, sweep_angle_deg: float | None = None,
                    sample_spacing: float | None = None, enforce_clearance: bool = True,
                    surface: TerrainSurface | None = None, min_depth: float = 1.0,
-                   nogo=None) -> Path:
+                   nogo=None, lane_spacing_m: float | None = None) -> Path:
     """Lawnmower over the valid cells of `bathy`; labels "lawnmower" and "transit".
 
     Args:
@@ -87,12 +87,16 @@ def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float
         surface: a prebuilt `TerrainSurface` of `bathy` to reuse.
         min_depth: minimum operating depth, m (>= 0): no sample above z = -min_depth.
         nogo: a `planning.nogo.NoGo` the lanes keep out of and the transits go around.
+        lane_spacing_m: distance between lanes, m (default `lane_spacing` of the sensor; the
+            coverage planner passes its survey order's).
     """
     check_sensor_parameters(omega, aperture_deg, overlap)
     check_min_depth(min_depth)
     check_omega_fits(omega, bathy)
     bathy = wet_grid(bathy, min_depth)
-    spacing = lane_spacing(omega, aperture_deg, overlap)
+    spacing = lane_spacing(omega, aperture_deg, overlap) if lane_spacing_m is None else lane_spacing_m
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"lane_spacing_m must be > 0 m, got {lane_spacing_m}")
     ds = omega / 4.0 if sample_spacing is None else float(sample_spacing)
     if not ds > 0:
         raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
