@@ -73,6 +73,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--speed", type=float, default=0.5,
                         help="mission surge speed, m/s, > 0 (default 0.5)")
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    parser.add_argument("--no-3d-metrics", action="store_true",
+                        help="skip the occluded 3D metrics on the grid's mesh (seconds on large "
+                             "grids)")
     parser.add_argument("-o", "--outdir", required=True, help="output directory")
     parser.set_defaults(func=run)
 
@@ -115,7 +118,8 @@ def run(args) -> int:
                          order=args.order,
                          progress=True)
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
-                          exports=exports, origin_lonlat=origin, surge_velocity=args.speed)
+                          exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
+                          metrics_3d=not args.no_3d_metrics)
     print(table3_markdown(plan.metrics))
     print(f"wrote {len(files)} files to {args.outdir}")
     return 0

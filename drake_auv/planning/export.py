@@ -130,8 +130,9 @@ def _fmt(value: float | None) -> str:
     return "n/a" if value is None else f"{value:.2f}"
 
 
-def report_dict(plan) -> dict:
-    """Parameters, classification summary, Table 3 metrics and the reference's Table 3."""
+def report_dict(plan, metrics_3d=None) -> dict:
+    """Parameters, classification summary, Table 3 metrics (grid and, if given, the occluded
+    3D ones of `planning.metrics3d`), water column, survey order and the reference's Table 3."""
     labels = plan.labels
     dx, dy = plan.bathy.spacing
     out = {
@@ -150,6 +151,10 @@ def report_dict(plan) -> dict:
         "survey_order": _order(plan),
         "reference_table3": REFERENCE_TABLE3,
     }
+    if metrics_3d is not None:
+        from drake_auv.planning.metrics3d import metrics3d_dict
+
+        out["metrics_3d"] = metrics3d_dict(metrics_3d)
     if plan.metrics is not None:
         out["metrics"] = plan.metrics.to_dict()
         out["ratios"] = {
@@ -171,9 +176,10 @@ def table3_markdown(metrics) -> str:
     return "\n".join(lines)
 
 
-def report_markdown(plan) -> str:
-    """A human-readable report: parameters, classification, Table 3, the reference's values."""
-    rep = report_dict(plan)
+def report_markdown(plan, metrics_3d=None) -> str:
+    """A human-readable report: parameters, classification, Table 3 (grid, and the occluded 3D
+    metrics if given), the reference's values."""
+    rep = report_dict(plan, metrics_3d)
     p = plan.parameters
     lines = ["# Coverage plan report", "",
              f"Offset Omega = {p['omega']} m, aperture {p['aperture_deg']} deg, overlap "
@@ -194,6 +200,15 @@ def report_markdown(plan) -> str:
                   table3_markdown(plan.metrics), "",
                   f"Length ratio (total / lawnmower): {_fmt(r['length_total_over_lawnmower'])}; "
                   f"viewing angle ratio: {_fmt(r['view_total_over_lawnmower'])}.", ""]
+    if metrics_3d is not None:
+        from drake_auv.planning.metrics3d import table3d_markdown
+
+        lines += ["## The same on the 3D mesh, with occlusion", "",
+                  "Viewing angle of each sample's axis at its first hit on the grid's triangle "
+                  "mesh; coverage: faces inside the aperture cone, in range, facing the sensor "
+                  "and not occluded. On high-slope regions both sensor models: the planned one "
+                  "and the reference's forward-looking sensor at one fixed tilt per region.", "",
+                  table3d_markdown(metrics_3d), ""]
     ref = REFERENCE_TABLE3
     lines += ["## The reference's Table 3 (Santorini caldera ROI)", "",
               "| path | length (m) | viewing angle (deg) |", "| --- | ---: | ---: |"]
@@ -221,7 +236,8 @@ def parse_exports(text: str | None) -> tuple[str, ...]:
 
 def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
-                  surge_velocity: float = 0.5, tolerance_xy: float = 1.0) -> list[FilePath]:
+                  surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
+                  metrics_3d: bool = True) -> list[FilePath]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
@@ -231,6 +247,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
             (a CRS or `origin_lonlat`), else none.
         origin_lonlat: WGS 84 (lon, lat) of the world origin, for grids without a CRS.
         surge_velocity: mission speed, m/s; tolerance_xy: waypoint arrival tolerance, m.
+        metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report.
     """
     georeferenced = plan.bathy.crs is not None or origin_lonlat is not None
     if exports is None:
@@ -263,9 +280,14 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
             write_qgc(wp, geo, outdir / "mission.plan", speed=surge_velocity,
                       acceptance_radius=tolerance_xy, no_go_lonlat=zones)
             written.append(outdir / "mission.plan")
-    (outdir / "report.md").write_text(report_markdown(plan))
+    m3d = None
+    if metrics_3d:
+        from drake_auv.planning.metrics3d import evaluate_plan_3d
+
+        m3d = evaluate_plan_3d(plan)
+    (outdir / "report.md").write_text(report_markdown(plan, m3d))
     with open(outdir / "report.json", "w") as f:
-        json.dump(report_dict(plan), f, indent=2)
+        json.dump(report_dict(plan, m3d), f, indent=2)
     written += [outdir / "report.md", outdir / "report.json"]
     if figures:
         from drake_auv.planning.figures import write_figures
