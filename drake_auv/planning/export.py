@@ -237,7 +237,7 @@ def parse_exports(text: str | None) -> tuple[str, ...]:
 def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
-                  metrics_3d: bool = True) -> list[FilePath]:
+                  metrics_3d=True) -> list[FilePath]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
@@ -247,7 +247,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
             (a CRS or `origin_lonlat`), else none.
         origin_lonlat: WGS 84 (lon, lat) of the world origin, for grids without a CRS.
         surge_velocity: mission speed, m/s; tolerance_xy: waypoint arrival tolerance, m.
-        metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report.
+        metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report: True
+            computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
     """
     georeferenced = plan.bathy.crs is not None or origin_lonlat is not None
     if exports is None:
@@ -280,8 +281,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
             write_qgc(wp, geo, outdir / "mission.plan", speed=surge_velocity,
                       acceptance_radius=tolerance_xy, no_go_lonlat=zones)
             written.append(outdir / "mission.plan")
-    m3d = None
-    if metrics_3d:
+    m3d = metrics_3d if isinstance(metrics_3d, dict) else None
+    if metrics_3d is True:
         from drake_auv.planning.metrics3d import evaluate_plan_3d
 
         m3d = evaluate_plan_3d(plan)
