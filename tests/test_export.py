@@ -119,11 +119,24 @@ def test_exports_need_a_georeference(tmp_path):
 
 
 @pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
-def test_cli_exports_on_a_monterey_tile(tmp_path, capsys):
-    tile = MONTEREY[0]
+@pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
+def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
     code = main(["plan", str(tile), "--omega", "20", "--export", "cola2,qgc,geojson",
-                 "--no-figures", "-o", str(tmp_path)])
+                 "--no-figures", "--no-3d-metrics", "-o", str(tmp_path)])
     assert code == 0, capsys.readouterr().err
+    from drake_auv.planning.path import Path
+
+    path = Path.from_csv(tmp_path / "path.csv")
+    bathy = read_bathymetry(tile)
+    geo = GeoFrame(bathy)
+    _, coords = read_geojson(tmp_path / "path.geojson")
+    back = np.column_stack([geo.from_lonlat(coords[:, :2]), coords[:, 2]])
+    assert nearest_distance(back, path.points).max() < 0.1
+    ll, _ = read_cola2(tmp_path / "mission.xml")
+    back = np.column_stack([geo.from_lonlat(ll[:, :2]), -ll[:, 2]])
+    assert nearest_distance(back, path.points).max() < 0.1
+    _, items = read_qgc(tmp_path / "mission.plan")
+    assert len(items) == len(ll) - 1  # the COLA2 park repeats the last waypoint
     # The tile name's extent; the raster itself overhangs it by 0.00051 deg on every side
     # (its transform: 5.5 cells), and the path covers the raster's cell centres.
     lon0, lon1, lat0, lat1 = (float(v) for v in re.findall(r"-?\d+\.\d+", tile.stem))
