@@ -28,7 +28,7 @@ from drake_auv.diagrams.replanning import build_replanning_diagram
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.mapping.octree_map import OctreeMap
 from drake_auv.scenarios import get_scenario
-from drake_auv.sensors.sonar import fan_angles
+from drake_auv.sonar.beams import fan_angles
 
 sys.path.insert(0, str(FilePath(__file__).resolve().parents[1] / "examples"))
 from breakwater_replanning import nominal_contour  # noqa: E402

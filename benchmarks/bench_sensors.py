@@ -22,14 +22,14 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import TrajectorySource
 from tqdm import tqdm
 
-from drake_auv.diagrams.vehicle import add_girona500
+from drake_auv.vehicle.diagram import add_girona500
 from drake_auv.geometry import RayCaster
 from drake_auv.planning import Path
-from drake_auv.sensors import SonarModel, SonarMount, fan_angles, scan
-from drake_auv.sensors.sonar import beam_geometry
-from drake_auv.systems.coverage_recorder import CoverageRecorder
-from drake_auv.systems.multibeam import MultibeamSonar
-from drake_auv.systems.profiler import PencilBeamProfiler
+from drake_auv.sonar import SonarModel, SonarMount, fan_angles, scan
+from drake_auv.sonar.beams import beam_geometry
+from drake_auv.coverage.recorder import CoverageRecorder
+from drake_auv.sonar.multibeam import MultibeamSonar
+from drake_auv.sonar.profiler import PencilBeamProfiler
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 

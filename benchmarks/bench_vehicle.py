@@ -13,10 +13,10 @@ import timeit
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.control import TrackingController
-from drake_auv.diagrams.vehicle import build_tracking_diagram
+from drake_auv.vehicle.control import TrackingController
+from drake_auv.vehicle.diagram import build_tracking_diagram
 from drake_auv.planning import Path
-from drake_auv.vehicle import Girona500Model
+from drake_auv.vehicle.model import Girona500Model
 
 SIM_SECONDS = 600.0
 RUNS = 5

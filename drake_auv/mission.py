@@ -31,12 +31,12 @@ from drake_auv.diagrams.profile_following import build_profile_following_diagram
 from drake_auv.diagrams.replanning import build_replanning_diagram
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.raycast import RayCaster
-from drake_auv.navigation import NavigationParams
+from drake_auv.vehicle.navigation import NavigationParams
 from drake_auv.perception import EstimatorParams, FollowingParams
 from drake_auv.planning.coverage_plan import CoveragePlan, plan_coverage
-from drake_auv.planning.replanning import ReplanningParameters
+from drake_auv.replanning.section import ReplanningParameters
 from drake_auv.scenarios import Scenario, get_scenario
-from drake_auv.systems.coverage_recorder import CoverageRecorder
+from drake_auv.coverage.recorder import CoverageRecorder
 
 VEHICLE_RADIUS = 1.0  # m, a sphere around the GIRONA 500's hulls for the contact check
 FOLLOW_RADIUS = 16.0  # m, from the boulder's centre: where profile following starts, and the

@@ -29,10 +29,10 @@ from tqdm import tqdm
 
 from drake_auv.diagrams.replanning import build_replanning_diagram
 from drake_auv.geometry.distance import mesh_distance
-from drake_auv.navigation import NavigationParams
+from drake_auv.vehicle.navigation import NavigationParams
 from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import motion_heading, resample
-from drake_auv.planning.replanning import ReplanningParameters
+from drake_auv.replanning.section import ReplanningParameters
 from drake_auv.scenarios import get_scenario
 from drake_auv.visualization.octree import depth_colours, draw_octree
 from drake_auv.visualization.scene import Scene

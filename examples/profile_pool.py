@@ -25,13 +25,13 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from drake_auv.control import wrap_angle
+from drake_auv.vehicle.control import wrap_angle
 from drake_auv.diagrams.profile_following import build_profile_following_diagram, run_mission
 from drake_auv.geometry.distance import mesh_distance
-from drake_auv.navigation import NavigationParams
+from drake_auv.vehicle.navigation import NavigationParams
 from drake_auv.perception import FollowingParams
 from drake_auv.scenarios import get_scenario
-from drake_auv.sensors.noise import SonarNoise
+from drake_auv.sonar.noise import SonarNoise
 
 SETTLE = 20.0  # s, the reference's pool result holds after the first 20 s
 VEHICLE_RADIUS = 1.0  # m, GIRONA 500 envelope 1.5 x 1.0 x 1.0 m

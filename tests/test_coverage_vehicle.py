@@ -6,9 +6,9 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import TrajectorySource
 
-from drake_auv.diagrams.vehicle import add_girona500
+from drake_auv.vehicle.diagram import add_girona500
 from drake_auv.planning import Path
-from drake_auv.systems.coverage_recorder import CoverageRecorder
+from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 

@@ -5,14 +5,14 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.control import wrap_angle
+from drake_auv.vehicle.control import wrap_angle
 from drake_auv.diagrams.profile_following import build_profile_following_diagram
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.perception import FollowingParams
 from drake_auv.scenarios import get_scenario
-from drake_auv.sensors.noise import SonarNoise
-from drake_auv.sensors.returns import SonarReturns
-from drake_auv.systems.profile_following import ProfileFollowingController
+from drake_auv.sonar.noise import SonarNoise
+from drake_auv.sonar.returns import SonarReturns
+from drake_auv.perception.controller import ProfileFollowingController
 
 
 

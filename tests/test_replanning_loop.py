@@ -6,7 +6,7 @@ import pytest
 import trimesh
 
 from drake_auv.mapping.octree_map import OctreeMap
-from drake_auv.planning.replanning import ReplanningParameters, collect_section, replan_section
+from drake_auv.replanning.section import ReplanningParameters, collect_section, replan_section
 
 OMEGA, SPEED, DT, PERIOD = 6.0, 0.5, 0.1, 1.0
 BLOCK_CENTRE, BLOCK_HALF = np.array([0.0, 0.0, -4.0]), np.array([2.5, 2.5, 6.0])

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from drake_auv.planning.replanning import (ReplanningParameters, SliceMap, collect_section,
+from drake_auv.replanning.section import (ReplanningParameters, SliceMap, collect_section,
                                            initial_trajectory, replan_section,
                                            resample_polyline)
 
@@ -146,7 +146,7 @@ def test_3d_offset_metric_keeps_omega_along_the_normal_of_a_sloping_face():
 
 
 def test_offset_is_queried_only_where_it_is_weighted_and_the_cost_is_unchanged():
-    from drake_auv.planning.replanning import ReplanningCost, ReplanningParameters, SliceMap
+    from drake_auv.replanning.section import ReplanningCost, ReplanningParameters, SliceMap
 
     rng = np.random.default_rng(11)
     wall = np.column_stack([rng.uniform(-5, 5, 400), np.full(400, 6.0), rng.uniform(-3, 3, 400)])

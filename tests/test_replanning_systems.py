@@ -12,9 +12,9 @@ from pydrake.systems.analysis import Simulator
 from drake_auv.diagrams.replanning import build_replanning_diagram
 from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle
 from drake_auv.scenarios import get_scenario
-from drake_auv.sensors.returns import SonarReturns
-from drake_auv.systems.octree_mapper import OctreeMapper
-from drake_auv.systems.replanner import Replanner
+from drake_auv.sonar.returns import SonarReturns
+from drake_auv.mapping.mapper import OctreeMapper
+from drake_auv.replanning.replanner import Replanner
 
 sys.path.insert(0, str(FilePath(__file__).resolve().parents[1] / "examples"))
 from breakwater_replanning import nominal_contour  # noqa: E402

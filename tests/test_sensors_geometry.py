@@ -6,7 +6,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from drake_auv.geometry import RayCaster
-from drake_auv.sensors import (SonarModel, SonarMount, SonarNoise, fan_angles, head_angles,
+from drake_auv.sonar import (SonarModel, SonarMount, SonarNoise, fan_angles, head_angles,
                                scan)
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh

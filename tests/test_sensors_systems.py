@@ -10,10 +10,10 @@ from pydrake.trajectories import PiecewisePolynomial
 
 from drake_auv.geometry import RayCaster
 from drake_auv.scenarios import get_scenario
-from drake_auv.sensors import SonarNoise, SonarReturns, fan_angles, scan
-from drake_auv.systems.coverage_recorder import CoverageRecorder
-from drake_auv.systems.multibeam import MultibeamSonar
-from drake_auv.systems.profiler import PencilBeamProfiler
+from drake_auv.sonar import SonarNoise, SonarReturns, fan_angles, scan
+from drake_auv.coverage.recorder import CoverageRecorder
+from drake_auv.sonar.multibeam import MultibeamSonar
+from drake_auv.sonar.profiler import PencilBeamProfiler
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 

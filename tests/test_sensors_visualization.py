@@ -9,8 +9,8 @@ from pydrake.systems.primitives import ConstantVectorSource
 
 from drake_auv.geometry import RayCaster
 from drake_auv.scenarios import get_scenario
-from drake_auv.systems.coverage_recorder import CoverageRecorder
-from drake_auv.systems.multibeam import MultibeamSonar
+from drake_auv.coverage.recorder import CoverageRecorder
+from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.visualization.sensors import (CoverageVisualizer, SonarVisualizer, angle_colors,
                                              draw_coverage)
 

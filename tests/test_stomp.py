@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from drake_auv.planning.stomp import (StompMatrices, StompParameters, accelerations,
+from drake_auv.replanning.stomp import (StompMatrices, StompParameters, accelerations,
                                       smoothness_costs, stomp)
 
 N = 20

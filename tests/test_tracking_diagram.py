@@ -5,9 +5,9 @@ import pytest
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-from drake_auv.control import cross_track_distance, wrap_angle
-from drake_auv.diagrams.vehicle import add_girona500, build_tracking_diagram
-from drake_auv.navigation import NavigationParams
+from drake_auv.vehicle.control import cross_track_distance, wrap_angle
+from drake_auv.vehicle.diagram import add_girona500, build_tracking_diagram
+from drake_auv.vehicle.navigation import NavigationParams
 from drake_auv.planning import Path
 
 SPEED = 0.5

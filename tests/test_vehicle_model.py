@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from drake_auv.vehicle import (DEFAULT_MODEL, WRENCH_ROWS, Girona500Model, Girona500Params,
+from drake_auv.vehicle.model import (DEFAULT_MODEL, WRENCH_ROWS, Girona500Model, Girona500Params,
                                allocate_thrust, load_girona500)
 
 DT = 0.05

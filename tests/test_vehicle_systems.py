@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.control import TrackingController, TrackingGains, cross_track_distance
-from drake_auv.navigation import NavigationParams, estimate, update_error, ERROR_SIZE
-from drake_auv.systems.dynamics import Girona500Dynamics
-from drake_auv.systems.navigation import Navigation
-from drake_auv.systems.thrusters import ThrusterAllocation
-from drake_auv.systems.tracker import TrajectoryTracker
-from drake_auv.vehicle import WRENCH_ROWS, Girona500Model, Girona500Params
+from drake_auv.vehicle.control import TrackingController, TrackingGains, cross_track_distance
+from drake_auv.vehicle.navigation import NavigationParams, estimate, update_error, ERROR_SIZE
+from drake_auv.vehicle.dynamics import Girona500Dynamics
+from drake_auv.vehicle.navigation_system import Navigation
+from drake_auv.vehicle.thrusters import ThrusterAllocation
+from drake_auv.vehicle.tracker import TrajectoryTracker
+from drake_auv.vehicle.model import WRENCH_ROWS, Girona500Model, Girona500Params
 
 
 def test_dynamics_system_steps_the_model():

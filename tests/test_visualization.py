@@ -8,7 +8,7 @@ import pytest
 import trimesh
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.diagrams.vehicle import build_tracking_diagram
+from drake_auv.vehicle.diagram import build_tracking_diagram
 from drake_auv.planning import Path
 from drake_auv.terrain.synthetic import random_seabed
 from drake_auv.visualization import Scene

@@ -59,8 +59,8 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     from pydrake.systems.analysis import Simulator
     from tqdm import tqdm
 
-    from drake_auv.control import cross_track_distance
-    from drake_auv.diagrams.vehicle import build_tracking_diagram
+    from drake_auv.vehicle.control import cross_track_distance
+    from drake_auv.vehicle.diagram import build_tracking_diagram
 
     if not (np.isfinite(speed) and 0.05 <= speed <= 1.5):
         raise ValueError(f"speed must be in [0.05, 1.5] m/s (the GIRONA 500 tops out near "
@@ -136,7 +136,7 @@ def report(result: FlightResult, out_dir) -> None:
 
 
 def run(args) -> int:
-    from drake_auv.navigation import NavigationParams
+    from drake_auv.vehicle.navigation import NavigationParams
     from drake_auv.planning.path import Path
     from drake_auv.visualization import Scene
 

@@ -21,15 +21,15 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import VectorLogSink
 from tqdm import tqdm
 
-from drake_auv.control import TrackingGains
-from drake_auv.diagrams.vehicle import VehicleSystems, add_girona500
+from drake_auv.vehicle.control import TrackingGains
+from drake_auv.vehicle.diagram import VehicleSystems, add_girona500
 from drake_auv.geometry.raycast import RayCaster
-from drake_auv.navigation import NavigationParams
+from drake_auv.vehicle.navigation import NavigationParams
 from drake_auv.perception.behaviours import FollowingParams
-from drake_auv.sensors.noise import SonarNoise
-from drake_auv.systems.profile_following import PROFILE_SIZE, ProfileFollowingController
-from drake_auv.systems.profiler import PencilBeamProfiler
-from drake_auv.vehicle import STATE_SIZE
+from drake_auv.sonar.noise import SonarNoise
+from drake_auv.perception.controller import PROFILE_SIZE, ProfileFollowingController
+from drake_auv.sonar.profiler import PencilBeamProfiler
+from drake_auv.vehicle.model import STATE_SIZE
 
 # Profiler head set-up for following (our choice): a full circle at the SeaKing's coarse
 # 1.8 degree step and 30 pings/s, one revolution in 6.7 s, batched at 10 Hz.

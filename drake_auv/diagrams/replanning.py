@@ -20,17 +20,17 @@ import numpy as np
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import TrajectorySource, VectorLogSink
 
-from drake_auv.diagrams.vehicle import VehicleSystems, add_girona500
+from drake_auv.vehicle.diagram import VehicleSystems, add_girona500
 from drake_auv.geometry.raycast import RayCaster
-from drake_auv.navigation import NavigationParams
+from drake_auv.vehicle.navigation import NavigationParams
 from drake_auv.planning.path import Path
-from drake_auv.planning.replanning import ReplanningParameters
-from drake_auv.systems.coverage_recorder import CoverageRecorder
-from drake_auv.systems.multibeam import MultibeamSonar
-from drake_auv.systems.octree_mapper import OctreeMapper
-from drake_auv.systems.profiler import PencilBeamProfiler
-from drake_auv.systems.replanner import Replanner
-from drake_auv.vehicle import STATE_SIZE
+from drake_auv.replanning.section import ReplanningParameters
+from drake_auv.coverage.recorder import CoverageRecorder
+from drake_auv.sonar.multibeam import MultibeamSonar
+from drake_auv.mapping.mapper import OctreeMapper
+from drake_auv.sonar.profiler import PencilBeamProfiler
+from drake_auv.replanning.replanner import Replanner
+from drake_auv.vehicle.model import STATE_SIZE
 from drake_auv.visualization.octree import OctreeVisualizer
 
 

@@ -206,7 +206,7 @@ class OctreeMap:
         return out
 
     def insert_returns(self, returns) -> None:
-        """Inserts a `drake_auv.sensors.SonarReturns` (navigation frame)."""
+        """Inserts a `drake_auv.sonar.SonarReturns` (navigation frame)."""
         if returns is None or len(np.atleast_1d(returns.ranges)) == 0:
             return
         self.insert_scan(returns.origin_nav, returns.directions_nav, returns.ranges,

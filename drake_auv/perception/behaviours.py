@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drake_auv.control import wrap_angle
+from drake_auv.vehicle.control import wrap_angle
 from drake_auv.perception.local_map import LocalProfileMap
 from drake_auv.perception.profile_estimation import (EstimatorParams, ProfileEstimate,
                                                      estimate_profile)

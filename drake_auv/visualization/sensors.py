@@ -19,7 +19,7 @@ from pydrake.geometry import Rgba
 from pydrake.perception import BaseField, Fields, PointCloud
 from pydrake.systems.framework import LeafSystem
 
-from drake_auv.sensors.returns import SonarReturns
+from drake_auv.sonar.returns import SonarReturns
 
 UNSEEN_RGB = (0.55, 0.55, 0.55)
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pydrake.systems.framework import LeafSystem
 
-from drake_auv.vehicle import NUM_THRUSTERS, Girona500Params, allocate_thrust
+from drake_auv.vehicle.model import NUM_THRUSTERS, Girona500Params, allocate_thrust
 
 
 class ThrusterAllocation(LeafSystem):

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_auv.vehicle import Girona500Params
+from drake_auv.vehicle.model import Girona500Params
 
 
 @dataclass(frozen=True)

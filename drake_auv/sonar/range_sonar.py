@@ -15,8 +15,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
-from drake_auv.sensors.returns import SonarReturns
-from drake_auv.sensors.sonar import BeamGeometry, SonarModel, beam_geometry, scan
+from drake_auv.sonar.returns import SonarReturns
+from drake_auv.sonar.beams import BeamGeometry, SonarModel, beam_geometry, scan
 
 STATE_SIZE = 12
 

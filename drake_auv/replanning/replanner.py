@@ -3,7 +3,7 @@
 At each replanning step (every `period` s, and at initialisation) it takes the estimated
 position, marks the nominal waypoints the previous plan has flown past as visited, collects
 the next section (waypoints within R, at most K), optimises it with STOMP against the current
-octree map (`drake_auv.planning.replanning.replan_section`) and times it at the survey speed.
+octree map (`drake_auv.replanning.section.replan_section`) and times it at the survey speed.
 Between steps it outputs the reference along that plan; after the last waypoint it holds the
 end of the last plan.
 
@@ -26,8 +26,8 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import motion_heading
-from drake_auv.planning.replanning import ReplanningParameters, SectionPlan, replan_section
-from drake_auv.vehicle import STATE_SIZE
+from drake_auv.replanning.section import ReplanningParameters, SectionPlan, replan_section
+from drake_auv.vehicle.model import STATE_SIZE
 
 
 @dataclass(frozen=True)

@@ -17,14 +17,14 @@ import numpy as np
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import TrajectorySource, VectorLogSink
 
-from drake_auv.control import TrackingGains
-from drake_auv.navigation import NavigationParams
+from drake_auv.vehicle.control import TrackingGains
+from drake_auv.vehicle.navigation import NavigationParams
 from drake_auv.planning.path import Path
-from drake_auv.systems.dynamics import Girona500Dynamics
-from drake_auv.systems.navigation import Navigation
-from drake_auv.systems.thrusters import ThrusterAllocation
-from drake_auv.systems.tracker import TrajectoryTracker
-from drake_auv.vehicle import Girona500Params, STATE_SIZE
+from drake_auv.vehicle.dynamics import Girona500Dynamics
+from drake_auv.vehicle.navigation_system import Navigation
+from drake_auv.vehicle.thrusters import ThrusterAllocation
+from drake_auv.vehicle.tracker import TrajectoryTracker
+from drake_auv.vehicle.model import Girona500Params, STATE_SIZE
 
 
 @dataclass

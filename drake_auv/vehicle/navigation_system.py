@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from drake_auv.navigation import ERROR_SIZE, NavigationParams, estimate, update_error
-from drake_auv.vehicle import STATE_SIZE
+from drake_auv.vehicle.navigation import ERROR_SIZE, NavigationParams, estimate, update_error
+from drake_auv.vehicle.model import STATE_SIZE
 
 
 class Navigation(LeafSystem):

@@ -1,6 +1,6 @@
 """GIRONA 500 model: parameters, YAML loader, thruster geometry, and the 6-DOF Fossen model.
 
-Pure numpy (no Drake), so it is unit-tested on its own; `drake_auv.systems.dynamics` wraps it.
+Pure numpy (no Drake), so it is unit-tested on its own; `drake_auv.vehicle.dynamics` wraps it.
 Frames follow DESIGN.md: world z up; body FLU (x forward, y left, z up), origin at the centre of
 buoyancy (CB). The YAML file gives positions in its source's NED/FRD body frame; `load_girona500`
 converts them to FLU once, here, by flipping y and z.
@@ -22,7 +22,7 @@ from pathlib import Path as FilePath
 import numpy as np
 import yaml
 
-DEFAULT_MODEL = FilePath(__file__).resolve().parent.parent / "models" / "girona500.yaml"
+DEFAULT_MODEL = FilePath(__file__).resolve().parents[2] / "models" / "girona500.yaml"
 THRUSTER_NAMES = ("surge_port", "surge_starboard", "heave_bow", "heave_stern", "sway")
 FRD_TO_FLU = np.diag([1.0, -1.0, -1.0])  # the same matrix takes FLU back to FRD
 WRENCH_ROWS = (0, 1, 2, 5)  # surge X, sway Y, heave Z, yaw N rows of a 6-DOF wrench

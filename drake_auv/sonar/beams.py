@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drake_auv.control import rotation_world_body
+from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.geometry.raycast import RayCaster
-from drake_auv.sensors.noise import SonarNoise, apply_noise
-from drake_auv.sensors.returns import SonarReturns
+from drake_auv.sonar.noise import SonarNoise, apply_noise
+from drake_auv.sonar.returns import SonarReturns
 
 # R_BS of the named mounts (columns: S's x, y, z axes in the body frame).
 MOUNT_ROTATIONS = {

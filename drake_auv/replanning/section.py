@@ -30,7 +30,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from drake_auv.planning.polyline import length, resample
-from drake_auv.planning.stomp import StompMatrices, StompParameters, stomp
+from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 
 
 @dataclass(frozen=True)

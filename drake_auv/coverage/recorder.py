@@ -13,11 +13,11 @@ from __future__ import annotations
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from drake_auv.control import rotation_world_body
+from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.geometry.visibility import (FaceVisibility, angle_histogram, coverage_share,
                                            merge_best)
-from drake_auv.sensors.sonar import SonarMount, fan_angles
-from drake_auv.systems.sonar import STATE_SIZE, as_caster
+from drake_auv.sonar.beams import SonarMount, fan_angles
+from drake_auv.sonar.range_sonar import STATE_SIZE, as_caster
 
 
 class CoverageRecorder(LeafSystem):

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_auv.sensors.noise import SonarNoise
-from drake_auv.sensors.sonar import SonarModel, SonarMount, head_angles
-from drake_auv.systems.sonar import RangeSonar
+from drake_auv.sonar.noise import SonarNoise
+from drake_auv.sonar.beams import SonarModel, SonarMount, head_angles
+from drake_auv.sonar.range_sonar import RangeSonar
 
 
 class PencilBeamProfiler(RangeSonar):

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from drake_auv.control import TrackingController, TrackingGains
-from drake_auv.vehicle import STATE_SIZE, Girona500Params
+from drake_auv.vehicle.control import TrackingController, TrackingGains
+from drake_auv.vehicle.model import STATE_SIZE, Girona500Params
 
 
 class TrajectoryTracker(LeafSystem):

@@ -13,7 +13,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.framework import BasicVector, LeafSystem
 
-from drake_auv.vehicle import NUM_THRUSTERS, STATE_SIZE, Girona500Model, Girona500Params
+from drake_auv.vehicle.model import NUM_THRUSTERS, STATE_SIZE, Girona500Model, Girona500Params
 
 
 class Girona500Dynamics(LeafSystem):

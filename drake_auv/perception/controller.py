@@ -20,8 +20,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.perception.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
-from drake_auv.sensors.returns import SonarReturns
-from drake_auv.vehicle import STATE_SIZE
+from drake_auv.sonar.returns import SonarReturns
+from drake_auv.vehicle.model import STATE_SIZE
 
 MODES = ("search", "follow", "turn")
 PROFILE_SIZE = 7

@@ -1,0 +1,3 @@
+"""The GIRONA 500: its model and loader (`model`), the tracking control law (`control`), the
+navigation error model (`navigation`), pure; their LeafSystems (`dynamics`, `thrusters`,
+`tracker`, `navigation_system`) and `add_girona500` (`diagram`)."""
