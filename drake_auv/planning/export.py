@@ -196,7 +196,8 @@ def report_markdown(plan, metrics_3d=None) -> str:
              _water_column_line(rep["water_column"]), "", _order_line(rep["survey_order"]), ""]
     if plan.metrics is not None:
         r = rep["ratios"]
-        lines += ["## Comparison with a standard lawnmower (Table 3)", "",
+        lines += ["## Comparison with a standard lawnmower (Table 3, on the grid: cone test, no "
+                  "occlusion)", "",
                   table3_markdown(plan.metrics), "",
                   f"Length ratio (total / lawnmower): {_fmt(r['length_total_over_lawnmower'])}; "
                   f"viewing angle ratio: {_fmt(r['view_total_over_lawnmower'])}.", ""]
