@@ -30,6 +30,7 @@ from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.perception.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.model import STATE_SIZE
+from drake_auv.vehicle.path_reference import trajectory_reference
 
 MODES = ("search", "follow", "turn")
 PROFILE_SIZE = 7
@@ -164,8 +165,7 @@ class ProfileFollowingController(LeafSystem):
     def _calc_reference(self, context, output):
         leg, _ = read_leg(self.leg_input, context)
         if context.get_discrete_state(self._consumed)[1] != leg:  # before the leg's first update
-            x = self.state_input.Eval(context)
-            output.SetFromVector(np.concatenate([x[:3], [x[5]], np.zeros(4)]))
+            output.SetFromVector(trajectory_reference(None, 0.0, self.state_input, context))
             return
         reference = context.get_discrete_state(self._reference).get_value().copy()
         since = context.get_time() - context.get_discrete_state(self._reference_time)[0]
