@@ -188,7 +188,8 @@ def report(rows, args) -> str:
     for mode, seed, m in values:
         lines.append(f"| {mode} | {seed} | {m['mean']:.2f} | {m['sd']:.2f} | {m['min']:.2f} | "
                      f"{m['map_mean']:.2f} | {m['clearance']:.2f} | "
-                     f"{'YES' if m['contact'] else 'no'} | {m['camera']:.3f} | {m['multibeam']:.3f} | {_ms(m['step_median'])} | "
+                     f"{'YES' if m['contact'] else 'no'} | {m['camera']:.3f} | "
+                     f"{m['multibeam']:.3f} | {_ms(m['step_median'])} | "
                      f"{_ms(m['step_p95'])} | {m['rtf']:.1f} |\n")
     lines.append("\n## Over all seeds\n\n| mode | mean d (m) | mean sd (m) | worst min d (m) "
                  "| worst clearance (m) | contacts | camera cov. | multibeam cov. | step median "

@@ -90,7 +90,8 @@ def main(argv=None):
     parser.add_argument("--offset", type=float, default=3.0, help="m")
     args = parser.parse_args(argv)
     if not 29.0 <= args.depth <= 39.0:
-        raise ValueError(f"--depth must be in [29, 39] m (the boulder spans 28-40 m), got {args.depth}")
+        raise ValueError(f"--depth must be in [29, 39] m (the boulder spans 28-40 m), "
+                         f"got {args.depth}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     from drake_auv.visualization import Scene

@@ -5,7 +5,8 @@ the 16 m x 8 m pool despite its 90 degree corners, then vertical following of th
 bottom from the shallow end up the far wall (the "cliff").
 
 1. Clean sonar, exact navigation: the true frontal distance (a ray against the true pool
-   along the direction the vehicle faces the wall with: its port-looking payload's axis) must stay within 1 m of the nominal 2 m after the first 20 s of the laps.
+   along the direction the vehicle faces the wall with: its port-looking payload's axis)
+   must stay within 1 m of the nominal 2 m after the first 20 s of the laps.
    Figures like Figure 84 (frontal distance and slope against time) and Figure 85 (distance
    to the cliff against time, the track in the x-z plane).
 2. The same mission with spurious returns and range noise on (seeded), and again with a
