@@ -21,6 +21,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle
+from drake_auv.sonar.returns import SonarReturns
 
 
 @dataclass(frozen=True)
@@ -57,10 +58,10 @@ class OctreeMapper(LeafSystem):
         self.octree_map = octree_map if octree_map is not None else OctreeMap(resolution)
         self.period = float(period)
         self.multibeam_stride = int(multibeam_stride)
-        self.multibeam_input = self.DeclareAbstractInputPort("multibeam_returns",
-                                                             AbstractValue.Make(None))
-        self.profiler_input = self.DeclareAbstractInputPort("profiler_returns",
-                                                            AbstractValue.Make(None))
+        self.multibeam_input = self.DeclareAbstractInputPort(
+            "multibeam_returns", AbstractValue.Make(SonarReturns.empty(0.0)))
+        self.profiler_input = self.DeclareAbstractInputPort(
+            "profiler_returns", AbstractValue.Make(SonarReturns.empty(0.0)))
         self._state_index = self.DeclareAbstractState(
             AbstractValue.Make(_MapperState(OctreeMapHandle(self.octree_map))))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_map)

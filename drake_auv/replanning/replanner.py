@@ -24,6 +24,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
+from drake_auv.mapping.octree_map import OctreeMapHandle
 from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import motion_heading
 from drake_auv.replanning.section import ReplanningParameters, SectionPlan, replan_section
@@ -106,7 +107,8 @@ class Replanner(LeafSystem):
         self.seed = int(seed)
         self.log: list[ReplanningStep] = []
         self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
-        self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(None))
+        self.map_input = self.DeclareAbstractInputPort(
+            "map", AbstractValue.Make(OctreeMapHandle(None)))
         self._state_index = self.DeclareAbstractState(AbstractValue.Make(_ReplannerState()))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_plan)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, self.period, self._update_plan)

@@ -13,7 +13,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.perception import BaseField, Fields, PointCloud
 from pydrake.systems.framework import LeafSystem
 
-from drake_auv.mapping.octree_map import OctreeMap
+from drake_auv.mapping.octree_map import OctreeMap, OctreeMapHandle
 
 
 def depth_colours(z: np.ndarray, cmap: str = "viridis") -> np.ndarray:
@@ -46,7 +46,8 @@ class OctreeVisualizer(LeafSystem):
         if not (np.isfinite(period) and period > 0):
             raise ValueError(f"OctreeVisualizer period must be > 0 s, got {period}")
         self.meshcat, self.path = meshcat, path
-        self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(None))
+        self.map_input = self.DeclareAbstractInputPort(
+            "map", AbstractValue.Make(OctreeMapHandle(None)))
         self._drawn_revision = -1
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish_map)
 
