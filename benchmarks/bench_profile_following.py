@@ -3,7 +3,8 @@
 No target in issue 5; the figures show where the time goes. The profiler head runs at 30
 pings/s batched at 10 Hz, so the controller updates at 10 Hz: one update must stay well below
 100 ms of wall time for a simulation faster than real time, and the whole mission (vehicle,
-profiler ray casting, controller) is reported as a real-time factor (median of runs).
+profiler ray casting, controller) is reported as a real-time factor (median of runs) and
+relative to the vehicle-only reference measured in the same run (`_reference.py`).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import timeit
 import numpy as np
 from pydrake.systems.analysis import Simulator
 
+from _reference import machine, print_reference, reference_factor
 from drake_auv.diagrams.profile_following import build_profile_following_diagram
 from drake_auv.perception import FollowingParams, HorizontalFollower, estimate_profile
 from drake_auv.scenarios import get_scenario
@@ -47,6 +49,9 @@ def pool_real_time_factor() -> float:
 
 
 def main() -> None:
+    print(machine())
+    reference = reference_factor()
+    print_reference(reference)
     points = corner_points()
     rng = np.random.default_rng(1)
     est_ms = min(timeit.repeat(lambda: estimate_profile(points, rng=rng), number=50,
@@ -64,9 +69,10 @@ def main() -> None:
     print(f"HorizontalFollower.update (map of {len(follower.map)} returns): {upd_ms:.2f} ms")
 
     factors = [pool_real_time_factor() for _ in range(RUNS)]
+    median = statistics.median(factors)
     print(f"pool horizontal following, {SIM_SECONDS:.0f} s simulated, {RUNS} runs: real-time "
-          f"factor median {statistics.median(factors):.0f}x (min {min(factors):.0f}x, "
-          f"max {max(factors):.0f}x)")
+          f"factor median {median:.0f}x (min {min(factors):.0f}x, max {max(factors):.0f}x), "
+          f"{median / reference:.3f} of the reference")
 
 
 if __name__ == "__main__":

@@ -9,6 +9,9 @@ Measures:
 - the whole mission's real-time factor (vehicle, both sonars, mapper, replanner), with and
   without the two coverage recorders.
 Targets (issue 6): step median <= 25 ms, p95 <= 50 ms; insertion <= 5 ms per 480-beam scan.
+Ratios to the vehicle-only reference measured in the same run (`_reference.py`): the mission's
+real-time factor over the reference's, and the step's median in vehicle-seconds (simulated
+seconds the vehicle alone advances in that wall time).
 
     .venv/bin/python benchmarks/bench_replanning.py [--error 5] [--seed 0]
 """
@@ -16,7 +19,6 @@ Targets (issue 6): step median <= 25 ms, p95 <= 50 ms; insertion <= 5 ms per 480
 from __future__ import annotations
 
 import argparse
-import platform
 import sys
 import time
 from pathlib import Path as FilePath
@@ -31,6 +33,7 @@ from drake_auv.scenarios import get_scenario
 from drake_auv.sonar.beams import fan_angles
 
 sys.path.insert(0, str(FilePath(__file__).resolve().parents[1] / "examples"))
+from _reference import machine, print_reference, reference_factor  # noqa: E402
 from breakwater_replanning import nominal_contour  # noqa: E402
 
 
@@ -70,8 +73,9 @@ def main() -> None:
     args = parser.parse_args()
     scenario = get_scenario("breakwater")
     p = scenario.params
-    print(f"machine: {platform.processor() or platform.machine()}, python "
-          f"{platform.python_version()}")
+    print(machine())
+    reference = reference_factor()
+    print_reference(reference)
     for stride in (1, 2):
         ms = bench_insertion(scenario, stride)
         print(f"octree insertion, {480 // stride} beams: median {np.median(ms):.2f} ms, "
@@ -83,7 +87,8 @@ def main() -> None:
     steps = 1e3 * np.array([s.wall_time for s in h.replanner.log])
     print(f"replanning step ({len(steps)} steps): median {np.median(steps):.1f} ms, "
           f"p95 {np.percentile(steps, 95):.1f} ms, max {steps.max():.1f} ms "
-          f"(targets 25 / 50 ms)")
+          f"(targets 25 / 50 ms); median = {np.median(steps) / 1e3 * reference:.1f} "
+          f"vehicle-seconds")
     cpu = 1e3 * np.array([s.cpu_time for s in h.replanner.log])
     print(f"  CPU time of the step (its thread): median {np.median(cpu):.1f} ms, "
           f"p95 {np.percentile(cpu, 95):.1f} ms")
@@ -91,9 +96,11 @@ def main() -> None:
     print(f"  of which map query (occupied voxels and rebuild): median {np.median(query):.1f} "
           f"ms, p95 {np.percentile(query, 95):.1f} ms; section + STOMP: median "
           f"{np.median(steps - query):.1f} ms, p95 {np.percentile(steps - query, 95):.1f} ms")
-    print(f"mission real-time factor, with coverage recorders: {rtf:.1f}x")
+    print(f"mission real-time factor, with coverage recorders: {rtf:.1f}x, "
+          f"{rtf / reference:.3f} of the reference")
     rtf, _ = run(scenario, nominal, p["speed"], coverage=False, seed=args.seed)
-    print(f"mission real-time factor, without coverage recorders: {rtf:.1f}x")
+    print(f"mission real-time factor, without coverage recorders: {rtf:.1f}x, "
+          f"{rtf / reference:.3f} of the reference")
 
 
 if __name__ == "__main__":
