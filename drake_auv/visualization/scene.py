@@ -41,7 +41,8 @@ def _rgba(value) -> Rgba:
 
 
 class Scene:
-    """One Meshcat scene. Attributes: `meshcat`, `root` (scene-tree prefix), `recording`."""
+    """One Meshcat scene. Attributes: `meshcat`, `root` (scene-tree prefix), `recording`,
+    `bounds` (box of the meshes and paths drawn), `camera_framed`."""
 
     def __init__(self, meshcat: Meshcat | None = None, root: str = "drake_auv"):
         self.meshcat = meshcat if meshcat is not None else Meshcat(MeshcatParams(host="localhost"))
@@ -76,8 +77,9 @@ class Scene:
     def frame_camera(self, direction=(-1.0, -1.6, 1.1), margin: float = 1.1, bounds=None):
         """Points Meshcat's camera at the centre of `bounds` (default: the box of every mesh
         and path drawn, see `include`) from `direction` (world frame, target to camera), far
-        enough for the box's bounding sphere to fill the view times `margin`, and lights the
-        scene from above. Returns the camera position and the target, m."""
+        enough for the box's bounding sphere to fill the view times `margin`, and brightens the
+        ambient and fill lights (Meshcat's defaults leave a seabed almost black). Returns the
+        camera position and the target, m."""
         box = self.bounds if bounds is None else np.asarray(bounds, dtype=float).reshape(2, 3)
         if box is None:
             raise ValueError("frame_camera: nothing drawn yet and no bounds given")
