@@ -1,6 +1,7 @@
 """Regenerates the documentation's demo figures from one run of the demo (`make docs`).
 
-Runs `drake-auv demo` into `--out`, copies its `report.json` to `docs/demo_report.json` and its
+Runs `drake-auv demo` into `--out`, copies its `report.json` to `docs/demo_report.json` (without
+the wall-clock `timing`, so that the committed copy changes only when the results do) and its
 figures to `docs/demo_<name>.png`, then rewrites every marked number in README.md and
 docs/*.md from the report. A marked number reads
 
@@ -24,6 +25,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 REPORT = ROOT / "docs" / "demo_report.json"
 FIGURES = ("plan", "coverage", "distance")
+MACHINE_DEPENDENT = ("timing",)  # top-level keys of report.json left out of the committed copy
 MARKER = re.compile(
     r"(<!-- report:(?P<key>[\w.]+):(?P<fmt>\w+) -->)(?P<text>.*?)(<!-- /report -->)", re.DOTALL)
 FORMATS = {
@@ -82,7 +84,8 @@ def main(argv=None) -> int:
     if not report_file.exists():
         raise FileNotFoundError(f"{report_file}: no demo report (run without --no-run)")
     report = json.loads(report_file.read_text())
-    shutil.copyfile(report_file, REPORT)
+    committed = {k: v for k, v in report.items() if k not in MACHINE_DEPENDENT}
+    REPORT.write_text(json.dumps(committed, indent=2) + "\n")
     for name in FIGURES:
         shutil.copyfile(out / f"{name}.png", ROOT / "docs" / f"demo_{name}.png")
     for doc in documents():
