@@ -226,7 +226,10 @@ def test_cost_is_the_weighted_sum_of_its_terms_with_the_terminal_goal_on_the_las
     assert np.all(t["offset"][..., ~keep] == 0) and np.all(t["route"][..., keep] == 0)
     expected = (params.offset_weight * t["offset"] + params.obstacle_weight * t["obstacle"]
                 + params.depth_weight * ~keep * t["depth"] + params.route_weight * t["route"]
-                + params.progress_weight * t["progress"])
+                + params.progress_weight * t["progress"] + params.spacing_weight * t["spacing"])
+    gaps = np.linalg.norm(np.diff(rollouts, axis=1), axis=-1)
+    assert np.allclose(t["spacing"][:, 1:], (gaps - params.spacing) ** 2)
+    assert np.all(t["spacing"][:, 0] == 0)
     expected[..., -1] += params.terminal_weight * (params.offset_weight * t["offset"][..., -1]
                                                    + params.progress_weight
                                                    * t["progress"][..., -1])

@@ -60,7 +60,7 @@ class ReplanningParameters:
             the misses, with OctoMap's 0.7 / 0.4 model one hit is 0.85), >= 0.
         huber: |d - Omega| beyond which the offset cost grows linearly, m (> 0).
         offset_weight, obstacle_weight, depth_weight, route_weight, progress_weight,
-        terminal_weight: cost weights (>= 0), per trajectory point.
+        terminal_weight, spacing_weight: cost weights (>= 0), per trajectory point.
         stomp: `StompParameters` (rollouts, iterations, noise, smoothness weight).
     """
 
@@ -80,6 +80,7 @@ class ReplanningParameters:
     route_weight: float = 1.0
     progress_weight: float = 0.1
     terminal_weight: float = 3.0
+    spacing_weight: float = 10.0
     stomp: StompParameters = field(default_factory=lambda: StompParameters(
         num_rollouts=10, max_iterations=40, noise_std=0.5, smoothness_weight=50.0,
         patience=8))
@@ -91,7 +92,7 @@ class ReplanningParameters:
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be > 0 m, got {value}")
         for name in ("min_log_odds", "offset_weight", "obstacle_weight", "depth_weight",
-                     "route_weight", "progress_weight", "terminal_weight"):
+                     "route_weight", "progress_weight", "terminal_weight", "spacing_weight"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be >= 0, got {value}")
@@ -339,6 +340,8 @@ class ReplanningCost:
       route (the vehicle, the section's waypoints and the next ones) and s_ref_i an even
       advance from the vehicle (0) to `goal` (the section's last waypoint), so lagging
       (hovering) costs;
+    - spacing: (|p_i - p_(i-1)| - spacing)^2 (0 at the first point): evenly spaced points, so
+      the trajectory neither bunches (hovers) nor folds back on itself;
     - terminal (last point only, times `terminal_weight`): its offset and progress terms
       again, the goal set of the free end.
 
@@ -376,15 +379,18 @@ class ReplanningCost:
         s, gap = self.route.project(trajectories)
         route = np.where(self.keep, 0.0, gap ** 2)
         progress = np.maximum(0.0, self.s_ref - s) ** 2
+        step = np.diff(trajectories, axis=-2)
+        spacing = np.zeros_like(zero)
+        spacing[..., 1:] = (np.sqrt(np.einsum("...k,...k->...", step, step)) - p.spacing) ** 2
         return dict(offset=offset, obstacle=np.maximum(0.0, p.clearance - c) ** 2,
                     depth=(trajectories[..., 2] - self.z_ref) ** 2, route=route,
-                    progress=progress)
+                    progress=progress, spacing=spacing)
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
         p, t = self.params, self.terms(trajectories)
         cost = (p.offset_weight * t["offset"] + p.obstacle_weight * t["obstacle"]
                 + self.depth_weight * t["depth"] + p.route_weight * t["route"]
-                + p.progress_weight * t["progress"])
+                + p.progress_weight * t["progress"] + p.spacing_weight * t["spacing"])
         cost[..., -1] += p.terminal_weight * (p.offset_weight * t["offset"][..., -1]
                                               + p.progress_weight * t["progress"][..., -1])
         return cost
@@ -403,12 +409,19 @@ def initial_trajectory(position, section_points, spacing: float) -> np.ndarray:
 def warm_start(position, previous: np.ndarray, route: Polyline, section_points: np.ndarray,
                waypoint_s: np.ndarray, spacing: float) -> np.ndarray:
     """STOMP's initial trajectory from the last step's optimised one (receding horizon): from
-    the vehicle, the part of `previous` (N', 3) ahead of it, then the section's waypoints
-    whose arclength along `route` (`waypoint_s`, m) lies beyond that part's end; resampled
-    every `spacing` m."""
+    the vehicle, the part of `previous` (N', 3) ahead of it up to the section's last waypoint
+    (by arclength along `route`; `waypoint_s`, m, per waypoint) or to where it turns back
+    along the route, then the section's waypoints
+    beyond that part's end; resampled every `spacing` m."""
     x = _check_position(position)
     s_x, _ = Polyline(previous).project(x[None])
     ahead = previous[_arclength(previous) > s_x[0] + 0.5 * spacing]
+    # Up to the section's end, and up to where it would turn back along the route: the
+    # trajectory neither outgrows the section nor carries a fold into the next step.
+    progress = route.project(ahead)[0] if len(ahead) else np.zeros(0)
+    stop = (progress > waypoint_s[-1] + spacing) | (
+        progress < np.maximum.accumulate(progress) - spacing)
+    ahead = ahead[np.cumsum(stop) == 0]
     s_end = route.project(ahead[-1:])[0][0] if len(ahead) else 0.0
     extra = section_points[waypoint_s > s_end + spacing]
     return resample_polyline(np.vstack([x, ahead, extra]), spacing)
