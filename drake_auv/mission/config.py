@@ -31,10 +31,10 @@ from drake_auv.vehicle.navigation import NavigationParams
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "missions"
 
-# The "realistic" sonar (docs/sensors.md, "Noise"): 10 cm range noise, 5 % of returns lost,
-# 2 % water-column clutter; half the rays reaching the sea surface reflected on (multipath,
-# echoes at the path length along the beam); a side lobe 20 deg off the axis at -11 dB; echoes
-# detected above 0.05 of a normal on-axis one (grazing echoes are lost).
+# The "realistic" sonar (docs/sensors.md, "Sonar model"): 10 cm range noise, 5 % of returns
+# lost, 2 % water-column clutter; half the rays reaching the sea surface reflected on
+# (multipath, echoes at the path length along the beam); a side lobe 20 deg off the axis at
+# -11 dB; echoes detected above 0.05 of a normal on-axis one (grazing echoes are lost).
 REALISTIC_NOISE = dict(range_sigma=0.1, dropout_prob=0.05, spurious_prob=0.02,
                        surface_prob=0.5, side_lobe_deg=20.0, side_lobe_gain=0.08,
                        echo_threshold=0.05)

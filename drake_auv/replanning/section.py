@@ -302,17 +302,22 @@ class Polyline:
         self.seg_len = np.sqrt(self.seg_sq)
         self.s0 = np.concatenate([[0.0], np.cumsum(self.seg_len)])[:-1]
         self.length = float(self.seg_len.sum())
+        self.a_ab = np.einsum("mk,mk->m", self.a, self.ab)
+        self.a_sq = np.einsum("mk,mk->m", self.a, self.a)
 
     def project(self, points: np.ndarray):
-        flat = points.reshape(-1, 1, 3) - self.a  # (n, m, 3)
-        t = np.clip(np.einsum("nmk,mk->nm", flat, self.ab) / self.seg_sq, 0.0, 1.0)
-        off = flat - t[..., None] * self.ab
-        gap_sq = np.einsum("nmk,nmk->nm", off, off)
+        flat = points.reshape(-1, 3)
+        # |p - a - t ab|^2 = |p - a|^2 - 2 t (p - a).ab + t^2 |ab|^2, from (n, 3) x (3, m)
+        # products (the segments' a and ab are fixed).
+        u = flat @ self.ab.T - self.a_ab  # (p - a).ab
+        t = np.clip(u / self.seg_sq, 0.0, 1.0)
+        gap_sq = (np.einsum("nk,nk->n", flat, flat)[:, None] - 2.0 * (flat @ self.a.T)
+                  + self.a_sq - 2.0 * t * u + t * t * self.seg_sq)
         best = np.argmin(gap_sq, axis=1)
         rows = np.arange(len(best))
         s = self.s0[best] + t[rows, best] * self.seg_len[best]
         return (s.reshape(points.shape[:-1]),
-                np.sqrt(gap_sq[rows, best]).reshape(points.shape[:-1]))
+                np.sqrt(np.maximum(gap_sq[rows, best], 0.0)).reshape(points.shape[:-1]))
 
 
 def polyline_progress(points: np.ndarray, polyline: np.ndarray):

@@ -135,7 +135,10 @@ def accelerations(trajectories: np.ndarray) -> np.ndarray:
 
 def smoothness_costs(trajectories: np.ndarray, weight: float) -> np.ndarray:
     """(..., N, D) -> (..., N) per-timestep smoothness cost 0.5 * weight * |acceleration|^2."""
-    return 0.5 * weight * np.sum(accelerations(trajectories) ** 2, axis=-1)
+    out = np.zeros(trajectories.shape[:-1])
+    a = trajectories[..., :-2, :] - 2.0 * trajectories[..., 1:-1, :] + trajectories[..., 2:, :]
+    out[..., 1:-1] = 0.5 * weight * np.einsum("...d,...d->...", a, a)
+    return out
 
 
 def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
@@ -191,17 +194,18 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
     # same call (one cost query per iteration instead of two; costs are per trajectory, so
     # the numbers are the ones a separate call would give).
     pending = False
+    eps = np.zeros((K, num_points, dim))  # zero at the fixed points throughout
+    batch = np.empty((K + 1, num_points, dim))  # the rollouts, then theta
     for iterations in range(1, params.max_iterations + 2):
+        batch[K] = theta
         if iterations <= params.max_iterations:
-            # Rollout noise eps[k] ~ N(0, R^-1) per dimension, zero at the fixed points.
-            eps = np.zeros((K, num_points, dim))
+            # Rollout noise eps[k] ~ N(0, R^-1) per dimension.
             z = rng.standard_normal((K, len(matrices.R), dim))
-            eps[:, var, :] = np.einsum("ij,kjd->kid", matrices.noise_factor, z) * std
-            rollouts = theta[None] + eps
-            batch = np.concatenate([rollouts, theta[None]]) if pending else rollouts
+            eps[:, var, :] = (matrices.noise_factor @ z) * std
+            np.add(theta, eps, out=batch[:K])
+            batch_costs = costs_of(batch if pending else batch[:K])
         else:
-            batch = theta[None]
-        batch_costs = costs_of(batch)
+            batch_costs = costs_of(batch[K:])
         if pending:  # the previous iteration's update, judged
             cost = float(batch_costs[-1].sum())
             if cost < best_cost:
