@@ -22,6 +22,7 @@ from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.visibility import coverage_share
 from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
+from drake_auv.reconstruction.products import products_markdown, write_products
 
 PHASE_COLOURS = {"transit": "0.45", "follow": "tab:green", "survey": "tab:blue"}
 
@@ -306,12 +307,15 @@ def write_trajectory(result: MissionResult, filename) -> None:
 
 def write_outputs(result: MissionResult, outdir, dpi: int = 110) -> dict:
     """Writes report.json, report.md, coverage.png, distance.png, plan.png (coverage plans),
-    trajectory.csv and diagram.dot into `outdir`; returns the summary."""
+    trajectory.csv, diagram.dot and the data products (points.ply; reconstruction.ply and .png
+    with Open3D, `reconstruction.products`) into `outdir`; returns the summary."""
     out = FilePath(outdir)
     out.mkdir(parents=True, exist_ok=True)
     summary = summarise(result)
+    summary["reconstruction"] = _rounded(write_products(result, out, dpi))
     (out / "report.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (out / "report.md").write_text(report_markdown(summary))
+    (out / "report.md").write_text(report_markdown(summary)
+                                   + products_markdown(summary["reconstruction"]))
     figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result)}
     if result.plan.coverage is not None:
         from drake_auv.planning.figures import fig_path3d
