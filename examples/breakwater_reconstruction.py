@@ -50,9 +50,11 @@ def fly(seed: int, overrides: list[str], extra: list[str]):
 
 def mean_sd(rows, section, key) -> str:
     values = np.array([r[section][key] for r in rows if section in r], dtype=float)
-    scale, unit = (100.0, " %") if key == "completeness" else (1.0, "")
-    return f"{scale * values.mean():.3f}{unit} (sd {scale * values.std():.3f})" if len(
-        values) else "n/a"
+    if not len(values):
+        return "n/a"
+    if key == "completeness":
+        return f"{100 * values.mean():.1f} % (sd {100 * values.std():.1f})"
+    return f"{values.mean():.3f} (sd {values.std():.3f})"
 
 
 def main(argv=None) -> None:
