@@ -5,9 +5,9 @@ Meshcat): vehicle dynamics, navigation, both sonars, the octree mapper, profile 
 the replanner, the supervisor and the coverage recorders, in one Diagram. Reports simulated
 seconds over the simulation's wall seconds (the real-time factor), over the CPU seconds of the
 whole run (site, plan and truth computations included), the replanning step times, and the
-mission's factor as a share of the vehicle-only lawnmower's (`bench_vehicle.py`, measured
-here on the same machine, so the ratio says how much the mission's sensing and planning cost
-whatever the machine's speed); medians over `--runs` runs.
+mission's factor over the vehicle-only one measured in the same run (`_reference.py`: the
+ratio says how much the mission's sensing and planning cost whatever the machine's speed);
+medians over `--runs` runs.
 
     .venv/bin/python benchmarks/bench_mission.py [--runs 3] [--seed 0] [--set KEY=VALUE]
 """
@@ -15,13 +15,11 @@ whatever the machine's speed); medians over `--runs` runs.
 from __future__ import annotations
 
 import argparse
-import platform
-import statistics
 import time
 
 import numpy as np
 
-from bench_vehicle import real_time_factor as vehicle_real_time_factor
+from _reference import machine, print_reference, reference_factor
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.runner import run_mission
 from drake_auv.replanning.replanner import STEP_FIELDS
@@ -50,9 +48,10 @@ def main(argv=None) -> int:
     spec = load_mission("boulder", seed=args.seed, overrides=args.overrides)
     runs = [one_run(spec) for _ in range(args.runs)]
     med = {k: float(np.median([r[k] for r in runs])) for k in runs[0]}
-    vehicle = statistics.median(vehicle_real_time_factor() for _ in range(3))
-    print(f"machine: {platform.processor() or platform.machine()}, {time.strftime('%Y-%m-%d')}; "
-          f"{args.runs} run(s) of the boulder mission, seed {args.seed}"
+    print(machine())
+    vehicle = reference_factor()
+    print_reference(vehicle)
+    print(f"{args.runs} run(s) of the boulder mission, seed {args.seed}"
           + (f", {' '.join(args.overrides)}" if args.overrides else "")
           + ("" if all(r["completed"] for r in runs) else " (time cap reached)"))
     print(f"simulated {med['sim']:.0f} s in {med['wall']:.1f} s wall of simulation "
@@ -60,8 +59,7 @@ def main(argv=None) -> int:
           f"truth computations)")
     print(f"real-time factor, whole mission: {med['rtf']:.1f}x (target >= 30x); "
           f"simulated / CPU seconds {med['rtf_cpu']:.1f}x")
-    print(f"vehicle-only lawnmower (bench_vehicle): {vehicle:.0f}x; the mission runs at "
-          f"{med['rtf'] / vehicle:.3f} of it")
+    print(f"whole mission over the reference: {med['rtf'] / vehicle:.3f}")
     print(f"replanning step ({med['steps']:.0f} steps): median {med['step_median']:.1f} ms, "
           f"95th percentile {med['step_p95']:.1f} ms")
     return 0
