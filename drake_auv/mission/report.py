@@ -133,7 +133,8 @@ def summarise(result: MissionResult) -> dict:
         min_clearance_m=min_clearance,
         contact=bool(min_clearance <= VEHICLE_RADIUS),
         distance_to_target=dict(
-            mean_m=float(d.mean()), sd_m=float(d.std()), min_m=float(result.distance.min()),
+            mean_m=float(d.mean()) if len(d) else None, sd_m=float(d.std()) if len(d) else None,
+            min_m=float(result.distance.min()),
             map_mean_m=float(map_d.mean()) if len(map_d) else None,
             map_sd_m=float(map_d.std()) if len(map_d) else None,
             near_m=near_distance(result), samples=int(scored.sum())),
@@ -214,8 +215,8 @@ def report_markdown(summary: dict) -> str:
               f"**{100 * c['camera']:.1f} %** ({_fmt(c['camera_angle_mean_deg'], '.1f')} deg, "
               f"sd {_fmt(c['camera_angle_sd_deg'], '.1f')}).",
               f"- True distance to the target over {d['samples']} survey samples within "
-              f"{d['near_m']:g} m: mean {d['mean_m']:.2f} m, sd {d['sd_m']:.2f} m; minimum over "
-              f"the dive {d['min_m']:.2f} m. Against the on-line map: mean "
+              f"{d['near_m']:g} m: mean {_fmt(d['mean_m'], '.2f')} m, sd {_fmt(d['sd_m'], '.2f')} m;"
+              f" minimum over the dive {d['min_m']:.2f} m. Against the on-line map: mean "
               f"{_fmt(d['map_mean_m'], '.2f')} m, sd {_fmt(d['map_sd_m'], '.2f')} m.",
               f"- Minimum clearance to anything: {summary['min_clearance_m']:.2f} m: "
               + ("**contact**." if summary["contact"] else "no contact.")
