@@ -1,4 +1,5 @@
-"""`drake-auv`: plan coverage paths, list scenarios, simulate missions, run the demo."""
+"""`drake-auv`: plan coverage paths, list scenarios, simulate missions, run the demo,
+reconstruct surfaces from recorded returns."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo")
+COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "reconstruct")
 
 
 def build_parser() -> argparse.ArgumentParser:
