@@ -6,7 +6,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo")
+COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "campaign")
 
 
 def build_parser() -> argparse.ArgumentParser:
