@@ -43,7 +43,7 @@ def connect(workers: int | None = None, scheduler: str | None = None):
     if workers < 1:
         raise CampaignError(f"--workers {workers}: allowed: an integer >= 1")
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
+                           dashboard_address=":0", silence_logs=logging.ERROR)
     return Client(cluster), cluster
 
 
