@@ -1,13 +1,21 @@
-# One-command set-up: every target creates .venv when it is missing and installs the package.
-PYTHON ?= python3.11
-VENV := .venv
+# One-command set-up: every target creates $(VENV) when it is missing and installs the package.
+# PYTHON defaults to the newest supported interpreter that runs (3.13, 3.12, then 3.11; a
+# command on PATH first, then pyenv's versions); a command that exists but fails, such as a
+# pyenv shim for a version not selected, is skipped. Override: make test PYTHON=... VENV=...
+SUPPORTED := 3.13 3.12 3.11
+PYTHONS := $(shell for v in $(SUPPORTED); do \
+	for c in python$$v $$(ls -d $$HOME/.pyenv/versions/$$v.*/bin/python$$v 2>/dev/null | sort -rV); do \
+	$$c -c "import sys, venv" >/dev/null 2>&1 && { echo $$c; break; }; done; done)
+PYTHON ?= $(firstword $(PYTHONS))
+VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test bench clean
+.PHONY: demo docs test bench pythons clean
 
 $(PY):
-	$(shell command -v $(PYTHON) >/dev/null 2>&1 && echo $(PYTHON) || echo python3) -m venv $(VENV)
+	@test -n "$(PYTHON)" || { echo "no Python $(SUPPORTED) found that runs; set PYTHON=..."; exit 1; }
+	$(PYTHON) -m venv $(VENV)
 
 $(STAMP): $(PY) pyproject.toml
 	$(PY) -m pip install --quiet --upgrade pip
@@ -17,11 +25,17 @@ $(STAMP): $(PY) pyproject.toml
 demo: $(STAMP)
 	MPLBACKEND=Agg $(VENV)/bin/drake-auv demo --out out/demo
 
+docs: $(STAMP)
+	MPLBACKEND=Agg $(PY) scripts/update_docs.py --out out/docs
+
 test: $(STAMP)
 	MPLBACKEND=Agg $(PY) -m pytest -q
 
 bench: $(STAMP)
 	@for f in benchmarks/bench_*.py; do echo "== $$f"; MPLBACKEND=Agg $(PY) $$f || exit 1; done
 
+pythons:  # the supported interpreters that run, newest first
+	@echo $(PYTHONS)
+
 clean:
-	rm -rf $(VENV) out build *.egg-info
+	rm -rf .venv .venv-* out build *.egg-info

@@ -8,6 +8,8 @@
    interleaved and the median of RUNS is reported, with the process CPU time beside the wall
    time, as the machine is shared.
 3. The cost of one sensor update (pure `scan`), to see where the time goes.
+Ratios: each configuration's wall time over the vehicle-only one (the sensors' cost over the
+vehicle's), and its real-time factor over the reference (`_reference.py`, same run).
 """
 
 from __future__ import annotations
@@ -22,9 +24,9 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import TrajectorySource
 from tqdm import tqdm
 
+from _reference import SIM_SECONDS, lawnmower, machine, print_reference, reference_factor
 from drake_auv.vehicle.diagram import add_girona500
 from drake_auv.geometry import RayCaster
-from drake_auv.planning import Path
 from drake_auv.sonar import SonarModel, SonarMount, fan_angles, scan
 from drake_auv.sonar.beams import beam_geometry
 from drake_auv.coverage.recorder import CoverageRecorder
@@ -33,7 +35,6 @@ from drake_auv.sonar.profiler import PencilBeamProfiler
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 
-SIM_SECONDS = 600.0
 RUNS = 3
 NUM_RAYS = 1_000_000
 
@@ -44,15 +45,6 @@ def seabed(cell: float = 0.3) -> Bathymetry:
     y = np.arange(-15.0, 45.0 + 1e-9, cell)
     gx, gy = np.meshgrid(x, y)
     return Bathymetry(-14.0 + np.sin(gx / 7.0) * np.cos(gy / 5.0), (cell, cell), (-15.0, -15.0))
-
-
-def lawnmower() -> Path:
-    """The vehicle benchmark's path: lanes of 50 m, 5 m apart, at -10 m."""
-    points = []
-    for i in range(7):
-        xs = (0.0, 50.0) if i % 2 == 0 else (50.0, 0.0)
-        points += [(xs[0], 5.0 * i, -10.0), (xs[1], 5.0 * i, -10.0)]
-    return Path(np.array(points), 0.0, (0.0, 0.0, -1.0)).resample(1.0)
 
 
 def ray_throughput(caster: RayCaster, bathy: Bathymetry) -> dict[str, float]:
@@ -122,6 +114,9 @@ def update_costs(caster: RayCaster) -> dict[str, float]:
 
 
 def main() -> None:
+    print(machine())
+    reference = reference_factor()
+    print_reference(reference)
     bathy = seabed()
     t0 = time.perf_counter()
     world = bathymetry_to_mesh(bathy)
@@ -143,9 +138,9 @@ def main() -> None:
         wall = statistics.median(t[0] for t in values)
         cpu = statistics.median(t[1] for t in values)
         print(f"  {name}: wall {wall:.2f} s (min {min(t[0] for t in values):.2f}), "
-              f"{SIM_SECONDS / wall:.0f}x real time, "
-              f"overhead {100 * (wall / base_wall - 1):+.0f} %; "
-              f"CPU {cpu:.2f} s, overhead {100 * (cpu / base_cpu - 1):+.0f} %")
+              f"{SIM_SECONDS / wall:.0f}x real time ({SIM_SECONDS / wall / reference:.2f} of "
+              f"the reference), {wall / base_wall:.2f}x the vehicle-only wall time; "
+              f"CPU {cpu:.2f} s ({cpu / base_cpu:.2f}x)")
     for label, us in update_costs(caster).items():
         print(f"  {label}: {us:.0f} us")
 

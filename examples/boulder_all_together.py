@@ -3,10 +3,12 @@
 Off-line plan on the boulder's prior map (Omega = 10 m, two slicing contours 2 m apart,
 boustrophedon lanes elsewhere), horizontal profile following around the boulder, then the plan
 flown with realtime replanning against the on-line octree map under prior-map and navigation
-error. Writes out/demo/: report.md, report.json, plan.png, coverage.png, distance.png and
-mission.html. Run:
+error: the built-in `boulder` mission (drake_auv/mission/missions/boulder.yaml). Writes
+out/demo/: report.md, report.json, plan.png, coverage.png, distance.png, mission.html,
+trajectory.csv and diagram.dot. Run:
     MPLBACKEND=Agg .venv/bin/python examples/boulder_all_together.py [--seed 0] [--out DIR]
-Every option of `drake-auv demo` is accepted (see `drake-auv demo --help`).
+Every option of `drake-auv demo` is accepted (see `drake-auv demo --help`), e.g.
+`--set limits.max_time_s=300` for a short dive.
 """
 
 import sys

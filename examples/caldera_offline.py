@@ -3,8 +3,11 @@ standard lawnmower (Omega = 2 m, 60 degree camera, delta_s = 0.5, 0.5 m cells).
 
     .venv/bin/python examples/caldera_offline.py [--outdir out/caldera_offline] [--no-figures]
 
-Prints the comparison and the reference's figures, and writes the plan's files (path CSV,
-GeoJSON, report, PNG figures) to --outdir.
+Prints the comparison twice: on the grid (cone test on cell centres, the planner's own metric)
+and on the grid's 3D mesh with occlusion, where the high-slope region is reported for both
+sensor models (the planned normal-aligned one and the reference's fixed-tilt forward-looking
+one). Writes the plan's files (path CSV, COLA2 and QGroundControl missions, WGS 84 GeoJSON
+with the site placed on the Santorini caldera, report, PNG figures) to --outdir.
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ import time
 
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.export import REFERENCE_TABLE3, table3_markdown, write_outputs
+from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
+from drake_auv.planning.metrics3d import evaluate_plan_3d, table3d_markdown
 from drake_auv.terrain.synthetic import caldera_site
 
 
@@ -32,12 +37,18 @@ def main() -> None:
     print(f"Caldera-rim ROI {bathy.extent[1]:.0f} m x {bathy.extent[3]:.0f} m, "
           f"{plan.labels.n_regions} high-slope region(s), {len(plan.cells.cells)} planar cells, "
           f"{len(plan.contours)} contour pieces; planned with metrics in {elapsed:.2f} s.\n")
+    print("On the grid (cone test, no occlusion):\n")
     print(table3_markdown(m))
+    print("\nOn the 3D mesh with occlusion:\n")
+    m3d = evaluate_plan_3d(plan)
+    print(table3d_markdown(m3d))
     print(f"\nlength ratio {m.total.length / m.lawnmower.length:.2f} (reference "
           f"{REFERENCE_TABLE3['total']['length'] / REFERENCE_TABLE3['lawnmower']['length']:.2f}), "
           f"viewing-angle ratio {m.total.view_mean_deg / m.lawnmower.view_mean_deg:.2f} (reference "
           f"{REFERENCE_TABLE3['total']['view_mean_deg'] / REFERENCE_TABLE3['lawnmower']['view_mean_deg']:.2f})")
-    files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True)
+    files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
+                          exports=("cola2", "qgc", "geojson"), origin_lonlat=CALDERA_ORIGIN_LONLAT,
+                          metrics_3d=m3d)
     print(f"wrote {len(files)} files to {args.outdir}")
 
 

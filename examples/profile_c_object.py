@@ -4,7 +4,8 @@ The GIRONA 500 starts in front of the C's opening and follows the vertical profi
 plane at a 2 m offset: the seabed, into the C over the bottom flange, up the inner wall, along
 the ceiling (where it turns 180 degrees instead of moving backwards), out around the upper
 flange, over the top (turning again to face its motion), down the back wall and onto the
-seabed behind. The run stops once the vehicle is back on the seabed beyond the object.
+seabed behind: the built-in `c_object` mission, whose follow step ends 26 m along the plane
+from the start, beyond the object (x > 20 m).
 Acceptance: no contact (the true clearance to the mesh stays above the vehicle's radius,
 1 m, at every logged step), the whole C followed, the ceiling turn made.
 
@@ -22,42 +23,30 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from drake_auv.diagrams.profile_following import build_profile_following_diagram, run_mission
-from drake_auv.geometry.distance import mesh_distance
-from drake_auv.perception import FollowingParams
-from drake_auv.scenarios import get_scenario
+from drake_auv.mission.config import load_mission
+from drake_auv.mission.plan import plan_mission
+from drake_auv.mission.recording import finish_recording, prepare_scene
+from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
+from drake_auv.mission.site import load_site
 
-VEHICLE_RADIUS = 1.0  # m
 # The C in its x-z section (scenarios._c_object_geometry) and the seabed, for the figure.
 C_OUTLINE = np.array([[0, -20], [0, -17], [10, -17], [10, -9], [0, -9], [0, -6], [13, -6],
                       [13, -20]], dtype=float)
 
 
-def run(scene=None, max_time=400.0, seed=0):
-    """Follows the C; returns a dict of time series and the turn count."""
-    scenario = get_scenario("c_object")
-    params = FollowingParams(offset=scenario.params["omega"], speed=scenario.params["speed"])
-    diagram, handles = build_profile_following_diagram(
-        scenario.world, scenario.start_state, "vertical", params, plane_yaw=0.0, seed=seed,
-        scene=scene)
-    passed_top = {"flag": False}
-
-    def behind_the_c(context):  # over the top, then back down on the seabed beyond the C
-        x = handles.state_log.FindLog(context).data()
-        if x.shape[1] == 0:
-            return False
-        passed_top["flag"] |= bool(x[2, -1] > -6.0)
-        return passed_top["flag"] and x[0, -1] > 20.0 and x[2, -1] < -17.0
-
-    simulator = run_mission(diagram, max_time, stop=behind_the_c, label="C object")
-    context = simulator.get_context()
-    log = handles.state_log.FindLog(context)
-    x = log.data()
-    profile = handles.profile_log.FindLog(context).data()
-    follower = handles.controller.follower(handles.controller.GetMyContextFromRoot(context))
-    return dict(t=log.sample_times(), x=x, mode=profile[6], estimated=profile[0],
-                clearance=mesh_distance(scenario.world, x[:3].T), turns=follower.turns,
-                offset=params.offset, world=scenario.world)
+def run(spec, site, scene=None):
+    """Flies `spec` (the `c_object` mission) at `site`; returns the follow leg's time series
+    and the turn count."""
+    result = run_mission(spec, site, scene=scene)
+    leg = next(iter(result.plan.follow_legs))
+    mask = result.leg_at == leg
+    controller = result.handles.controller
+    follower = controller.follower(controller.GetMyContextFromRoot(result.context))
+    t = result.times[mask]
+    return dict(result=result, t=t - t[0], x=result.state[mask].T,
+                mode=result.profile[mask, 6], estimated=result.profile[mask, 0],
+                clearance=result.clearance[mask], turns=follower.turns,
+                offset=result.plan.follow_legs[leg].params.offset)
 
 
 def figure(result, filename):
@@ -83,7 +72,7 @@ def figure(result, filename):
     b.plot(t, result["estimated"], lw=0.8, label="estimated distance to profile")
     b.axhline(VEHICLE_RADIUS, color="r", ls="--", lw=0.8, label="vehicle radius")
     b.axhline(result["offset"], color="k", lw=0.8)
-    b.set_xlabel("time (s)")
+    b.set_xlabel("time since following began (s)")
     b.set_ylabel("distance (m)")
     b.legend(fontsize=8)
     fig.tight_layout()
@@ -97,15 +86,19 @@ def main(argv=None):
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    from drake_auv.visualization.scene import Scene
+    from drake_auv.visualization import Scene
+
+    spec = load_mission("c_object")
+    site = load_site(spec.site, spec.seed)
     scene = Scene()
-    scene.add_mesh("c_object", get_scenario("c_object").world, rgba=(0.6, 0.55, 0.5, 1.0))
+    prepare_scene(scene, site, plan_mission(spec, site))
     scene.start_recording(playback_speed=10.0, live=False)
-    result = run(scene=scene)
-    scene.write_html(out / "c_object.html")
+    result = run(spec, site, scene)
+    finish_recording(result["result"], scene, out / "c_object.html")
     figure(result, out / "c_object_trajectory.png")
     x = result["x"]
     summary = dict(duration_s=float(result["t"][-1]), turns=int(result["turns"]),
+                   outcomes=result["result"].outcomes,
                    min_clearance_m=float(result["clearance"].min()),
                    no_contact=bool(result["clearance"].min() > VEHICLE_RADIUS),
                    max_offset_error_m=float(np.abs(result["clearance"][result["t"] > 20]

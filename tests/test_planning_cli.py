@@ -36,11 +36,14 @@ def test_plan_writes_every_output(tmp_path, small_tif, capsys):
     assert report["metrics"]["total"]["coverage"] >= 0.95
     gj = json.loads((out / "path.geojson").read_text())
     coords = np.vstack([f["geometry"]["coordinates"] for f in gj["features"]])
-    assert coords.shape[1] == 3
-    # Map coordinates of the file (EPSG:32631), not world metres from the corner.
-    assert coords[:, 0].min() >= 999.5 and coords[:, 0].max() <= 1049.5
-    assert coords[:, 1].min() >= 1999.5 and coords[:, 1].max() <= 2059.5
-    assert gj["crs"]["properties"]["name"] == "urn:ogc:def:crs:EPSG::32631"
+    assert coords.shape[1] == 3 and "crs" not in gj
+    # WGS 84 longitude/latitude of the file's map coordinates (EPSG:32631).
+    from pyproj import Transformer
+
+    e, n = Transformer.from_crs("EPSG:4326", "EPSG:32631", always_xy=True).transform(
+        coords[:, 0], coords[:, 1])
+    assert e.min() >= 999.5 and e.max() <= 1049.5
+    assert n.min() >= 1999.5 and n.max() <= 2059.5
     assert "Standard lawnmower path" in capsys.readouterr().out
 
 
@@ -56,3 +59,25 @@ def test_plan_reports_bad_input(tmp_path, small_tif, capsys, extra, message):
 def test_plan_missing_file(tmp_path, capsys):
     assert main(["plan", str(tmp_path / "missing.tif"), "-o", str(tmp_path)]) == 2
     assert "not found" in capsys.readouterr().err
+
+
+def _npz(tmp_path, name, z):
+    path = tmp_path / name
+    np.savez(path, z=z, spacing=[1.0, 1.0])
+    return path
+
+
+@pytest.mark.parametrize("case, extra, message", [
+    ("dry", [], "minimum operating depth"), ("inf", [], "infinite"),
+    ("ok", ["--omega", "1e9"], "omega (offset to the terrain) must be in (0, "),
+    ("ok", ["--min-depth", "-1"], "min_depth"),
+    ("ok", ["--origin-lonlat", "north"], "--origin-lonlat")])
+def test_bad_grids_and_values_give_one_line(tmp_path, capsys, case, extra, message):
+    x = np.arange(40.0)[None, :] * np.ones((30, 1))
+    z = {"dry": 5.0 + 0.1 * x, "inf": np.where(x == 7, np.inf, -20.0 + 0.1 * x),
+         "ok": -20.0 + 0.1 * x}[case]
+    code = main(["plan", str(_npz(tmp_path, f"{case}.npz", z)), "--no-figures",
+                 "-o", str(tmp_path / "o"), *extra])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and message in err[0], err
+    assert "Traceback" not in err[0]

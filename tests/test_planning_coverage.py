@@ -14,6 +14,7 @@ from scipy.spatial import cKDTree
 
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.export import path_to_geojson
+from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.path import Path
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
@@ -40,8 +41,11 @@ def exact_clearance(bathy: Bathymetry, points: np.ndarray, radius: float) -> np.
 
 
 def check_clearance(plan, omega, n_check=150):
-    """Independent check: the samples the planner found closest plus random ones."""
+    """Independent check: the samples the planner found closest plus random ones. Samples
+    held at the minimum operating depth (water too shallow for Omega) are left out."""
     path = plan.path
+    held = path.points[:, 2] >= -plan.parameters["min_depth"] - 1e-9
+    path = path.select(~held)
     d, _ = plan.surface.distance(path.points)
     assert d.min() >= 0.9 * omega
     rng = np.random.default_rng(0)
@@ -204,18 +208,22 @@ def test_monterey_tiles(tile):
     plan = plan_coverage(bathy, omega=20.0, aperture_deg=60.0, slope_threshold=0.5)
     assert plan.metrics.total.coverage >= 0.95
     check_clearance(plan, 20.0, n_check=40)
-    gj = json.loads(json.dumps(path_to_geojson(plan.path, plan.bathy)))
-    assert gj["crs"]["properties"]["name"] == "urn:ogc:def:crs:EPSG::3857"
+    assert plan.path.points[:, 2].max() <= -1.0 and plan.lawnmower.points[:, 2].max() <= -1.0
+    gj = json.loads(json.dumps(path_to_geojson(plan.path, GeoFrame(plan.bathy))))
     coords = np.vstack([np.asarray(f["geometry"]["coordinates"]) for f in gj["features"]])
     import rasterio
+    from pyproj import Transformer
 
     with rasterio.open(tile) as ds:
         b = ds.bounds
+    lon, lat = Transformer.from_crs("EPSG:3857", "EPSG:4326", always_xy=True).transform(
+        [b.left, b.right], [b.bottom, b.top])
     # The Y scale is positive, so rasterio's "bottom" is the northern edge: compare sorted.
-    x0, x1 = sorted((b.left, b.right))
-    y0, y1 = sorted((b.bottom, b.top))
+    x0, x1 = sorted(lon)
+    y0, y1 = sorted(lat)
     assert np.all((coords[:, 0] >= x0) & (coords[:, 0] <= x1))
     assert np.all((coords[:, 1] >= y0) & (coords[:, 1] <= y1))
+    assert coords[:, 2].max() <= -1.0
     assert {f["properties"]["label"] for f in gj["features"]} >= {"planar", "slice"}
 
 

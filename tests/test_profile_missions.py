@@ -1,33 +1,37 @@
-"""Whole profile-following missions in Drake, checked against the true world: the pool's V
-profile in vertical mode (up to its far wall) and a closed loop around the boulder."""
+"""Whole profile-following missions in Drake (the built-in mission files, flown by the mission
+runner), checked against the true world: the pool's V profile in vertical mode up to its far
+wall, and a closed loop around the boulder under the boulder mission's navigation and chart
+errors."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
-from pydrake.systems.analysis import Simulator
 
-from drake_auv.diagrams.profile_following import build_profile_following_diagram
-from drake_auv.geometry.distance import mesh_distance
-from drake_auv.perception import EstimatorParams, FollowingParams
-from drake_auv.scenarios import get_scenario
+from drake_auv.mission.config import FollowStep, load_mission
+from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 
 
+def _follow_only(name: str, overrides=()):
+    """The mission `name` reduced to its follow steps."""
+    spec = load_mission(name, overrides=overrides)
+    return replace(spec, steps=tuple(s for s in spec.steps if isinstance(s, FollowStep)))
 
-def _fly(world, start, mode, params, duration, **kwargs):
-    diagram, handles = build_profile_following_diagram(world, start, mode, params,
-                                                       **kwargs)
-    simulator = Simulator(diagram)
-    simulator.AdvanceTo(duration)
-    log = handles.state_log.FindLog(simulator.get_context())
-    return log.sample_times(), log.data()
+
+def _following(result):
+    """(t since the follow leg began, x (12, n), clearance) of the follow leg's samples."""
+    leg = next(i for i, leg in enumerate(result.plan.legs) if leg.phase == "follow")
+    mask = result.leg_at == leg
+    t = result.times[mask]
+    return t - t[0], result.state[mask].T, result.clearance[mask]
 
 
 def test_pool_v_profile_to_the_cliff():
-    world = get_scenario("pool").world
-    start = np.zeros(12)
-    start[:3] = (-6.0, 0.0, -3.0)  # over the shallow end, heading +x along the V
-    t, x = _fly(world, start, "vertical", FollowingParams(offset=2.0, min_depth=1.0), 55.0,
-                plane_yaw=0.0)
-    clearance = mesh_distance(world, x[:3].T)
+    spec = _follow_only("pool", ["limits.max_time_s=150"])
+    spec = replace(spec, steps=spec.steps[1:])  # the vertical step alone
+    result = run_mission(spec, progress=False)
+    assert result.completed and result.outcomes[-1] == "goal"  # the far wall climbed
+    t, x, clearance = _following(result)
     assert np.all(np.abs(clearance[t > 10] - 2.0) < 0.3)
     deepest = np.argmin(x[2])
     assert abs(x[0, deepest]) < 1.5 and x[2, deepest] == pytest.approx(-5.0, abs=0.3)  # V apex
@@ -36,16 +40,13 @@ def test_pool_v_profile_to_the_cliff():
 
 
 def test_boulder_closed_loop_without_contact():
-    scenario = get_scenario("boulder")
-    target = scenario.world.vertices[scenario.world.faces[scenario.target_faces]].reshape(-1, 3)
-    centre = target.mean(axis=0)
-    start = np.zeros(12)
-    start[:3] = (centre[0] - 16.0, centre[1], -34.0)
-    params = FollowingParams(offset=3.0, speed=0.5, estimator=EstimatorParams(window=6.0))
-    t, x = _fly(scenario.world, start, "horizontal", params, 180.0)
+    result = run_mission(_follow_only("boulder", ["limits.max_time_s=260"]), progress=False)
+    assert result.completed and result.outcomes == ["goal", "goal"]
+    t, x, clearance = _following(result)
+    lo, hi = result.site.target_mesh.bounds
+    centre = 0.5 * (lo + hi)
     angle = np.unwrap(np.arctan2(x[1] - centre[1], x[0] - centre[0]))
-    assert abs(angle[-1] - angle[0]) > 2 * np.pi  # closed the loop
-    clearance = mesh_distance(scenario.world, x[:3].T)
-    assert clearance.min() > 2.0  # the vehicle's radius is 1 m
+    assert abs(angle[-1] - angle[0]) > 0.95 * 2 * np.pi  # closed the loop (true centre)
+    assert clearance.min() > 2.0 * VEHICLE_RADIUS
     assert np.abs(clearance[t > 30] - 3.0).mean() < 0.3
     assert np.all(np.abs(x[2] + 34.0) < 0.15)  # constant depth

@@ -99,3 +99,52 @@ def test_caldera_site_matches_the_reference_figures():
     np.testing.assert_array_equal(caldera_site(seed=0).z, bathy.z)
     other = caldera_site(seed=1).z
     assert 0 < np.abs(other - bathy.z).max() < 0.2
+
+
+def _block(shape=(80, 100)):
+    """A 30 m x 20 m block 6 m high with vertical sides on a 1 m grid (a steep band 2 cells
+    wide, slope 3, seen from above)."""
+    yy, xx = np.mgrid[0:shape[0], 0:shape[1]] * 1.0
+    cy, cx = shape[0] / 2, shape[1] / 2
+    return Bathymetry(-30.0 + 6.0 * ((np.abs(xx - cx) < 15) & (np.abs(yy - cy) < 10)), (1, 1))
+
+
+def _listing_hull():
+    """A 50 m x 12 m hull turned 29 deg, its deck listing 0.3 m per m, on a 1 m grid."""
+    yy, xx = np.mgrid[0:80, 0:100] * 1.0
+    c, s = np.cos(0.5), np.sin(0.5)
+    u, v = (xx - 50) * c + (yy - 40) * s, -(xx - 50) * s + (yy - 40) * c
+    inside = (np.abs(u) < 25) & (np.abs(v) < 6)
+    return Bathymetry(-30.0 + np.where(inside, 4.0 + 0.3 * v, 0.0), (1, 1))
+
+
+@pytest.mark.parametrize("make", [_block, _listing_hull], ids=["block", "listing hull"])
+def test_thin_near_vertical_walls_survive_and_are_sliced(make):
+    from drake_auv.planning.coverage_plan import plan_coverage
+
+    bathy = make()
+    labels = classify(bathy)
+    assert labels.n_regions == 1
+    assert labels.high.sum() <= 0.12 * labels.valid.sum()  # the wall band, not the deck
+    plan = plan_coverage(bathy, omega=2.0, compute_metrics=False)
+    assert len(plan.contours) >= 1 and plan.path.length_by_label()["slice"] > 100.0
+    # An opening of 2 cells (the former default) erases such a wall: what this guards.
+    assert classify(bathy, opening_radius=2.0).n_regions == 0
+
+
+def test_region_count_does_not_depend_on_the_roi_size():
+    from drake_auv.terrain.synthetic import random_seabed
+
+    def mound(n):
+        yy, xx = np.mgrid[0:n, 0:n] * 1.0
+        r = np.hypot(xx - n / 2, yy - n / 2)
+        return -40.0 + 8.0 * np.exp(-(r / 6.0) ** 2)
+
+    small = Bathymetry(mound(60), (1, 1))
+    texture = random_seabed(2, shape=(120, 120), relief=0.5, smoothness=6.0).z + 40.0
+    large = Bathymetry(mound(120) + texture, (1, 1))  # the same mound, 4x the area
+    a, b = classify(small), classify(large)
+    assert a.n_regions == b.n_regions == 1
+    assert abs(int(a.high.sum()) - int(b.high.sum())) <= 0.1 * a.high.sum()
+    # A minimum area in m^2 from the CLI's --min-area: above the mound's, it is dropped.
+    assert classify(small, min_area=2.0 * a.high.sum()).n_regions == 0

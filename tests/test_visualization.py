@@ -65,3 +65,18 @@ def test_scene_rejects_bad_input(scene):
         scene.add_path("red", np.zeros((2, 3)), rgba=(2.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="playback_speed"):
         scene.start_recording(playback_speed=0.0)
+
+
+def test_frame_camera_looks_at_the_drawn_box():
+    scene = Scene()
+    with pytest.raises(ValueError, match="nothing drawn"):
+        scene.frame_camera()
+    scene.add_path("diagonal", np.array([[0.0, 0.0, -30.0], [40.0, 20.0, -20.0]]))
+    camera, target = scene.frame_camera(direction=(0.0, -1.0, 1.0))
+    np.testing.assert_allclose(target, [20.0, 10.0, -25.0])
+    view = camera - target
+    assert view[0] == pytest.approx(0.0) and view[1] == pytest.approx(-view[2])
+    # The box's bounding sphere (radius 21.2 m) fits the 75 degree view.
+    assert np.linalg.norm(view) > 21.2 / np.sin(np.radians(37.5))
+    with pytest.raises(ValueError, match="direction"):
+        scene.frame_camera(direction=(0.0, 0.0, 0.0))

@@ -2,15 +2,25 @@
 
     drake-auv plan map.tif -o out/                         whole grid, Omega = 2 m
     drake-auv plan map.tif --roi 500,200,600,450 --omega 2 --aperture 60 -o out/
+    drake-auv plan map.tif --export cola2,qgc,geojson -o out/   missions a vehicle runs
     drake-auv plan caldera -o out/                         the synthetic caldera-rim site
 
-Writes path.csv (world frame), path.geojson and lawnmower.geojson (3D, in the map's CRS),
-report.md and report.json (the Table 3 comparison) and PNG figures into OUTDIR.
+Writes path.csv (world frame), report.md and report.json (the Table 3 comparison), PNG figures
+and the --export formats (default geojson when the grid is georeferenced): mission.xml (COLA2),
+mission.plan (QGroundControl, ArduSub), path.geojson and lawnmower.geojson (WGS 84) into OUTDIR.
 """
 
 from __future__ import annotations
 
 from pathlib import Path as FilePath
+
+
+def _lonlat(text: str) -> tuple[float, float]:
+    try:
+        lon, lat = (float(v) for v in text.split(","))
+    except ValueError:
+        raise ValueError(f"--origin-lonlat: expected 'LON,LAT' in degrees, got {text!r}") from None
+    return lon, lat
 
 
 def add_parser(subparsers) -> None:
@@ -22,6 +32,11 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--roi", help="region of interest in map coordinates: "
                                       "'xmin,ymin,xmax,ymax' or a polygon 'x1,y1;x2,y2;x3,y3;...' "
                                       "(write --roi=-123,... when it starts with a minus sign)")
+    parser.add_argument("--roi-file", help="region of interest as polygons (holes allowed) in a "
+                                           "GeoJSON, Shapefile or GeoPackage, any CRS")
+    parser.add_argument("--no-go", action="append", default=[], metavar="FILE",
+                        help="no-go zones (polygons: GeoJSON, Shapefile, GeoPackage, any CRS); "
+                             "nothing comes within Omega of them; repeatable")
     parser.add_argument("--omega", type=float, default=2.0,
                         help="offset to the terrain, m, > 0 (default 2)")
     parser.add_argument("--slope-threshold", type=float, default=0.5,
@@ -40,31 +55,71 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
                         help="on high-slope regions look along the inward normal (default) or "
                              "with one fixed tilt per region")
+    parser.add_argument("--order", default=None,
+                        help="IHO S-44 ed. 6 survey order: exclusive (200 %% coverage), special, "
+                             "1a (100 %%), 1b, 2 (5 %%); sets the lane spacing")
+    parser.add_argument("--min-area", type=float, default=None,
+                        help="smallest high-slope region kept, m^2, >= 0 (default 100, at "
+                             "least 4 cells; it does not grow with the ROI)")
+    parser.add_argument("--min-depth", type=float, default=1.0,
+                        help="minimum operating depth, m, >= 0: no sample above it, shallower "
+                             "cells are no-go (default 1)")
+    parser.add_argument("--export", default=None,
+                        help="comma-separated: cola2 (mission.xml), qgc (mission.plan), "
+                             "geojson (WGS 84) (default: geojson when georeferenced)")
+    parser.add_argument("--origin-lonlat", default=None,
+                        help="WGS 84 'LON,LAT' of the world origin, for grids without a CRS "
+                             "(the caldera site defaults to the Santorini caldera)")
+    parser.add_argument("--speed", type=float, default=0.5,
+                        help="mission surge speed, m/s, > 0 (default 0.5)")
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    parser.add_argument("--no-3d-metrics", action="store_true",
+                        help="skip the occluded 3D metrics on the grid's mesh (seconds on large "
+                             "grids)")
     parser.add_argument("-o", "--outdir", required=True, help="output directory")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     from drake_auv.planning.coverage_plan import plan_coverage
-    from drake_auv.planning.export import table3_markdown, write_outputs
+    from drake_auv.planning.export import parse_exports, table3_markdown, write_outputs
     from drake_auv.terrain.roi import parse_roi
 
+    exports = parse_exports(args.export) if args.export is not None else None
+    origin = _lonlat(args.origin_lonlat) if args.origin_lonlat is not None else None
     if args.bathymetry == "caldera" and not FilePath("caldera").exists():
+        from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
         from drake_auv.terrain.synthetic import caldera_site
 
         bathy = caldera_site()
+        origin = CALDERA_ORIGIN_LONLAT if origin is None else origin
     else:
         from drake_auv.terrain.readers import read_bathymetry
 
         bathy = read_bathymetry(args.bathymetry)
+    if args.roi and args.roi_file:
+        raise ValueError("give --roi or --roi-file, not both")
     roi = parse_roi(args.roi) if args.roi else None
+    no_go = None
+    if args.roi_file or args.no_go:
+        import shapely
+
+        from drake_auv.terrain.zones import read_zones
+
+        if args.roi_file:
+            roi = read_zones(args.roi_file, bathy, "region of interest")
+        if args.no_go:
+            no_go = shapely.union_all([read_zones(f, bathy) for f in args.no_go])
     plan = plan_coverage(bathy, roi=roi, omega=args.omega, aperture_deg=args.aperture,
                          overlap=args.overlap, slope_threshold=args.slope_threshold,
                          sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
                          slice_count=args.slice_count, slice_sensor=args.slice_sensor,
+                         min_area=args.min_area, min_depth=args.min_depth, no_go=no_go,
+                         order=args.order,
                          progress=True)
-    files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True)
+    files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
+                          exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
+                          metrics_3d=not args.no_3d_metrics)
     print(table3_markdown(plan.metrics))
     print(f"wrote {len(files)} files to {args.outdir}")
     return 0

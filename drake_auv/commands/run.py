@@ -51,14 +51,15 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     spec = load_mission(mission, seed=seed, overrides=overrides)
     site = load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
+    plan = plan_mission(spec, site)
     scene = None
     if html:
         from drake_auv.visualization import Scene
 
         scene = Scene()
-        prepare_scene(scene, site, plan_mission(spec, site))
+        prepare_scene(scene, site, plan)
         scene.start_recording(playback_speed=playback_speed, live=False)
-    result = run_mission(spec, site, scene=scene, progress=progress)
+    result = run_mission(spec, site, scene=scene, progress=progress, plan=plan)
     out = FilePath(out)
     summary = write_outputs(result, out)
     if scene is not None:

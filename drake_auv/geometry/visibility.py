@@ -88,6 +88,50 @@ class FaceVisibility:
         angles = np.arccos(np.clip(-(normals[seen] @ axis), -1.0, 1.0))
         return slots[seen], angles
 
+    def cameras(self, origins, axes, aperture: float, max_range: float, chunk: int = 1024):
+        """`camera` for many poses at once, batched (one KD-tree query and one ray cast per
+        chunk of poses): (slots (k,), angles (k,) rad, pose index (k,)) of every face a pose
+        sees, a face once per pose that sees it."""
+        origins = np.atleast_2d(np.asarray(origins, dtype=float))
+        axes = np.atleast_2d(np.asarray(axes, dtype=float))
+        axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+        if not (0 < aperture < np.pi):
+            raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
+        if not (np.isfinite(max_range) and max_range > 0):
+            raise ValueError(f"max_range must be > 0 m, got {max_range}")
+        half = 0.5 * aperture
+        if half <= np.pi / 4:
+            centres = origins + 0.5 * max_range * axes
+            radius = max_range * np.sqrt(0.25 + np.sin(half) ** 2)
+        else:
+            centres, radius = origins, max_range
+        out_s, out_a, out_p = [], [], []
+        for c0 in range(0, len(origins), chunk):
+            lists = self._tree.query_ball_point(centres[c0:c0 + chunk], radius)
+            counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
+            if counts.sum() == 0:
+                continue
+            slots = np.concatenate([np.asarray(x, dtype=np.int64) for x in lists])
+            pose = c0 + np.repeat(np.arange(len(lists)), counts)
+            v = self.centroids[slots] - origins[pose]
+            dist = np.linalg.norm(v, axis=1)
+            u = v / np.maximum(dist, 1e-12)[:, None]
+            normals = self.normals[slots]
+            keep = ((np.einsum("ij,ij->i", u, axes[pose]) >= np.cos(half)) & (dist <= max_range)
+                    & (np.einsum("ij,ij->i", u, normals) < 0))
+            slots, pose, u, dist, normals = slots[keep], pose[keep], u[keep], dist[keep], normals[keep]
+            if len(slots) == 0:
+                continue
+            ranges, faces = self.caster.cast_unit(origins[pose], u, max_range)
+            seen = (faces == self.target_index[slots]) | ~(ranges < dist - (1e-3 + 1e-4 * dist))
+            out_s.append(slots[seen])
+            out_p.append(pose[seen])
+            out_a.append(np.arccos(np.clip(-np.einsum("ij,ij->i", normals[seen],
+                                                      axes[pose[seen]]), -1.0, 1.0)))
+        if not out_s:
+            return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64)
+        return np.concatenate(out_s), np.concatenate(out_a), np.concatenate(out_p)
+
     def beams(self, hits: RayHits, directions):
         """Target faces hit by sonar beams: (slots, angles between beam and inward normal)."""
         directions = np.asarray(directions, dtype=float)

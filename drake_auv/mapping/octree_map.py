@@ -8,7 +8,9 @@ Frame: the navigation frame (the world as the vehicle believes it), metres.
 
 Insertion is lazy (`lazy_eval`): OctoMap updates only the leaves a scan touches and leaves
 the inner nodes' summaries and the pruning of uniform subtrees for later, about 20 % less
-work per multibeam ping. Every query here reads leaves (`search` finds the leaf itself, or
+work per multibeam ping. (Discretised insertion, one ray per endpoint voxel, is 25 % faster
+for a 240-beam fan but casts towards voxel centres, so beams without a return no longer
+clear exactly along the beam: not used.) Every query here reads leaves (`search` finds the leaf itself, or
 the pruned node it would have been merged into, with the same log-odds), so labels are the
 same; `sync()` brings the inner nodes up to date (done before writing a file).
 

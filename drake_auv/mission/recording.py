@@ -3,8 +3,8 @@
 Layers (under the scene's root, each can be toggled in Meshcat's tree): `world` (the true
 world), `nominal_path` (the off-line plan), `vehicle` and its trail (drawn while it flies),
 `octree` (the on-line map's occupied voxels) and `coverage` (the target coloured by the best
-multibeam viewing angle, red unseen). The camera opens framed on the target, from above and
-to the south-west.
+multibeam viewing angle, red unseen). The camera opens framed on the target (not the whole
+world: a seabed can be far larger than the structure), lit by `Scene.frame_camera`.
 """
 
 from __future__ import annotations
@@ -16,20 +16,12 @@ from drake_auv.mission.runner import MissionResult
 from drake_auv.mission.site import Site
 
 
-def frame_camera(scene, site: Site) -> None:
-    """Points the recording's camera at the target from 1.2 of its size away."""
-    lo, hi = site.target_mesh.bounds
-    centre = 0.5 * (lo + hi)
-    size = max(float(np.linalg.norm(hi - lo)), 5.0)
-    scene.meshcat.SetCameraPose(centre + size * np.array([-0.7, -0.9, 0.6]), centre)
-
-
 def prepare_scene(scene, site: Site, plan: MissionPlan) -> None:
     """Draws the world and the nominal path, and frames the camera on the target."""
     scene.add_mesh("world", site.world, rgba=(0.55, 0.5, 0.42, 1.0))
     if plan.nominal is not None and len(plan.nominal) >= 2:
         scene.add_path("nominal_path", plan.nominal)
-    frame_camera(scene, site)
+    scene.frame_camera(direction=(-0.6, -1.0, 1.8), bounds=site.target_mesh.bounds, margin=1.4)
 
 
 def finish_recording(result: MissionResult, scene, filename):

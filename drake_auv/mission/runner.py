@@ -51,7 +51,7 @@ class MissionResult:
         phases: the legs grouped by phase, on one time axis; outcomes: per leg ("goal",
             "timed out", "flying" when the time cap stopped it).
         camera_best, multibeam_best: (T,) best viewing angle per target face, rad, NaN unseen.
-        replanning: (k, 6) replanning steps (`replanner.STEP_FIELDS`), planned ones only.
+        replanning: (k, 5) replanning steps (`replanner.STEP_FIELDS`), planned ones only.
         scan_log: the returns recorded by the mapper; online_map: its final octree.
         profile: (n, 7) the profile-following controller's `profile` output (NaN rows
             without a controller; see `perception.controller`), sampled with the state.
@@ -119,11 +119,12 @@ def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndar
 
 
 def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
-                progress: bool = True) -> MissionResult:
-    """Flies `spec` (at `site`, default `load_site(spec.site, spec.seed)`) in one dive."""
-    site = site if site is not None else load_site(spec.site, spec.seed)
+                progress: bool = True, plan: MissionPlan | None = None) -> MissionResult:
+    """Flies `spec` in one dive, at `site` (default `load_site(spec.site, spec.seed)`) with
+    `plan` (default `plan_mission(spec, site)`)."""
+    site = site if site is not None else load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
-    plan = plan_mission(spec, site)
+    plan = plan if plan is not None else plan_mission(spec, site)
     diagram, handles = build_mission_diagram(site, spec, plan, scene=scene)
     simulator = Simulator(diagram)
     context = simulator.get_context()
@@ -162,7 +163,7 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
     if "replanning" in logs:
         steps = logs["replanning"].data().T
         # one row per step: the log samples the last step at every period
-        steps = steps[np.r_[True, np.diff(steps[:, 0]) != 0] & (steps[:, 5] > 0)]
+        steps = steps[np.r_[True, np.diff(steps[:, 0]) != 0] & (steps[:, -1] > 0)]
         replanning = steps
     mapper_context = handles.mapper.GetMyContextFromRoot(context)
     profile = np.full((len(times), 7), np.nan)

@@ -4,8 +4,9 @@ A thin adapter over `drake_auv.perception` (`HorizontalFollower` / `VerticalFoll
 profiler's update period, while one of its legs flies, it feeds the new returns to the
 follower's local map and stores the tracker reference it computes. A new leg starts a new
 follower (empty local map, its own mode and depth or plane). The follower (local map, RANSAC
-generator, yaw and turn state) is abstract state; it holds a few thousand points at most, so
-the copies Drake makes of it are cheap. Discrete-state groups: `reference` (8) with the time
+generator, yaw and turn state) is abstract state, boxed so that Drake's copies of the state
+cost nothing while it does not fly; a flying update copies it once (a few thousand points at
+most). Discrete-state groups: `reference` (8) with the time
 it was computed (`reference_time`), the last returns' sequence and leg (`consumed`), and
 `profile` (7). Between updates the reference position is extrapolated with its velocity, so
 the tracker's position error does not build up along the profile.
@@ -18,6 +19,7 @@ orientation, valid, mode]` in the scan plane's 2D axes (horizontal: x, y; vertic
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +30,7 @@ from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.perception.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.model import STATE_SIZE
+from drake_auv.vehicle.path_reference import trajectory_reference
 
 MODES = ("search", "follow", "turn")
 PROFILE_SIZE = 7
@@ -61,6 +64,18 @@ class FollowConfig:
         return VerticalFollower(self.params, plane_yaw=self.plane_yaw, seed=seed)
 
 
+@dataclass(frozen=True)
+class _Held:
+    """The follower as abstract state, boxed: the box is never changed (an update copies the
+    follower, advances the copy and stores a new box), so Drake's state copies of it, two at
+    every periodic update whether a leg flies or not, share it for free."""
+
+    follower: object
+
+    def __deepcopy__(self, memo):
+        return self
+
+
 class ProfileFollowingController(LeafSystem):
     """Drives the tracker from profiler returns.
 
@@ -89,7 +104,7 @@ class ProfileFollowingController(LeafSystem):
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         first = min(self.legs)
         self._follower_index = self.DeclareAbstractState(
-            AbstractValue.Make(self.legs[first].follower(self.seed + first)))
+            AbstractValue.Make(_Held(self.legs[first].follower(self.seed + first))))
         self._reference = self.DeclareDiscreteState(8)
         self._reference_time = self.DeclareDiscreteState(1)
         self._consumed = self.DeclareDiscreteState(np.array([-1.0, -1.0]))  # sequence, leg
@@ -111,7 +126,7 @@ class ProfileFollowingController(LeafSystem):
     def follower(self, context):
         """The follower (its map, turn count, ...) held in this system's own `context`
         (from a diagram's context: `GetMyContextFromRoot`), for inspection."""
-        return context.get_abstract_state(self._follower_index).get_value()
+        return context.get_abstract_state(self._follower_index).get_value().follower
 
     def _update_reference(self, context, state):
         leg, _ = read_leg(self.leg_input, context)
@@ -120,12 +135,14 @@ class ProfileFollowingController(LeafSystem):
             return  # not flying
         t = context.get_time()
         sequence, flown = context.get_discrete_state(self._consumed).get_value()
-        follower = state.get_mutable_abstract_state(self._follower_index).get_mutable_value()
         if flown != leg:  # a new leg: a new follower
             follower = config.follower(self.seed + leg)
-            state.get_mutable_abstract_state(self._follower_index).set_value(follower)
-        elif follower.time is not None and t <= follower.time:
-            return  # the initialization and the first periodic event share t = 0
+        else:
+            follower = self.follower(context)
+            if follower.time is not None and t <= follower.time:
+                return  # the initialization and the first periodic event share t = 0
+            follower = copy.deepcopy(follower)
+        state.get_mutable_abstract_state(self._follower_index).set_value(_Held(follower))
         returns = self.returns_input.Eval(context) if self.returns_input.HasValue(context) else None
         points = np.empty((0, 3))
         if returns is not None and returns.sequence != sequence:  # each batch once
@@ -148,8 +165,7 @@ class ProfileFollowingController(LeafSystem):
     def _calc_reference(self, context, output):
         leg, _ = read_leg(self.leg_input, context)
         if context.get_discrete_state(self._consumed)[1] != leg:  # before the leg's first update
-            x = self.state_input.Eval(context)
-            output.SetFromVector(np.concatenate([x[:3], [x[5]], np.zeros(4)]))
+            output.SetFromVector(trajectory_reference(None, 0.0, self.state_input, context))
             return
         reference = context.get_discrete_state(self._reference).get_value().copy()
         since = context.get_time() - context.get_discrete_state(self._reference_time)[0]

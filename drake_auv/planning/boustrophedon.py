@@ -66,19 +66,18 @@ def sweep_raster(bathy: Bathymetry, layers: list[np.ndarray], angle: float,
     ns = int(np.floor((s.max() - s.min()) / h + 1e-9)) + 1
     nt = int(np.floor((t.max() - t.min()) / h + 1e-9)) + 1
     frame = SweepFrame(float(angle), h, float(s.min()), float(t.min()), (ns, nt))
-    ss = frame.row_s(np.arange(ns))[:, None]
-    tt = frame.col_t(np.arange(nt))[None, :]
-    x = ss * a[0] + tt * b[0]
-    y = ss * a[1] + tt * b[1]
     ny, nx = bathy.shape
-    j = np.rint((x - bathy.origin[0]) / bathy.spacing[0]).astype(int)
-    i = np.rint((y - bathy.origin[1]) / bathy.spacing[1]).astype(int)
-    inside = (i >= 0) & (i < ny) & (j >= 0) & (j < nx)
-    i, j = np.clip(i, 0, ny - 1), np.clip(j, 0, nx - 1)
-    out = []
-    for layer in layers:
-        values = layer[i, j]
-        out.append(np.where(inside, values, np.zeros((), dtype=layer.dtype)))
+    out = [np.zeros((ns, nt), dtype=layer.dtype) for layer in layers]
+    tt = frame.col_t(np.arange(nt))[None, :]
+    rows = max(1, (1 << 20) // nt)  # about a million raster cells at a time
+    for r0 in range(0, ns, rows):
+        ss = frame.row_s(np.arange(r0, min(r0 + rows, ns)))[:, None]
+        j = np.rint((ss * a[0] + tt * b[0] - bathy.origin[0]) / bathy.spacing[0]).astype(np.int32)
+        i = np.rint((ss * a[1] + tt * b[1] - bathy.origin[1]) / bathy.spacing[1]).astype(np.int32)
+        inside = (i >= 0) & (i < ny) & (j >= 0) & (j < nx)
+        i, j = i[inside], j[inside]
+        for layer, o in zip(layers, out):
+            o[r0:r0 + len(ss)][inside] = layer[i, j]
     return frame, out
 
 
@@ -210,9 +209,10 @@ def sliver_cells(dec: Decomposition, min_area: float) -> set[int]:
 
 def lane_count(bathy: Bathymetry, free: np.ndarray, angle: float, lane_spacing: float) -> float:
     """Estimated number of lanes (so of turns) to sweep `free` with lanes along `angle`:
-    free runs per sweep column, summed, times columns per lane. Uses a coarse raster."""
+    free runs per sweep column, summed, times columns per lane. Uses a raster at the lane
+    spacing (one column per lane)."""
     frame, (mask,) = sweep_raster(bathy, [free.astype(bool)], angle,
-                                  max(min(bathy.spacing), lane_spacing / 2.0))
+                                  max(min(bathy.spacing), lane_spacing))
     cols, _, _ = column_runs(mask)
     return len(cols) * frame.resolution / lane_spacing
 

@@ -11,11 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import ndimage
 
 from drake_auv.planning.boustrophedon import (Decomposition, best_sweep_angle,
                                               boustrophedon_waypoints, cell_lanes, decompose,
                                               exhaustive_walk, sliver_cells, sweep_raster)
-from drake_auv.planning.lawnmower import check_sensor_parameters, lane_spacing, plan_lawnmower
+from drake_auv.planning.lawnmower import (check_omega_fits, check_sensor_parameters, lane_spacing,
+                                          plan_lawnmower, wet_grid)
 from drake_auv.planning.path import Path
 from drake_auv.planning.route import RouteBuilder
 from drake_auv.planning.slicing import (Contour, fixed_depression, order_contours, slice_levels,
@@ -71,6 +73,27 @@ def _region_adjacency(dec: Decomposition, bathy: Bathymetry, regions: np.ndarray
     return sorted(pairs)
 
 
+def _apply_no_go(bathy: Bathymetry, no_go, omega: float):
+    """The grid with the cells within Omega of the zones made no-data, and the `NoGo`."""
+    from drake_auv.planning.nogo import NoGo
+    from drake_auv.terrain.zones import check_inside_grid, zones_to_world
+
+    zones = zones_to_world(no_go, bathy)
+    check_inside_grid(zones, bathy, "--no-go")
+    nogo = NoGo(zones, omega, bathy.extent)
+    xx, yy = np.meshgrid(bathy.x, bathy.y)
+    blocked = nogo.inside(np.column_stack([xx.ravel(), yy.ravel()])).reshape(bathy.shape)
+    if (bathy.valid & ~blocked).sum() == 0:
+        raise ValueError("the no-go zones plus Omega cover every cell of the grid")
+    return bathy.with_z(np.where(blocked, np.nan, bathy.z)), nogo
+
+
+def _exterior_rings(geom) -> list[list[list[float]]]:
+    """Exterior rings of a (Multi)Polygon as [[x, y], ...] lists (world frame, m)."""
+    polys = [geom] if geom.geom_type == "Polygon" else list(geom.geoms)
+    return [np.round(np.asarray(p.exterior.coords), 3).tolist() for p in polys]
+
+
 def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_deg: float = 60.0,
                   overlap: float = 0.1, slope_threshold: float = 0.5,
                   sweep_angle_deg: float | None = None, slice_spacing: float | None = None,
@@ -78,6 +101,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                   closing_radius: float | None = None, opening_radius: float | None = None,
                   min_area: float | None = None, sample_spacing: float | None = None,
                   sensor_range: float | None = None, slice_sensor: str = "normal",
+                  min_depth: float = 1.0, no_go=None, order: str | None = None,
                   baseline: bool = True,
                   compute_metrics: bool = True, progress: bool = False) -> CoveragePlan:
     """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) at offset `omega`.
@@ -98,6 +122,14 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         sensor_range: largest range at which the sensor sees, m (default 2 Omega), for metrics.
         slice_sensor: on high-slope regions the sensor looks along the inward surface normal
             ("normal") or keeps one tilt per region matched to its median slope ("fixed-tilt").
+        min_depth: minimum operating depth, m (>= 0). Cells shallower than it are no-go; no
+            sample lies above z = -min_depth (where Omega above the seabed would be, the path
+            runs at the minimum depth instead; `report_dict` says how much of it).
+        no_go: shapely (Multi)Polygon of no-go zones in the map coordinates of the grid's CRS
+            (`terrain.zones.read_zones`); no lane, contour or transit comes within Omega of
+            them, transits go around them (`planning.nogo`).
+        order: IHO S-44 survey order ("exclusive", "special", "1a", "1b", "2"): the lane
+            spacing is divided by its coverage factor (`planning.orders`); None: 100 %.
         baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
         compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
         progress: show a tqdm bar over the stages.
@@ -105,6 +137,11 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     from tqdm import tqdm
 
     check_sensor_parameters(omega, aperture_deg, overlap)
+    survey = None
+    if order is not None:
+        from drake_auv.planning.orders import survey_order
+
+        survey = survey_order(order)
     if not isinstance(bathy, Bathymetry):
         raise ValueError(f"plan_coverage needs a Bathymetry, got {type(bathy).__name__}")
     if slice_spacing is not None and not (np.isfinite(slice_spacing) and slice_spacing > 0):
@@ -120,13 +157,18 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
     if sensor_range is not None and not (np.isfinite(sensor_range) and sensor_range > 0):
         raise ValueError(f"sensor_range must be > 0 m, got {sensor_range}")
-    bar = tqdm(total=6, desc="plan", disable=not progress, leave=False)
     if roi is not None:
         bathy = crop_to_roi(bathy, roi)
+    check_omega_fits(omega, bathy)
+    bathy = wet_grid(bathy, min_depth)
+    nogo = None
+    if no_go is not None:
+        bathy, nogo = _apply_no_go(bathy, no_go, omega)
+    bar = tqdm(total=6, desc="plan", disable=not progress, leave=False)
     labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
     bar.update()
     surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0))
-    spacing = lane_spacing(omega, aperture_deg, overlap)
+    spacing = lane_spacing(omega, aperture_deg, overlap) / (1.0 if survey is None else survey.coverage)
     planar = labels.planar
     if planar.any():
         angle = (best_sweep_angle(bathy, planar, spacing) if sweep_angle_deg is None
@@ -142,14 +184,14 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         adjacency[c].append(n_cells + r - 1)
         adjacency[n_cells + r - 1].append(c)
     positions = [c.centroid(dec.frame) for c in dec.cells]
-    xx, yy = np.meshgrid(bathy.x, bathy.y)
-    for r in range(1, labels.n_regions + 1):
-        m = labels.regions == r
-        positions.append(np.array([xx[m].mean(), yy[m].mean()]))
+    if labels.n_regions:
+        rc = np.array(ndimage.center_of_mass(labels.high, labels.regions,
+                                             np.arange(1, labels.n_regions + 1)))
+        positions += list(np.asarray(bathy.origin) + rc[:, ::-1] * np.asarray(bathy.spacing))
     positions = np.array(positions).reshape(-1, 2)
     order = exhaustive_walk(adjacency, positions, 0)
     bar.update()
-    route = RouteBuilder(surface, omega, ds)
+    route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
     contours_done: list[Contour] = []
     visit = []
     slivers = sliver_cells(dec, 0.5 * spacing ** 2)
@@ -180,14 +222,19 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     lawn = None
     if baseline:
         lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=aperture_deg, overlap=overlap,
-                              sample_spacing=ds, surface=surface)
+                              lane_spacing_m=spacing,
+                              sample_spacing=ds, surface=surface, min_depth=min_depth,
+                              nogo=nogo)
     bar.update()
     params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
                   slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
                   slice_spacing=slice_spacing, slice_count=slice_count, lane_spacing=spacing,
                   sample_spacing=ds,
                   sensor_range=2.0 * omega if sensor_range is None else float(sensor_range),
-                  slice_sensor=slice_sensor)
+                  slice_sensor=slice_sensor, min_depth=float(min_depth),
+                  unreachable_pieces=route.unreachable,
+                  order=None if survey is None else survey.name,
+                  no_go_rings=[] if nogo is None else _exterior_rings(nogo.zones))
     plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                         None, surface)
     if compute_metrics and baseline:

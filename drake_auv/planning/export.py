@@ -1,8 +1,8 @@
-"""Exports of a `CoveragePlan`: GeoJSON in the bathymetry's CRS, CSV, and the Table 3 report.
+"""Exports of a `CoveragePlan`: CSV (world frame), RFC 7946 GeoJSON (WGS 84), the COLA2 and
+QGroundControl missions (`planning.missions`), and the Table 3 report.
 
-GeoJSON: one 3D LineString feature per run of samples with the same label (coordinates in the
-input file's map CRS, z the elevation in metres). RFC 7946 assumes WGS 84; for any other CRS
-the file carries the legacy `crs` member naming it, as GDAL and QGIS read it.
+GeoJSON: one 3D LineString feature per run of samples with the same label, coordinates
+[lon, lat, elevation] through pyproj from the grid's CRS (no `crs` member: RFC 7946 is WGS 84).
 """
 
 from __future__ import annotations
@@ -12,8 +12,9 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.planning.geo import GeoFrame
+from drake_auv.planning.missions import ALTITUDE_LABELS
 from drake_auv.planning.path import Path
-from drake_auv.terrain.bathymetry import Bathymetry
 
 # The reference's Table 3 (Santorini caldera ROI, Omega = 2 m, 60 degree camera).
 REFERENCE_TABLE3 = {
@@ -24,49 +25,114 @@ REFERENCE_TABLE3 = {
 }
 
 
-def _crs_member(crs: str | None):
-    if crs is None:
-        return None
-    if crs.upper().startswith("EPSG:"):
-        return {"type": "name", "properties": {"name": f"urn:ogc:def:crs:EPSG::{crs[5:]}"}}
-    return {"type": "name", "properties": {"name": crs}}
+def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path") -> dict:
+    """A FeatureCollection (RFC 7946) of the path's labelled runs in WGS 84.
 
-
-def path_to_geojson(path: Path, bathy: Bathymetry, name: str = "path") -> dict:
-    """A FeatureCollection of the path's labelled runs, in the bathymetry's CRS."""
-    xy = bathy.world_to_crs(path.points[:, :2])
-    coords = np.column_stack([xy, path.points[:, 2]])
+    Coordinates are [longitude, latitude, elevation] (degrees, degrees, m; negative below the
+    sea surface). Each feature's properties: `label`, `index`, `length_m`, `heave_mode`
+    ("altitude" on lanes, "depth" elsewhere) and per vertex the sensor axis as
+    `sensor_azimuth_deg` (clockwise from true north) and `sensor_depression_deg` (below the
+    horizontal; 90 looks straight down)."""
+    lonlat = geo.to_lonlat(path.points[:, :2])
+    coords = np.column_stack([np.round(lonlat, 9), np.round(path.points[:, 2], 3)])
+    s = path.sensor_dir
+    azimuth = np.degrees(np.mod(np.arctan2(s[:, 0], s[:, 1])
+                                + geo.grid_north_azimuth(path.points[:, :2]), 2 * np.pi))
+    depression = np.degrees(np.arcsin(np.clip(-s[:, 2], -1.0, 1.0)))
     labels = path.labels
     breaks = np.flatnonzero(labels[1:] != labels[:-1]) + 1
     starts = np.concatenate([[0], breaks])
     ends = np.concatenate([breaks, [len(path)]])
     features = []
     for k, (a, b) in enumerate(zip(starts, ends)):
-        # Each run starts at the previous run's last sample, so the lines join up.
-        run = coords[max(a - 1, 0):b]
-        if len(run) < 2:
-            run = np.vstack([run, run])
+        lo = max(a - 1, 0)  # each run starts at the previous run's last sample: lines join up
+        idx = np.arange(lo, b) if b - lo >= 2 else np.array([lo, lo])
+        label = str(labels[a])
         features.append({
             "type": "Feature",
-            "properties": {"name": name, "label": str(labels[a]), "index": k,
-                           "length_m": float(np.linalg.norm(np.diff(path.points[max(a - 1, 0):b],
-                                                                    axis=0), axis=1).sum())},
-            "geometry": {"type": "LineString", "coordinates": np.round(run, 3).tolist()},
+            "properties": {
+                "name": name, "label": label, "index": k,
+                "length_m": round(float(np.linalg.norm(np.diff(path.points[idx], axis=0),
+                                                       axis=1).sum()), 3),
+                "heave_mode": "altitude" if label in ALTITUDE_LABELS else "depth",
+                "sensor_azimuth_deg": np.round(azimuth[idx], 2).tolist(),
+                "sensor_depression_deg": np.round(depression[idx], 2).tolist()},
+            "geometry": {"type": "LineString", "coordinates": coords[idx].tolist()},
         })
-    collection = {"type": "FeatureCollection", "name": name, "features": features}
-    crs = _crs_member(bathy.crs)
-    if crs is not None and bathy.crs != "EPSG:4326":
-        collection["crs"] = crs
-    return collection
+    return {"type": "FeatureCollection", "name": name, "features": features}
 
 
-def write_geojson(path: Path, bathy: Bathymetry, filename, name: str = "path") -> None:
+def write_geojson(path: Path, geo: GeoFrame, filename, name: str = "path") -> None:
     with open(filename, "w") as f:
-        json.dump(path_to_geojson(path, bathy, name), f)
+        json.dump(path_to_geojson(path, geo, name), f)
 
 
-def report_dict(plan) -> dict:
-    """Parameters, classification summary, Table 3 metrics and the reference's Table 3."""
+def _ratio(a: float, b: float) -> float | None:
+    """a / b, None (JSON null) when it is undefined (b zero or either not finite)."""
+    return float(a / b) if np.isfinite(a) and np.isfinite(b) and b != 0 else None
+
+
+def _depth_limited(path: Path, plan) -> dict:
+    """Samples held at the minimum operating depth with less than Omega of altitude."""
+    p = plan.parameters
+    ceiling = -p["min_depth"]
+    alt = path.points[:, 2] - plan.surface.elevation(path.points[:, 0], path.points[:, 1])
+    held = (path.points[:, 2] >= ceiling - 1e-9) & (alt < p["omega"] - 1e-6)
+    return {"samples_share": float(held.mean()),
+            "length_m": float(path.segment_lengths()[held[1:]].sum()),
+            "least_altitude_m": float(alt[held].min()) if held.any() else None}
+
+
+def water_column_summary(plan) -> dict:
+    """The minimum operating depth and how much of each path it holds shallower than Omega
+    above the seabed (the coverage those parts lose shows in the metrics)."""
+    out = {"min_depth_m": plan.parameters["min_depth"],
+           "path_depth_limited": _depth_limited(plan.path, plan)}
+    if plan.lawnmower is not None:
+        out["lawnmower_depth_limited"] = _depth_limited(plan.lawnmower, plan)
+    return out
+
+
+def _water_column_line(wc: dict) -> str:
+    d = wc["path_depth_limited"]
+    line = (f"Water column: minimum operating depth {wc['min_depth_m']:g} m; "
+            f"{100 * d['samples_share']:.1f} % of the path's samples ({d['length_m']:.1f} m) "
+            "run at that depth with less than Omega above the seabed")
+    if d["least_altitude_m"] is not None:
+        line += f" (down to {d['least_altitude_m']:.2f} m), so they see a smaller footprint"
+    return line + "."
+
+
+def _order(plan) -> dict | None:
+    if plan.parameters.get("order") is None:
+        return None
+    from drake_auv.planning.orders import order_report, survey_order
+
+    return order_report(plan, survey_order(plan.parameters["order"]))
+
+
+def _order_line(o: dict | None) -> str:
+    if o is None:
+        return "Survey order: none asked for (lanes one footprint apart, 100 % nominal)."
+    req = ("no feature detection required" if o["required_feature_m"] is None else
+           f"the order asks for {o['required_feature_m']:.2f} m "
+           f"({'met' if o['meets_feature_detection'] else 'NOT met'})")
+    return (f"Survey order: IHO S-44 {o['order']}, coverage target {o['coverage_target_percent']:g} % "
+            f"(lanes {o['lane_spacing_m']:.2f} m apart); achieved {o['achieved_percent']:.1f} % of "
+            f"the area seen by at least {o['passes_needed']} pass(es), "
+            f"{o['mean_passes_per_cell']:.2f} passes per cell on average; the footprint supports "
+            f"features of {o['detectable_feature_m']:.2f} m and larger (largest gap "
+            f"{o['largest_gap_m']:.2f} m, sounding resolution {o['sounding_resolution_m']:.2f} m); "
+            f"{req}.")
+
+
+def _fmt(value: float | None) -> str:
+    return "n/a" if value is None else f"{value:.2f}"
+
+
+def report_dict(plan, metrics_3d=None) -> dict:
+    """Parameters, classification summary, Table 3 metrics (grid and, if given, the occluded
+    3D ones of `planning.metrics3d`), water column, survey order and the reference's Table 3."""
     labels = plan.labels
     dx, dy = plan.bathy.spacing
     out = {
@@ -81,14 +147,21 @@ def report_dict(plan) -> dict:
         "contours": len(plan.contours),
         "visit_order": [f"{kind} {k}" for kind, k in plan.visit_order],
         "path_length_by_label": plan.path.length_by_label(),
+        "water_column": water_column_summary(plan),
+        "survey_order": _order(plan),
         "reference_table3": REFERENCE_TABLE3,
     }
+    if metrics_3d is not None:
+        from drake_auv.planning.metrics3d import metrics3d_dict
+
+        out["metrics_3d"] = metrics3d_dict(metrics_3d)
     if plan.metrics is not None:
         out["metrics"] = plan.metrics.to_dict()
         out["ratios"] = {
-            "length_total_over_lawnmower": plan.metrics.total.length / plan.metrics.lawnmower.length,
-            "view_total_over_lawnmower": (plan.metrics.total.view_mean_deg
-                                          / plan.metrics.lawnmower.view_mean_deg),
+            "length_total_over_lawnmower": _ratio(plan.metrics.total.length,
+                                                  plan.metrics.lawnmower.length),
+            "view_total_over_lawnmower": _ratio(plan.metrics.total.view_mean_deg,
+                                                plan.metrics.lawnmower.view_mean_deg),
         }
     return out
 
@@ -103,9 +176,10 @@ def table3_markdown(metrics) -> str:
     return "\n".join(lines)
 
 
-def report_markdown(plan) -> str:
-    """A human-readable report: parameters, classification, Table 3, the reference's values."""
-    rep = report_dict(plan)
+def report_markdown(plan, metrics_3d=None) -> str:
+    """A human-readable report: parameters, classification, Table 3 (grid, and the occluded 3D
+    metrics if given), the reference's values."""
+    rep = report_dict(plan, metrics_3d)
     p = plan.parameters
     lines = ["# Coverage plan report", "",
              f"Offset Omega = {p['omega']} m, aperture {p['aperture_deg']} deg, overlap "
@@ -118,13 +192,24 @@ def report_markdown(plan) -> str:
              f"covering {100 * rep['classification']['high_slope_share']:.1f} % of the valid area; "
              f"slope {rep['classification']['slope_min']:.3f} to "
              f"{rep['classification']['slope_max']:.3f}. Planar area: {rep['cells']} boustrophedon "
-             f"cells. High-slope area: {rep['contours']} contour pieces.", ""]
+             f"cells. High-slope area: {rep['contours']} contour pieces.", "",
+             _water_column_line(rep["water_column"]), "", _order_line(rep["survey_order"]), ""]
     if plan.metrics is not None:
         r = rep["ratios"]
-        lines += ["## Comparison with a standard lawnmower (Table 3)", "",
+        lines += ["## Comparison with a standard lawnmower (Table 3, on the grid: cone test, no "
+                  "occlusion)", "",
                   table3_markdown(plan.metrics), "",
-                  f"Length ratio (total / lawnmower): {r['length_total_over_lawnmower']:.2f}; "
-                  f"viewing angle ratio: {r['view_total_over_lawnmower']:.2f}.", ""]
+                  f"Length ratio (total / lawnmower): {_fmt(r['length_total_over_lawnmower'])}; "
+                  f"viewing angle ratio: {_fmt(r['view_total_over_lawnmower'])}.", ""]
+    if metrics_3d is not None:
+        from drake_auv.planning.metrics3d import table3d_markdown
+
+        lines += ["## The same on the 3D mesh, with occlusion", "",
+                  "Viewing angle of each sample's axis at its first hit on the grid's triangle "
+                  "mesh; coverage: faces inside the aperture cone, in range, facing the sensor "
+                  "and not occluded. On high-slope regions both sensor models: the planned one "
+                  "and the reference's forward-looking sensor at one fixed tilt per region.", "",
+                  table3d_markdown(metrics_3d), ""]
     ref = REFERENCE_TABLE3
     lines += ["## The reference's Table 3 (Santorini caldera ROI)", "",
               "| path | length (m) | viewing angle (deg) |", "| --- | ---: | ---: |"]
@@ -135,20 +220,76 @@ def report_markdown(plan) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_outputs(plan, outdir, figures: bool = True, progress: bool = False) -> list[FilePath]:
-    """Writes path.csv, path.geojson, lawnmower.geojson, report.md, report.json and (with
-    `figures`) the PNG figures into `outdir`; returns the files written."""
+EXPORTS = {"cola2": "mission.xml", "qgc": "mission.plan", "geojson": "path.geojson"}
+
+
+def parse_exports(text: str | None) -> tuple[str, ...]:
+    """'cola2,qgc,geojson' -> ('cola2', 'qgc', 'geojson'); ValueError naming an unknown one."""
+    if not text:
+        return ()
+    names = tuple(dict.fromkeys(t.strip().lower() for t in text.split(",") if t.strip()))
+    bad = [n for n in names if n not in EXPORTS]
+    if bad:
+        raise ValueError(f"--export: unknown format {bad[0]!r}; choose from "
+                         f"{', '.join(EXPORTS)} (comma-separated)")
+    return names
+
+
+def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
+                  exports: tuple[str, ...] | None = None, origin_lonlat=None,
+                  surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
+                  metrics_3d=True) -> list[FilePath]:
+    """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
+    `figures`) the PNG figures into `outdir`; returns the files written.
+
+    Args:
+        exports: any of "cola2" (mission.xml), "qgc" (mission.plan), "geojson" (path.geojson
+            and lawnmower.geojson, WGS 84); None: "geojson" when the grid is georeferenced
+            (a CRS or `origin_lonlat`), else none.
+        origin_lonlat: WGS 84 (lon, lat) of the world origin, for grids without a CRS.
+        surge_velocity: mission speed, m/s; tolerance_xy: waypoint arrival tolerance, m.
+        metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report: True
+            computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
+    """
+    georeferenced = plan.bathy.crs is not None or origin_lonlat is not None
+    if exports is None:
+        exports = ("geojson",) if georeferenced else ()
+    for name in exports:
+        if name not in EXPORTS:
+            raise ValueError(f"unknown export {name!r}; choose from {', '.join(EXPORTS)}")
+    geo = GeoFrame(plan.bathy, origin_lonlat) if exports else None
     outdir = FilePath(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     written = []
     plan.path.to_csv(outdir / "path.csv")
     written.append(outdir / "path.csv")
-    write_geojson(plan.path, plan.bathy, outdir / "path.geojson", "coverage path")
-    write_geojson(plan.lawnmower, plan.bathy, outdir / "lawnmower.geojson", "lawnmower")
-    written += [outdir / "path.geojson", outdir / "lawnmower.geojson"]
-    (outdir / "report.md").write_text(report_markdown(plan))
+    if "geojson" in exports:
+        write_geojson(plan.path, geo, outdir / "path.geojson", "coverage path")
+        written.append(outdir / "path.geojson")
+        if plan.lawnmower is not None:
+            write_geojson(plan.lawnmower, geo, outdir / "lawnmower.geojson", "lawnmower")
+            written.append(outdir / "lawnmower.geojson")
+    if "cola2" in exports or "qgc" in exports:
+        from drake_auv.planning.missions import mission_waypoints, write_cola2, write_qgc
+
+        wp = mission_waypoints(plan.path, plan.surface)
+        if "cola2" in exports:
+            write_cola2(wp, geo, outdir / "mission.xml", surge_velocity=surge_velocity,
+                        tolerance_xy=tolerance_xy)
+            written.append(outdir / "mission.xml")
+        if "qgc" in exports:
+            zones = [geo.to_lonlat(ring) for ring in plan.parameters.get("no_go_rings", [])]
+            write_qgc(wp, geo, outdir / "mission.plan", speed=surge_velocity,
+                      acceptance_radius=tolerance_xy, no_go_lonlat=zones)
+            written.append(outdir / "mission.plan")
+    m3d = metrics_3d if isinstance(metrics_3d, dict) else None
+    if metrics_3d is True:
+        from drake_auv.planning.metrics3d import evaluate_plan_3d
+
+        m3d = evaluate_plan_3d(plan)
+    (outdir / "report.md").write_text(report_markdown(plan, m3d))
     with open(outdir / "report.json", "w") as f:
-        json.dump(report_dict(plan), f, indent=2)
+        json.dump(report_dict(plan, m3d), f, indent=2)
     written += [outdir / "report.md", outdir / "report.json"]
     if figures:
         from drake_auv.planning.figures import write_figures

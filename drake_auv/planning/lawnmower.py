@@ -37,10 +37,45 @@ def check_sensor_parameters(omega: float, aperture_deg: float, overlap: float) -
         raise ValueError(f"overlap must be in [0, 1), got {overlap}")
 
 
+def check_min_depth(min_depth: float) -> None:
+    """ValueError naming the minimum operating depth when it is out of range."""
+    if not (np.isfinite(min_depth) and min_depth >= 0):
+        raise ValueError(f"min_depth (minimum operating depth) must be >= 0 m, got {min_depth}")
+
+
+def check_omega_fits(omega: float, bathy: Bathymetry) -> None:
+    """ValueError when Omega exceeds the grid's horizontal diagonal (the largest offset at
+    which a sensor over the grid still sees it; larger values only allocate)."""
+    xmin, xmax, ymin, ymax = bathy.extent
+    diagonal = float(np.hypot(xmax - xmin + bathy.spacing[0], ymax - ymin + bathy.spacing[1]))
+    if omega > diagonal:
+        raise ValueError(f"omega (offset to the terrain) must be in (0, {diagonal:.1f}] m, the "
+                         f"diagonal of the grid, got {omega:g}")
+
+
+def wet_grid(bathy: Bathymetry, min_depth: float) -> Bathymetry:
+    """`bathy` with the cells shallower than `min_depth` (elevation above -min_depth, m: land,
+    or water too shallow to operate in) made no-data, so no lane covers them. ValueError when
+    no cell is left."""
+    check_min_depth(min_depth)
+    z = bathy.z
+    wet = z <= -min_depth
+    if not wet.any():
+        raise ValueError(f"no cell of the grid lies below the minimum operating depth "
+                         f"(min_depth = {min_depth:g} m): its elevations span "
+                         f"{np.nanmin(z):.2f} to {np.nanmax(z):.2f} m; a plan needs seabed "
+                         f"deeper than -{min_depth:g} m (elevations are z up, negative below "
+                         f"the sea surface)")
+    if wet[bathy.valid].all():
+        return bathy
+    return bathy.with_z(np.where(wet, z, np.nan))
+
+
 def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float = 60.0,
                    overlap: float = 0.1, sweep_angle_deg: float | None = None,
                    sample_spacing: float | None = None, enforce_clearance: bool = True,
-                   surface: TerrainSurface | None = None) -> Path:
+                   surface: TerrainSurface | None = None, min_depth: float = 1.0,
+                   nogo=None, lane_spacing_m: float | None = None) -> Path:
     """Lawnmower over the valid cells of `bathy`; labels "lawnmower" and "transit".
 
     Args:
@@ -50,9 +85,18 @@ def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float
         sweep_angle_deg: lane direction, degrees from world +x (None: fewest turns).
         sample_spacing: largest distance between samples, m (default Omega / 4).
         surface: a prebuilt `TerrainSurface` of `bathy` to reuse.
+        min_depth: minimum operating depth, m (>= 0): no sample above z = -min_depth.
+        nogo: a `planning.nogo.NoGo` the lanes keep out of and the transits go around.
+        lane_spacing_m: distance between lanes, m (default `lane_spacing` of the sensor; the
+            coverage planner passes its survey order's).
     """
     check_sensor_parameters(omega, aperture_deg, overlap)
-    spacing = lane_spacing(omega, aperture_deg, overlap)
+    check_min_depth(min_depth)
+    check_omega_fits(omega, bathy)
+    bathy = wet_grid(bathy, min_depth)
+    spacing = lane_spacing(omega, aperture_deg, overlap) if lane_spacing_m is None else lane_spacing_m
+    if not (np.isfinite(spacing) and spacing > 0):
+        raise ValueError(f"lane_spacing_m must be > 0 m, got {lane_spacing_m}")
     ds = omega / 4.0 if sample_spacing is None else float(sample_spacing)
     if not ds > 0:
         raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
@@ -62,7 +106,7 @@ def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float
              else np.radians(float(sweep_angle_deg)))
     dec = decompose(bathy, valid, angle)
     centroids = np.array([c.centroid(dec.frame) for c in dec.cells])
-    route = RouteBuilder(surface, omega, ds)
+    route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
     slivers = sliver_cells(dec, 0.5 * spacing ** 2)
     for k in exhaustive_walk(dec.adjacency(), centroids, 0):
         if k in slivers:

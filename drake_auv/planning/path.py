@@ -34,23 +34,44 @@ class Path:
     labels: np.ndarray = field(default=None)
 
     def __post_init__(self):
-        points = np.asarray(self.points, dtype=float)
+        self._validate(copy=True)
+
+    @classmethod
+    def adopt(cls, points, heading, sensor_dir, labels) -> "Path":
+        """A Path that takes ownership of freshly built, full-shape arrays without copying
+        them (they become read-only): for planners assembling millions of samples."""
+        path = cls.__new__(cls)
+        for name, value in (("points", points), ("heading", heading),
+                            ("sensor_dir", sensor_dir), ("labels", labels)):
+            object.__setattr__(path, name, value)
+        path._validate(copy=False)
+        return path
+
+    def _validate(self, copy: bool) -> None:
+        points = np.array(self.points, dtype=float, copy=copy or None)
         if points.ndim != 2 or points.shape[1] != 3:
             raise ValueError(f"Path.points must have shape (N, 3), got {points.shape}")
         n = len(points)
         if n < 1:
             raise ValueError("Path.points is empty: a path needs at least one sample")
-        heading = np.broadcast_to(np.asarray(self.heading, dtype=float), (n,)).copy()
-        sensor_dir = np.broadcast_to(np.asarray(self.sensor_dir, dtype=float), (n, 3)).copy()
-        labels = self.labels if self.labels is not None else "path"
-        labels = np.broadcast_to(np.asarray(labels, dtype=object), (n,)).copy()
+
+        def full(value, shape, dtype):
+            value = np.asarray(value, dtype=dtype)
+            if not copy and value.shape == shape:
+                return value
+            return np.broadcast_to(value, shape).copy()
+
+        heading = full(self.heading, (n,), float)
+        sensor_dir = full(self.sensor_dir, (n, 3), float)
+        labels = full(self.labels if self.labels is not None else "path", (n,), object)
         if not (np.all(np.isfinite(points)) and np.all(np.isfinite(heading))):
             raise ValueError("Path.points and Path.heading must be finite (no NaN or inf)")
         norms = np.linalg.norm(sensor_dir, axis=1)
         if np.any(~np.isfinite(norms)) or np.any(norms < 1e-9):
             raise ValueError("Path.sensor_dir must hold finite non-zero vectors")
+        sensor_dir /= norms[:, None]
         for name, value in (("points", points), ("heading", heading),
-                            ("sensor_dir", sensor_dir / norms[:, None]), ("labels", labels)):
+                            ("sensor_dir", sensor_dir), ("labels", labels)):
             value.setflags(write=False)
             object.__setattr__(self, name, value)
 

@@ -69,18 +69,19 @@ def slice_levels(surface: TerrainSurface, region_mask: np.ndarray, slope: np.nda
     return first + spacing * np.arange(n)
 
 
-def sensor_axes(normals: np.ndarray, depression: float | None = None) -> np.ndarray:
+def sensor_axes(normals: np.ndarray, depression=None) -> np.ndarray:
     """(n, 3) sensor axes looking into the wall: the inward normal -n itself, or, with a fixed
-    `depression` angle below the horizontal (rad), the axis of a sensor rigidly tilted on a
-    vehicle that keeps roll and pitch level, turned to face the wall's horizontal normal."""
+    `depression` angle below the horizontal (rad, scalar or (n,)), the axis of a sensor rigidly
+    tilted on a vehicle that keeps roll and pitch level, turned to face the wall's horizontal
+    normal."""
     inward = -normals
     if depression is None:
         return inward
     horiz = inward[:, :2]
     norm = np.linalg.norm(horiz, axis=1, keepdims=True)
     horiz = np.where(norm > 1e-9, horiz / np.maximum(norm, 1e-12), np.array([1.0, 0.0]))
-    return np.column_stack([np.cos(depression) * horiz,
-                            np.full(len(horiz), -np.sin(depression))])
+    dep = np.broadcast_to(np.asarray(depression, dtype=float), (len(horiz),))
+    return np.column_stack([np.cos(dep)[:, None] * horiz, -np.sin(dep)])
 
 
 def fixed_depression(slope: np.ndarray) -> float:

@@ -28,6 +28,20 @@ def bilinear(grid: np.ndarray, origin, spacing, x, y) -> np.ndarray:
     return (1 - ti) * ((1 - tj) * g00 + tj * g01) + ti * ((1 - tj) * g10 + tj * g11)
 
 
+def _upsample(a: np.ndarray, factor: int, axis: int) -> np.ndarray:
+    """Linear interpolation of `a` at every 1/factor of a sample along `axis` (ends kept)."""
+    if factor == 1:
+        return a
+    n = a.shape[axis]
+    pos = np.arange((n - 1) * factor + 1) / factor
+    i0 = np.minimum(pos.astype(int), n - 2)
+    shape = [1] * a.ndim
+    shape[axis] = -1
+    t = (pos - i0).astype(a.dtype).reshape(shape)
+    a0 = np.take(a, i0, axis=axis)
+    return a0 + t * (np.take(a, i0 + 1, axis=axis) - a0)
+
+
 class TerrainSurface:
     """Geometric queries on a bathymetric surface (world frame, z up, metres).
 
@@ -107,24 +121,23 @@ class TerrainSurface:
         nearest[found] = self._tree_points[idx[found]]
         return d, nearest
 
-    def clamp_to_grid(self, points: np.ndarray) -> np.ndarray:
+    def clamp_to_grid(self, points: np.ndarray, copy: bool = True) -> np.ndarray:
         """Points with x, y clamped to the grid's extent (cell centres): the path stays over
-        the mapped seabed."""
+        the mapped seabed. With `copy` False a float array is clamped in place."""
         xmin, xmax, ymin, ymax = self.bathy.extent
-        out = np.array(points, dtype=float)
+        out = np.array(points, dtype=float, copy=copy or None)
         out[:, 0] = np.clip(out[:, 0], xmin, xmax)
         out[:, 1] = np.clip(out[:, 1], ymin, ymax)
         return out
 
-    def _dense_grid(self, factor_x: int, factor_y: int):
-        """The bilinear surface sampled `factor` times finer than the grid: (xs, ys, z)."""
+    def _dense_grid(self, factor_x: int, factor_y: int, dtype=float):
+        """The bilinear surface sampled `factor` times finer than the grid: (xs, ys, z), z of
+        `dtype` (bilinear is separable: linear along x, then along y)."""
         ny, nx = self.z.shape
         xs = self.origin[0] + self.spacing[0] * np.linspace(0, nx - 1, (nx - 1) * factor_x + 1)
         ys = self.origin[1] + self.spacing[1] * np.linspace(0, ny - 1, (ny - 1) * factor_y + 1)
-        if factor_x == 1 and factor_y == 1:
-            return xs, ys, self.z
-        xx, yy = np.meshgrid(xs, ys)
-        return xs, ys, self.elevation(xx, yy)
+        z = _upsample(_upsample(self.z.astype(dtype, copy=False), factor_x, 1), factor_y, 0)
+        return xs, ys, z
 
     def _clearance_samples(self, omega: float):
         """Surface samples about every omega / 4 for clearance: bilinear refinement of a coarse
@@ -137,7 +150,7 @@ class TerrainSurface:
         h = omega / 4.0
         dx, dy = self.spacing
         ux, uy = max(1, int(np.ceil(dx / h))), max(1, int(np.ceil(dy / h)))
-        _, _, z = self._dense_grid(ux, uy)
+        _, _, z = self._dense_grid(ux, uy, np.float32)
         sx, sy = dx / ux, dy / uy
         f = max(1, int(np.floor(h / max(sx, sy))))
         if f > 1:
@@ -187,10 +200,11 @@ class TerrainSurface:
             out[k:k + chunk] = (np.take(zpad, base + flat_offsets) + height).max(axis=1)
         return out + 1e-3  # 1 mm over the float32 rounding
 
-    def enforce_clearance(self, points: np.ndarray, omega: float) -> np.ndarray:
+    def enforce_clearance(self, points: np.ndarray, omega: float, copy: bool = True) -> np.ndarray:
         """Points kept over the grid (x, y clamped to its extent) and lifted vertically where
-        needed to be at least `omega` from the surface (`safe_elevation_at`)."""
-        points = self.clamp_to_grid(points)
+        needed to be at least `omega` from the surface (`safe_elevation_at`); in place with
+        `copy` False."""
+        points = self.clamp_to_grid(points, copy)
         points[:, 2] = np.maximum(points[:, 2],
                                   self.safe_elevation_at(points[:, 0], points[:, 1], omega))
         return points

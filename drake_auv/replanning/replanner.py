@@ -11,12 +11,11 @@ The nominal plan is an input (`nominal`, a `Path` from a source system), the map
 (`map`, the mapper's `OnlineMap`). State, all in the Context: the plan and its trajectory
 (abstract, replaced at every step, never modified), the progress (`progress` group: leg,
 next waypoint, steps, finished) and the record of the last step (`last_step` group: time,
-wall and CPU time of the step, of which the map query, next waypoint, whether a section was
-planned), which the `step` output exposes for a `LogVectorOutput`.
+wall time of the step and of its map query, next waypoint, whether a section was planned), which the `step` output exposes for a `LogVectorOutput`.
 
 Ports: inputs `estimated_state` (12), `map` (`OnlineMap`), `nominal` (`Path`), `leg` (2);
 outputs `reference` (8, world: `[x, y, z, yaw, vx, vy, vz, yaw_rate]`), `status` (3:
-`[leg, finished, next_index]`, the leg last flown, -1 before any) and `step` (6).
+`[leg, finished, next_index]`, the leg last flown, -1 before any) and `step` (5).
 """
 
 from __future__ import annotations
@@ -37,7 +36,7 @@ from drake_auv.replanning.section import ReplanningParameters, SectionPlan, repl
 from drake_auv.vehicle.model import STATE_SIZE
 from drake_auv.vehicle.path_reference import trajectory_reference
 
-STEP_FIELDS = ("time", "wall_time", "query_time", "cpu_time", "next_index", "planned")
+STEP_FIELDS = ("time", "wall_time", "query_time", "next_index", "planned")
 
 
 @dataclass(frozen=True)
@@ -141,11 +140,11 @@ class Replanner(LeafSystem):
         nominal = self.nominal_input.Eval(context)
         keep_offset = np.isin(nominal.labels, self.offset_labels)
         online = self.map_input.Eval(context) if self.map_input.HasValue(context) else None
-        start, start_cpu = time.perf_counter(), time.thread_time()
+        start = time.perf_counter()
         plan = replan_section(x[:3], nominal.points, int(next_index),
                               online.map if online is not None else np.zeros((0, 3)),
                               self.params, seed=self.seed + int(steps), keep_offset=keep_offset)
-        wall, cpu = time.perf_counter() - start, time.thread_time() - start_cpu
+        wall = time.perf_counter() - start
         if plan is None:  # every waypoint visited: hold the end of the last plan
             finished = 1.0
             new = current
@@ -155,7 +154,7 @@ class Replanner(LeafSystem):
         state.get_mutable_discrete_state(self._progress).set_value(
             [leg, next_index, steps + 1, finished])
         state.get_mutable_discrete_state(self._last_step).set_value(
-            [t, wall, plan.query_time if plan is not None else 0.0, cpu, next_index,
+            [t, wall, plan.query_time if plan is not None else 0.0, next_index,
              float(plan is not None)])
 
     def _timed(self, plan: SectionPlan, x: np.ndarray, t: float) -> PiecewisePolynomial:

@@ -39,7 +39,10 @@ class Bathymetry:
         if z.shape[0] < 3 or z.shape[1] < 3:
             raise ValueError(f"Bathymetry grid must be at least 3 x 3 cells, got {z.shape}")
         if np.isinf(z).any():
-            raise ValueError("Bathymetry.z holds infinite values; use NaN for no-data")
+            i, j = np.argwhere(np.isinf(z))[0]
+            raise ValueError(f"Bathymetry.z holds {int(np.isinf(z).sum())} infinite value(s) "
+                             f"(first {z[i, j]} at row {i}, column {j}); elevations must be "
+                             "finite metres, NaN for no-data")
         if np.isnan(z).all():
             raise ValueError("Bathymetry.z is all no-data (NaN)")
         spacing = tuple(float(s) for s in self.spacing)

@@ -41,10 +41,22 @@ def parse_roi(text: str) -> np.ndarray:
 
 def crop_to_roi(bathy: Bathymetry, roi) -> Bathymetry:
     """The part of `bathy` inside `roi` (map coordinates of the file's CRS, or world metres when
-    the grid has no georeferencing); cells outside the polygon become no-data."""
-    poly_map = roi_polygon(roi)
+    the grid has no georeferencing); cells outside the polygon become no-data. `roi` may also
+    be a shapely (Multi)Polygon, holes included (`terrain.zones.read_zones`)."""
     xx, yy = np.meshgrid(bathy.x, bathy.y)
     centres = bathy.world_to_crs(np.column_stack([xx.ravel(), yy.ravel()]))
+    if hasattr(roi, "geom_type"):
+        import shapely
+
+        inside = shapely.intersects_xy(roi, centres[:, 0], centres[:, 1]).reshape(bathy.shape)
+        if not inside.any():
+            lo, hi = centres.min(axis=0), centres.max(axis=0)
+            b = roi.bounds
+            raise ValueError(f"ROI (bounds x [{b[0]:.2f}, {b[2]:.2f}], y [{b[1]:.2f}, {b[3]:.2f}]) "
+                             f"lies outside the grid: its cell centres span x [{lo[0]:.2f}, "
+                             f"{hi[0]:.2f}], y [{lo[1]:.2f}, {hi[1]:.2f}] in map units")
+        return _crop(bathy, inside)
+    poly_map = roi_polygon(roi)
     # Cell centres on the boundary count as inside (matplotlib's test is orientation-dependent
     # on the boundary, so take both signs of a tiny tolerance).
     tol = 1e-6 * float(np.ptp(poly_map, axis=0).max())
@@ -55,6 +67,11 @@ def crop_to_roi(bathy: Bathymetry, roi) -> Bathymetry:
         lo, hi = centres.min(axis=0), centres.max(axis=0)
         raise ValueError(f"ROI {poly_map.tolist()} lies outside the grid: its cell centres span "
                          f"x [{lo[0]:.2f}, {hi[0]:.2f}], y [{lo[1]:.2f}, {hi[1]:.2f}] in map units")
+    return _crop(bathy, inside)
+
+
+def _crop(bathy: Bathymetry, inside: np.ndarray) -> Bathymetry:
+    """`bathy` cropped to the bounding box of the `inside` cells, the others no-data."""
     rows = np.flatnonzero(inside.any(axis=1))
     cols = np.flatnonzero(inside.any(axis=0))
     i0, i1, j0, j1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1

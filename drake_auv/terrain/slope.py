@@ -1,12 +1,15 @@
 """Slope map and terrain classification into high-slope regions and the effectively planar rest.
 
 S(x, y) = |grad z| (rise over run, dimensionless) with the true cell spacing. Cells with
-S > delta_s are high-slope; a morphological closing (joins fragments of one wall), then an
-opening (drops thin spurs), then removal of components smaller than a minimum area clean the
-mask; planar specks smaller than the minimum area are given to the high-slope class (the slicing
-sweeps them with the wall around them). The reference fixes only delta_s = 0.5; the structuring
-sizes and the minimum area are ours (defaults below, in metres so they do not depend on the
-cell size).
+S > delta_s are high-slope; a morphological closing (joins fragments of one wall), then removal
+of components smaller than a minimum area clean the mask; planar specks smaller than the
+minimum area are given to the high-slope class (the slicing sweeps them with the wall around
+them). No opening by default: an opening of radius r erases every band narrower than 2 r, and a
+near-vertical wall seen from above is a steep band one or two cells wide; thin noise goes with
+the minimum area instead (`opening_radius` still opens when asked). The minimum area is a fixed
+number of square metres (`MIN_AREA_M2`, at least `MIN_AREA_CELLS` cells), so the regions found
+never depend on how large the ROI around them is. The reference fixes only delta_s = 0.5; the
+closing size and the minimum area are ours.
 """
 
 from __future__ import annotations
@@ -73,6 +76,10 @@ class TerrainLabels:
         return self.valid & ~self.high
 
 
+MIN_AREA_M2 = 100.0  # default minimum area of a high-slope region (and of a planar speck), m^2
+MIN_AREA_CELLS = 4   # ... and at least this many cells, so one noisy cell is never a region
+
+
 def _disk(radius_cells_x: float, radius_cells_y: float) -> np.ndarray:
     rx, ry = max(radius_cells_x, 0.5), max(radius_cells_y, 0.5)
     ny, nx = int(np.floor(ry)), int(np.floor(rx))
@@ -87,22 +94,24 @@ def classify(bathy: Bathymetry, slope_threshold: float = 0.5, closing_radius: fl
     Args:
         slope_threshold: delta_s > 0; cells with S > delta_s are high-slope (0.5 is about 26.6 deg).
         closing_radius: radius of the disk for the closing, m (default 2 cells).
-        opening_radius: radius of the disk for the opening, m (default 2 cells).
+        opening_radius: radius of the disk for an opening after the closing, m (default 0: none,
+            see the module docstring).
         min_area: high-slope components smaller than this are dropped and planar ones smaller
-            than this become high-slope, m^2 (default 1 % of the valid area, at least 25 cells).
+            than this become high-slope, m^2 (default `MIN_AREA_M2`, at least `MIN_AREA_CELLS`
+            cells; independent of the ROI's size).
     """
     if not (np.isfinite(slope_threshold) and slope_threshold > 0):
         raise ValueError(f"slope_threshold (delta_s) must be > 0, got {slope_threshold}")
     dx, dy = bathy.spacing
     cell_area = dx * dy
     closing_radius = 2.0 * max(dx, dy) if closing_radius is None else closing_radius
-    opening_radius = 2.0 * max(dx, dy) if opening_radius is None else opening_radius
+    opening_radius = 0.0 if opening_radius is None else opening_radius
     for name, value in (("closing_radius", closing_radius), ("opening_radius", opening_radius)):
         if not (np.isfinite(value) and value >= 0):
             raise ValueError(f"{name} must be >= 0 m, got {value}")
     valid = bathy.valid
     if min_area is None:
-        min_area = max(0.01 * valid.sum() * cell_area, 25 * cell_area)
+        min_area = max(MIN_AREA_M2, MIN_AREA_CELLS * cell_area)
     if not (np.isfinite(min_area) and min_area >= 0):
         raise ValueError(f"min_area must be >= 0 m^2, got {min_area}")
     slope = slope_map(bathy)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.primitives import TrajectorySource, VectorLogSink
+from pydrake.systems.primitives import LogVectorOutput, TrajectorySource, VectorLogSink
 
 from drake_auv.vehicle.control import TrackingGains
 from drake_auv.vehicle.navigation import NavigationParams
@@ -99,10 +99,10 @@ def build_tracking_diagram(path: Path, speed: float = 0.5, params: Girona500Para
     vehicle = add_girona500(builder, params, navigation, initial_state, gains, time_step)
     source = builder.AddNamedSystem("reference", TrajectorySource(trajectory, 1))
     builder.Connect(source.get_output_port(), vehicle.tracker.reference_input)
-    state_log = builder.AddNamedSystem("state_log", VectorLogSink(STATE_SIZE, log_period))
-    builder.Connect(vehicle.dynamics.state_output, state_log.get_input_port())
-    reference_log = builder.AddNamedSystem("reference_log", VectorLogSink(8, log_period))
-    builder.Connect(source.get_output_port(), reference_log.get_input_port())
+    state_log = LogVectorOutput(vehicle.dynamics.state_output, builder, log_period)
+    state_log.set_name("state_log")
+    reference_log = LogVectorOutput(source.get_output_port(), builder, log_period)
+    reference_log.set_name("reference_log")
     builder.ExportOutput(vehicle.dynamics.state_output, "state")
     builder.ExportOutput(vehicle.navigation.estimated_state_output, "estimated_state")
     visualizer = None

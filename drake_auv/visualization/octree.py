@@ -13,6 +13,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.perception import BaseField, Fields, PointCloud
 from pydrake.systems.framework import LeafSystem
 
+from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mapping.octree_map import OctreeMap
 
 
@@ -38,22 +39,16 @@ def draw_octree(meshcat, path: str, octree_map: OctreeMap, point_size: float | N
 
 
 class OctreeVisualizer(LeafSystem):
-    """Redraws the map from its `map` input (abstract `OctreeMapHandle`) every `period` s,
-    when the map changed since the last draw."""
+    """Redraws the map from its `map` input (the mapper's `OnlineMap`) every `period` s."""
 
     def __init__(self, meshcat, path: str, period: float = 2.0):
         super().__init__()
         if not (np.isfinite(period) and period > 0):
             raise ValueError(f"OctreeVisualizer period must be > 0 s, got {period}")
         self.meshcat, self.path = meshcat, path
-        self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(None))
-        self._drawn_revision = -1
+        self.map_input = self.DeclareAbstractInputPort("map",
+                                                       AbstractValue.Make(OnlineMap(0.5)))
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish_map)
 
     def _publish_map(self, context):
-        handle = self.map_input.Eval(context)
-        if handle is None or handle.map.revision == self._drawn_revision:
-            return
-        draw_octree(self.meshcat, self.path, handle.map)
-        self._drawn_revision = handle.map.revision
-
+        draw_octree(self.meshcat, self.path, self.map_input.Eval(context).map)

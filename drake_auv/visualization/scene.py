@@ -5,7 +5,7 @@ Other modules add their own layers (sonar beams, octree, coverage) through `scen
 `scene.path_of(name)`. The vehicle is posed from a `state` port by `VehicleVisualizer`, a
 LeafSystem that publishes periodically; with `start_recording` every pose (and each completed
 piece of the trail, by its visibility) is also keyframed, and `write_html` saves the whole
-animation as one standalone HTML file.
+animation as one standalone HTML file, with the camera framed on the scene.
 """
 
 from __future__ import annotations
@@ -27,6 +27,8 @@ _HULL_LENGTH = 1.5 - 2 * _HULL_RADIUS  # cylinder part of the capsule
 _HULLS = (("hull_port", (0.0, 0.3, 0.2), Rgba(0.95, 0.75, 0.1, 1.0)),
           ("hull_starboard", (0.0, -0.3, 0.2), Rgba(0.95, 0.75, 0.1, 1.0)),
           ("hull_lower", (0.0, 0.0, -0.3), Rgba(0.35, 0.35, 0.4, 1.0)))
+_CAMERA = "/Cameras/default/rotated/<object>"
+_FOV_DEG = 75.0  # vertical field of view of Meshcat's default perspective camera
 
 
 def _rgba(value) -> Rgba:
@@ -39,7 +41,8 @@ def _rgba(value) -> Rgba:
 
 
 class Scene:
-    """One Meshcat scene. Attributes: `meshcat`, `root` (scene-tree prefix), `recording`."""
+    """One Meshcat scene. Attributes: `meshcat`, `root` (scene-tree prefix), `recording`,
+    `bounds` (box of the meshes and paths drawn), `camera_framed`."""
 
     def __init__(self, meshcat: Meshcat | None = None, root: str = "drake_auv"):
         self.meshcat = meshcat if meshcat is not None else Meshcat(MeshcatParams(host="localhost"))
@@ -48,6 +51,8 @@ class Scene:
         self.playback_speed = 1.0
         self.time_offset = 0.0  # s of mission time before this diagram's t = 0 (multi-phase)
         self._trails = 0
+        self.bounds: np.ndarray | None = None  # (2, 3) min and max corners of what is drawn
+        self.camera_framed = False
 
     def path_of(self, name: str) -> str:
         """The scene-tree path of a named layer."""
@@ -59,6 +64,44 @@ class Scene:
         self._trails += 1
         return self.path_of(f"{name}_trail/{self._trails - 1}")
 
+    def include(self, points) -> None:
+        """Grows `bounds` to hold `points` ((N, 3), m): what `frame_camera` looks at."""
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        points = points[np.all(np.isfinite(points), axis=1)]
+        if len(points) == 0:
+            return
+        box = np.array([points.min(axis=0), points.max(axis=0)])
+        self.bounds = box if self.bounds is None else np.array(
+            [np.minimum(self.bounds[0], box[0]), np.maximum(self.bounds[1], box[1])])
+
+    def frame_camera(self, direction=(-1.0, -1.6, 1.1), margin: float = 1.1, bounds=None):
+        """Points Meshcat's camera at the centre of `bounds` (default: the box of every mesh
+        and path drawn, see `include`) from `direction` (world frame, target to camera), far
+        enough for the box's bounding sphere to fill the view times `margin`, and brightens the
+        ambient and fill lights (Meshcat's defaults leave a seabed almost black). Returns the
+        camera position and the target, m."""
+        box = self.bounds if bounds is None else np.asarray(bounds, dtype=float).reshape(2, 3)
+        if box is None:
+            raise ValueError("frame_camera: nothing drawn yet and no bounds given")
+        direction = np.asarray(direction, dtype=float)
+        norm = np.linalg.norm(direction)
+        if direction.shape != (3,) or not np.isfinite(norm) or norm == 0:
+            raise ValueError(f"direction must be a non-zero 3-vector, got {direction}")
+        if not (np.isfinite(margin) and margin > 0):
+            raise ValueError(f"margin must be > 0, got {margin}")
+        target = box.mean(axis=0)
+        radius = max(0.5 * float(np.linalg.norm(box[1] - box[0])), 1.0)
+        distance = margin * radius / math.sin(math.radians(_FOV_DEG / 2))
+        camera = target + distance * direction / norm
+        meshcat = self.meshcat
+        meshcat.SetProperty(_CAMERA, "near", 0.01 * distance)
+        meshcat.SetProperty(_CAMERA, "far", 4.0 * (distance + radius))
+        meshcat.SetCameraPose(camera, target)
+        meshcat.SetProperty("/Lights/AmbientLight/<object>", "intensity", 1.0)
+        meshcat.SetProperty("/Lights/FillLight/<object>", "intensity", 3.0)
+        self.camera_framed = True
+        return camera, target
+
     def add_mesh(self, name: str, mesh, rgba=(0.55, 0.5, 0.42, 1.0), wireframe: bool = False) -> str:
         """Draws a `trimesh.Trimesh` (world frame) at `name`; returns its scene path."""
         vertices = np.asarray(mesh.vertices, dtype=float)
@@ -66,6 +109,7 @@ class Scene:
         if len(vertices) == 0 or len(faces) == 0:
             raise ValueError(f"add_mesh({name!r}): the mesh is empty")
         path = self.path_of(name)
+        self.include(vertices)
         self.meshcat.SetTriangleMesh(path, np.asfortranarray(vertices.T),
                                      np.asfortranarray(faces.T), _rgba(rgba), wireframe)
         return path
@@ -82,6 +126,7 @@ class Scene:
         if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
             raise ValueError(f"add_path({name!r}): need (N >= 2, 3) points, got {points.shape}")
         scene_path = self.path_of(name)
+        self.include(points)
         self.meshcat.SetLine(scene_path, np.asfortranarray(points.T), line_width, _rgba(rgba))
         return scene_path
 
@@ -111,7 +156,10 @@ class Scene:
         return (self.time_offset + sim_time) / self.playback_speed
 
     def write_html(self, filename) -> FilePath:
-        """Publishes the recording (if any) and writes the scene as one standalone HTML file."""
+        """Publishes the recording (if any) and writes the scene as one standalone HTML file;
+        frames the camera on the scene first unless `frame_camera` was called."""
+        if not self.camera_framed and self.bounds is not None:
+            self.frame_camera()
         if self.recording:
             self.meshcat.StopRecording()
             self.meshcat.PublishRecording()

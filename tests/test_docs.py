@@ -1,0 +1,35 @@
+"""The documentation's marked numbers (`<!-- report:KEY:FORMAT -->`) agree with the committed
+demo report, docs/demo_report.json; `make docs` (scripts/update_docs.py) rewrites them."""
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+from update_docs import REPORT, documents, markers, render, rewrite  # noqa: E402
+
+
+def test_marked_numbers_equal_the_committed_report():
+    report = json.loads(REPORT.read_text())
+    found = 0
+    for doc in documents():
+        for key, fmt, text in markers(doc.read_text()):
+            assert text == render(report, key, fmt), \
+                f"{doc.name}: {key} reads {text!r}, the report says {render(report, key, fmt)!r}"
+            found += 1
+    assert found >= 4  # the README's headline numbers at least
+
+
+def test_rewrite_replaces_only_the_marked_text():
+    report = {"coverage": {"multibeam": 0.9634}, "contact": True}
+    text = ("covers <!-- report:coverage.multibeam:pct -->1 %<!-- /report --> of it "
+            "(<!-- report:contact:contact -->no contact<!-- /report -->)")
+    assert rewrite(text, report) == (
+        "covers <!-- report:coverage.multibeam:pct -->96.3 %<!-- /report --> of it "
+        "(<!-- report:contact:contact -->contact<!-- /report -->)")
+    with pytest.raises(KeyError, match="coverage.camera"):
+        rewrite("<!-- report:coverage.camera:pct -->1 %<!-- /report -->", report)
+    with pytest.raises(ValueError, match="format"):
+        rewrite("<!-- report:contact:yes -->1<!-- /report -->", report)

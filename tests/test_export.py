@@ -1,0 +1,155 @@
+"""Exports a vehicle runs (COLA2 mission XML, QGroundControl .plan) and the WGS 84 GeoJSON:
+each written, read back (XML parsed, JSON loaded) and compared with the path."""
+
+import json
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path as FilePath
+
+import numpy as np
+import pytest
+
+from drake_auv.cli import main
+from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.export import write_outputs
+from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
+from drake_auv.planning.missions import douglas_peucker
+from drake_auv.terrain.readers import read_bathymetry
+from drake_auv.terrain.synthetic import caldera_site
+
+DATA = FilePath(__file__).resolve().parents[1] / ".." / "shared" / "data"
+MONTEREY = sorted((DATA / "monterey").glob("*.tif"))
+ALL = ("cola2", "qgc", "geojson")
+
+
+def read_cola2(filename):
+    """(K, 3) lon, lat, depth of every maneuver's final point, and the maneuvers."""
+    root = ET.parse(filename).getroot()
+    assert root.tag == "mission" and root.find("version").text == "2.0"
+    mans = [s.find("maneuver") for s in root.findall("mission_step")]
+    ll = np.array([[float(m.find(t).text) for t in ("final_longitude", "final_latitude",
+                                                    "final_depth")] for m in mans])
+    return ll, mans
+
+
+def read_qgc(filename):
+    plan = json.loads(FilePath(filename).read_text())
+    assert plan["fileType"] == "Plan" and plan["mission"]["version"] == 2
+    items = plan["mission"]["items"]
+    assert all(i["type"] == "SimpleItem" and i["command"] == 16 for i in items)
+    return plan, items
+
+
+def read_geojson(filename):
+    gj = json.loads(FilePath(filename).read_text())
+    assert "crs" not in gj  # RFC 7946: WGS 84, no crs member
+    return gj, np.vstack([f["geometry"]["coordinates"] for f in gj["features"]])
+
+
+def nearest_distance(points, samples):
+    from scipy.spatial import cKDTree
+
+    return cKDTree(samples).query(points)[0]
+
+
+def check_exports(plan, outdir, origin=None):
+    """Every export lands within 0.1 m of the path; returns the GeoJSON lon/lat."""
+    geo = GeoFrame(plan.bathy, origin)
+    pts = plan.path.points
+    ll, mans = read_cola2(outdir / "mission.xml")
+    assert [m.get("type") for m in mans[:2]] == ["goto", "section"] and mans[-1].get("type") == "park"
+    back = np.column_stack([geo.from_lonlat(ll[:, :2]), -ll[:, 2]])
+    assert nearest_distance(back, pts).max() < 0.1
+    heave = np.array([int(m.find("heave_mode").text) for m in mans[:-1]])
+    assert set(heave.tolist()) <= {0, 1}
+    if "slice" in set(plan.path.labels):
+        assert {0, 1} <= set(heave.tolist())  # altitude on lanes, depth on contours
+    for m in mans[1:-1]:
+        for tag in ("initial_latitude", "initial_longitude", "initial_depth", "final_altitude",
+                    "surge_velocity", "tolerance_xy", "no_altitude_goes_up"):
+            assert m.find(tag) is not None, tag
+    qgc, items = read_qgc(outdir / "mission.plan")
+    p = np.array([i["params"][4:7] for i in items])
+    frames = np.array([i["frame"] for i in items])
+    assert set(frames.tolist()) <= {3, 10}
+    xy = geo.from_lonlat(p[:, [1, 0]])
+    seabed = plan.surface.elevation(xy[:, 0], xy[:, 1])
+    z = np.where(frames == 10, seabed + p[:, 2], p[:, 2])
+    assert np.all(p[frames == 10, 2] > 0) and np.all(p[frames == 3, 2] < 0)
+    assert nearest_distance(np.column_stack([xy, z]), pts).max() < 0.1
+    gj, coords = read_geojson(outdir / "path.geojson")
+    back = np.column_stack([geo.from_lonlat(coords[:, :2]), coords[:, 2]])
+    assert nearest_distance(back, pts).max() < 0.1
+    assert nearest_distance(pts, back).max() < 0.1  # every sample is in the file
+    for f in gj["features"]:
+        n = len(f["geometry"]["coordinates"])
+        assert len(f["properties"]["sensor_azimuth_deg"]) == n
+        assert f["properties"]["heave_mode"] in ("altitude", "depth")
+    return coords[:, :2]
+
+
+def test_douglas_peucker_keeps_corners_and_bounds_the_error():
+    t = np.linspace(0, 1, 101)
+    line = np.column_stack([t, np.where(t < 0.5, t, 1 - t), np.zeros_like(t)])
+    idx = douglas_peucker(line, 0.01)
+    assert idx.tolist() == [0, 50, 100]
+    rng = np.random.default_rng(3)
+    walk = np.cumsum(rng.normal(size=(300, 3)), axis=0)
+    idx = douglas_peucker(walk, 0.5)
+    assert 2 < len(idx) < 300
+    dense = np.vstack([np.linspace(walk[a], walk[b], 50) for a, b in zip(idx[:-1], idx[1:])])
+    assert nearest_distance(walk, dense).max() <= 0.5 + 1e-6
+
+
+def test_caldera_exports_read_back(tmp_path):
+    plan = plan_coverage(caldera_site(cell=1.0), omega=2.0, compute_metrics=False)
+    write_outputs(plan, tmp_path, figures=False, exports=ALL, origin_lonlat=CALDERA_ORIGIN_LONLAT)
+    lonlat = check_exports(plan, tmp_path, CALDERA_ORIGIN_LONLAT)
+    lon0, lat0 = CALDERA_ORIGIN_LONLAT  # the site is 100 m x 250 m east and north of it
+    assert lon0 <= lonlat[:, 0].min() and lonlat[:, 0].max() <= lon0 + 101 / 89_600
+    assert lat0 <= lonlat[:, 1].min() and lonlat[:, 1].max() <= lat0 + 251 / 110_900
+
+
+def test_exports_need_a_georeference(tmp_path):
+    plan = plan_coverage(caldera_site(cell=2.0), omega=3.0, compute_metrics=False)
+    with pytest.raises(ValueError, match="no CRS"):
+        write_outputs(plan, tmp_path, figures=False, exports=("geojson",))
+    assert [f.name for f in write_outputs(plan, tmp_path, figures=False)] == [
+        "path.csv", "report.md", "report.json"]
+
+
+@pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
+@pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
+def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
+    code = main(["plan", str(tile), "--omega", "20", "--export", "cola2,qgc,geojson",
+                 "--no-figures", "--no-3d-metrics", "-o", str(tmp_path)])
+    assert code == 0, capsys.readouterr().err
+    from drake_auv.planning.path import Path
+
+    path = Path.from_csv(tmp_path / "path.csv")
+    bathy = read_bathymetry(tile)
+    geo = GeoFrame(bathy)
+    _, coords = read_geojson(tmp_path / "path.geojson")
+    back = np.column_stack([geo.from_lonlat(coords[:, :2]), coords[:, 2]])
+    assert nearest_distance(back, path.points).max() < 0.1
+    ll, _ = read_cola2(tmp_path / "mission.xml")
+    back = np.column_stack([geo.from_lonlat(ll[:, :2]), -ll[:, 2]])
+    assert nearest_distance(back, path.points).max() < 0.1
+    _, items = read_qgc(tmp_path / "mission.plan")
+    assert len(items) == len(ll) - 1  # the COLA2 park repeats the last waypoint
+    # The tile name's extent; the raster itself overhangs it by 0.00051 deg on every side
+    # (its transform: 5.5 cells), and the path covers the raster's cell centres.
+    lon0, lon1, lat0, lat1 = (float(v) for v in re.findall(r"-?\d+\.\d+", tile.stem))
+    m = 0.00051
+    _, coords = read_geojson(tmp_path / "path.geojson")
+    ll, _ = read_cola2(tmp_path / "mission.xml")
+    for c in (coords, ll):
+        assert np.all((c[:, 0] >= lon0 - m) & (c[:, 0] <= lon1 + m))
+        assert np.all((c[:, 1] >= lat0 - m) & (c[:, 1] <= lat1 + m))
+    assert ll[:, 2].min() >= 1.0 - 1e-9  # nothing above the minimum operating depth
+
+
+def test_unknown_export_is_one_line(tmp_path, capsys):
+    assert main(["plan", "caldera", "--export", "kml", "-o", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "kml" in err[0] and "cola2" in err[0]
