@@ -27,7 +27,7 @@ def one_line(err: BaseException) -> str:
 def metrics_row(summary: dict) -> dict:
     """The campaign's metrics of a mission report's `summarise` dict."""
     timing = summary["timing"]
-    responses = summary.get("responses", [])
+    responses = summary["responses"]
     return dict(
         coverage_multibeam=summary["coverage"]["multibeam"],
         coverage_camera=summary["coverage"]["camera"],
@@ -35,7 +35,7 @@ def metrics_row(summary: dict) -> dict:
         distance_mean_m=summary["distance_to_target"]["mean_m"],
         distance_min_m=summary["distance_to_target"]["min_m"],
         completed=summary["mission"]["completed"],
-        aborted=summary["mission"].get("aborted", False),
+        aborted=summary["mission"]["aborted"],
         responses=";".join(f"{r['response']}@{r['start_s']:g}s({r['cause']})"
                            for r in responses),
         first_response_s=responses[0]["start_s"] if responses else None,
