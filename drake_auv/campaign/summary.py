@@ -176,6 +176,8 @@ def figures(rows: list[dict], vary_keys) -> dict[str, Figure]:
                       if g else np.nan for _, g in points]
             ax.plot(xs, ys, marker="o", label=_label(rest, vary_keys[1:]))
         ax.set(xlabel=first or "", ylabel=f"{name} ({unit})", title=name)
+        if column == "contact":
+            ax.set_ylim(-2, 102)
         if len(lines) > 1:
             ax.legend(fontsize=7)
     comparison.tight_layout()

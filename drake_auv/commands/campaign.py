@@ -82,10 +82,10 @@ def run(args) -> int:
         client.close()
         if cluster is not None:
             cluster.close()
-    rows = results.rows()
-    wanted = {run.key for run in runs}
-    rows = [r for r in rows if (r["seed"], *(r[k] for k in keys)) in wanted]
+    rows = results.rows()  # this command's and earlier ones' (more seeds, more values)
+    seeds_done = sorted({int(r["seed"]) for r in rows})
     meta.pop("base_mission")
+    meta["seeds"] = f"{seeds_done[0]}..{seeds_done[-1]} ({len(seeds_done)} seeds)"
     summary = write_summary(rows, keys, out, meta)
     overall = summary["overall"]
     print(f"campaign {base['name']}: {counts['total']} runs ({counts['skipped']} already in "
