@@ -4,7 +4,9 @@ target: >= 1.7x on a 2-core machine).
 The same runs (breakwater, capped at `--sim-s` simulated seconds, seeds 0..runs-1) on a
 LocalCluster of 1 then 2 worker processes; the cluster is started and warmed up (one task
 per worker imports Drake) before the clock starts. Prints the machine line and the load
-average, which decide the figure on a shared machine.
+average, which decide the figure on a shared machine, and a control without Dask: the speed-up
+of two plain processes running one run each over one process running both (what the machine
+gives two processes at that moment; the Dask ratio cannot exceed it).
 
     .venv/bin/python benchmarks/bench_campaign.py [--runs 6] [--sim-s 60]
 """
@@ -13,10 +15,11 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import tempfile
 import time
 from pathlib import Path
+
+from _reference import machine
 
 
 def throughput(runs, workers: int) -> float:
@@ -44,6 +47,27 @@ def throughput(runs, workers: int) -> float:
         cluster.close()
 
 
+def plain_speedup(runs) -> float:
+    """Wall time of the first two runs one after the other in one process over both at once
+    in two processes (one thread each)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from drake_auv.campaign.task import run_task
+
+    missions = [run.mission for run in runs[:2]]
+    with ProcessPoolExecutor(1) as pool:
+        list(pool.map(run_task, missions[:1]))  # warm-up: imports
+        start = time.perf_counter()
+        list(pool.map(run_task, missions))
+        one = time.perf_counter() - start
+    with ProcessPoolExecutor(2) as pool:
+        list(pool.map(run_task, missions))
+        start = time.perf_counter()
+        list(pool.map(run_task, missions))
+        two = time.perf_counter() - start
+    return one / two
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=6)
@@ -53,17 +77,20 @@ def main(argv=None) -> int:
 
     runs = expand_runs("breakwater", list(range(args.runs)), [],
                        [f"limits.max_time_s={args.sim_s:g}", "sonar_noise=realistic"])
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[name] = "1"  # as Dask's nanny sets it for its workers
     load_before = os.getloadavg()
     one = throughput(runs, 1)
     two = throughput(runs, 2)
+    control = plain_speedup(runs)
     load_after = os.getloadavg()
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"{time.strftime('%Y-%m-%d %H:%M')}; load average (1, 5, 15 min) before "
-          f"{', '.join(f'{v:.1f}' for v in load_before)}, after "
-          f"{', '.join(f'{v:.1f}' for v in load_after)}")
+    print(machine())
+    print(f"load average (1, 5, 15 min) before {', '.join(f'{v:.1f}' for v in load_before)}, "
+          f"after {', '.join(f'{v:.1f}' for v in load_after)}")
     print(f"{args.runs} breakwater runs of {args.sim_s:g} s simulated each")
     print(f"1 worker: {one:.2f} runs/min; 2 workers: {two:.2f} runs/min; ratio {two / one:.2f}x "
           "(target >= 1.7x on a quiet 2-core machine)")
+    print(f"control without Dask: 2 plain processes {control:.2f}x faster than 1 on 2 runs")
     return 0
 
 
