@@ -243,7 +243,8 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     if scene is not None:
         from drake_auv.visualization.octree import OctreeVisualizer
 
-        scene.add_vehicle_visualizer(builder, vehicle.dynamics.state_output)
+        # a pose every 0.5 s: at the recordings' 20x playback and 32 frames/s a frame is 0.6 s
+        scene.add_vehicle_visualizer(builder, vehicle.dynamics.state_output, period=0.5)
         octree_view = builder.AddNamedSystem("octree_visualizer", OctreeVisualizer(
             scene.meshcat, scene.path_of("octree"), period=10.0))
         builder.Connect(mapper.map_output, octree_view.map_input)

@@ -32,6 +32,6 @@ def finish_recording(result: MissionResult, scene, filename):
     world, target = result.site.world, result.site.target_faces
     best = np.full(len(world.faces), np.nan)
     best[target] = result.multibeam_best
-    draw_coverage(scene.meshcat, scene.path_of("coverage"), world, best, target)
+    draw_coverage(scene.meshcat, scene.path_of("coverage"), world, best, target, lift=0.05)
     draw_octree(scene.meshcat, scene.path_of("octree"), result.online_map.map)
     return scene.write_html(filename)

@@ -44,9 +44,10 @@ def depth_colors(z: np.ndarray) -> np.ndarray:
 
 
 def draw_coverage(meshcat, path: str, world, face_angles: np.ndarray,
-                  faces: np.ndarray | None = None) -> None:
+                  faces: np.ndarray | None = None, lift: float = 0.0) -> None:
     """Draws `faces` of `world` (default: all) coloured by `face_angles` (per world face,
-    rad, NaN unseen). Each face gets its own vertices so colours do not bleed."""
+    rad, NaN unseen). Each face gets its own vertices so colours do not bleed; `lift` (m)
+    moves them along the face normals, so the layer shows over the world mesh itself."""
     face_angles = np.asarray(face_angles, dtype=float)
     if face_angles.shape != (len(world.faces),):
         raise ValueError(f"face_angles must have one value per world face "
@@ -56,7 +57,8 @@ def draw_coverage(meshcat, path: str, world, face_angles: np.ndarray,
         faces = np.flatnonzero(faces)
     if len(faces) == 0:
         raise ValueError("draw_coverage: no faces to draw")
-    triangles = np.asarray(world.triangles)[faces].reshape(-1, 3)
+    triangles = (np.asarray(world.triangles)[faces]
+                 + lift * np.asarray(world.face_normals)[faces][:, None, :]).reshape(-1, 3)
     colors = np.repeat(angle_colors(face_angles[faces]), 3, axis=0)
     indices = np.arange(len(triangles), dtype=np.int32).reshape(-1, 3)
     meshcat.SetTriangleColorMesh(path, np.asfortranarray(triangles.T),
