@@ -9,6 +9,7 @@ back. Built-in scenarios are already local (origin 0). Pure Python, no Drake.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -69,9 +70,9 @@ class Site:
         out[..., :2] += sign * np.asarray(self.origin, dtype=float)
         return out
 
-    @property
+    @functools.cached_property
     def target_mesh(self) -> trimesh.Trimesh:
-        """The target faces as their own mesh (local frame)."""
+        """The target faces as their own mesh (local frame), built once."""
         return self.world.submesh([np.flatnonzero(self.target_faces)], append=True)
 
 
