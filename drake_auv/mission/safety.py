@@ -22,7 +22,8 @@ Answers (`RESPONSES`), each a straight-line reference from the estimated pose wh
   (within `surface_tolerance_m`) or after `abort_max_s` s. The answer to a navigation jump
   (the on-line map no longer agrees with the estimate), to a hold that lasts too long and
   after a back-off.
-Responses move at `speed` m/s and never go back to a leg, except a hold on a silent sonar.
+Responses move at `speed` m/s and never go back to a leg, except a hold on a silent sonar
+(the leg's behaviour keeps running meanwhile, unselected, and its time budget runs on).
 """
 
 from __future__ import annotations
