@@ -157,6 +157,7 @@ def test_supervisor_backs_off_from_the_map_when_tracking_fails():
     assert record[7] > 4.0 and abs(record[8]) < 0.5  # away (+x) from the voxel at x = -3
 
 
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no survey samples: null statistics
 def test_a_navigation_jump_in_a_dive_ends_it_with_an_abort():
     from drake_auv.mission.report import summarise
     from drake_auv.mission.runner import run_mission
