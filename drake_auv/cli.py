@@ -1,4 +1,5 @@
-"""`drake-auv`: plan coverage paths, list scenarios, simulate missions, run the demo."""
+"""`drake-auv`: plan coverage paths, list scenarios, simulate missions, run the demo,
+reconstruct surfaces from recorded returns."""
 
 from __future__ import annotations
 
@@ -6,7 +7,8 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "campaign")
+COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "reconstruct",
+            "campaign")
 
 
 def build_parser() -> argparse.ArgumentParser:

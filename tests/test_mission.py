@@ -182,3 +182,15 @@ def test_demo_writes_every_output(tmp_path):
                   b"set_animation"):
         assert layer in commands, layer
     assert b"/Cameras/default" in commands and b"set_target" in commands  # framed
+
+
+def test_a_dive_stopped_before_its_survey_still_reports(tmp_path):
+    # 20 s: the breakwater's transit only, no survey or follow sample to score
+    result = run_mission(load_mission("breakwater", overrides=["limits.max_time_s=20"]),
+                         progress=False)
+    summary = summarise(result)
+    assert summary["distance_to_target"]["mean_m"] is None
+    assert not summary["mission"]["completed"] and summary["phases"][0]["name"] == "transit"
+    from drake_auv.mission.report import report_markdown
+
+    assert "n/a" in report_markdown(summary)

@@ -25,6 +25,7 @@ from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.visibility import coverage_share
 from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
+from drake_auv.reconstruction.products import products_markdown, write_products
 
 PHASE_COLOURS = {"transit": "0.45", "follow": "tab:green", "survey": "tab:blue"}
 
@@ -136,7 +137,8 @@ def summarise(result: MissionResult) -> dict:
         min_clearance_m=min_clearance,
         contact=bool(min_clearance <= VEHICLE_RADIUS),
         distance_to_target=dict(
-            mean_m=float(d.mean()), sd_m=float(d.std()), min_m=float(result.distance.min()),
+            mean_m=float(d.mean()) if len(d) else None, sd_m=float(d.std()) if len(d) else None,
+            min_m=float(result.distance.min()),
             map_mean_m=float(map_d.mean()) if len(map_d) else None,
             map_sd_m=float(map_d.std()) if len(map_d) else None,
             near_m=near_distance(result), samples=int(scored.sum())),
@@ -219,8 +221,8 @@ def report_markdown(summary: dict) -> str:
               f"**{100 * c['camera']:.1f} %** ({_fmt(c['camera_angle_mean_deg'], '.1f')} deg, "
               f"sd {_fmt(c['camera_angle_sd_deg'], '.1f')}).",
               f"- True distance to the target over {d['samples']} survey samples within "
-              f"{d['near_m']:g} m: mean {d['mean_m']:.2f} m, sd {d['sd_m']:.2f} m; minimum over "
-              f"the dive {d['min_m']:.2f} m. Against the on-line map: mean "
+              f"{d['near_m']:g} m: mean {_fmt(d['mean_m'], '.2f')} m, sd {_fmt(d['sd_m'], '.2f')} m;"
+              f" minimum over the dive {d['min_m']:.2f} m. Against the on-line map: mean "
               f"{_fmt(d['map_mean_m'], '.2f')} m, sd {_fmt(d['map_sd_m'], '.2f')} m.",
               f"- Minimum clearance to anything: {summary['min_clearance_m']:.2f} m: "
               + ("**contact**." if summary["contact"] else "no contact.")
@@ -312,12 +314,15 @@ def write_trajectory(result: MissionResult, filename) -> None:
 
 def write_outputs(result: MissionResult, outdir, dpi: int = 110) -> dict:
     """Writes report.json, report.md, coverage.png, distance.png, plan.png (coverage plans),
-    trajectory.csv and diagram.dot into `outdir`; returns the summary."""
+    trajectory.csv, diagram.dot and the data products (points.ply; reconstruction.ply and .png
+    with Open3D, `reconstruction.products`) into `outdir`; returns the summary."""
     out = FilePath(outdir)
     out.mkdir(parents=True, exist_ok=True)
     summary = summarise(result)
+    summary["reconstruction"] = _rounded(write_products(result, out, dpi))
     (out / "report.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (out / "report.md").write_text(report_markdown(summary))
+    (out / "report.md").write_text(report_markdown(summary)
+                                   + products_markdown(summary["reconstruction"]))
     figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result)}
     if result.plan.coverage is not None:
         from drake_auv.planning.figures import fig_path3d

@@ -1,0 +1,271 @@
+"""The recorded point cloud of a dive: every sonar return with its sensor origin, time and source.
+
+Built from the mapper's `ScanLog`, so in the NAVIGATION frame (where the vehicle believed the
+returns were, drift included), metres, seconds. Files: binary little-endian PLY (`write_ply`,
+`read_ply`, which also reads ASCII and big-endian PLY of other tools) with vertex properties
+`x y z` (float64), `origin_x origin_y origin_z` (float64), `time` (float64, s) and `source`
+(uint8, index into `mapping.scan_log.SOURCES`); LAS/LAZ through the optional `laspy`
+(`write_las`, `read_las`). Pure numpy, no Drake.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path as FilePath
+
+import numpy as np
+
+from drake_auv.mapping.scan_log import SOURCES, ScanLog
+
+POSITION = ("x", "y", "z")
+ORIGIN = ("origin_x", "origin_y", "origin_z")
+_PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2",
+              "int16": "i2", "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4",
+              "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4", "double": "f8",
+              "float64": "f8"}
+_PLY_FORMATS = {"binary_little_endian": "<", "binary_big_endian": ">", "ascii": None}
+
+
+@dataclass(frozen=True, eq=False)
+class PointCloud:
+    """n sonar returns.
+
+    Attributes:
+        points: (n, 3) return positions, m. origins: (n, 3) sensor origin of each return, m
+            (NaN rows when unknown, e.g. a PLY of another tool). times: (n,) s (NaN unknown).
+        sources: (n,) uint8 index into `SOURCES` (0 multibeam, 1 profiler).
+    """
+
+    points: np.ndarray
+    origins: np.ndarray
+    times: np.ndarray
+    sources: np.ndarray
+
+    def __post_init__(self):
+        n = len(self.points)
+        if np.shape(self.points) != (n, 3) or np.shape(self.origins) != (n, 3) \
+                or np.shape(self.times) != (n,) or np.shape(self.sources) != (n,):
+            raise ValueError("PointCloud: points and origins must be (n, 3), times and sources "
+                             f"(n,); got {np.shape(self.points)}, {np.shape(self.origins)}, "
+                             f"{np.shape(self.times)}, {np.shape(self.sources)}")
+        if not np.all(np.isfinite(self.points)):
+            raise ValueError("PointCloud: point positions must be finite (no NaN or inf)")
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    @property
+    def has_origins(self) -> bool:
+        return len(self) > 0 and bool(np.all(np.isfinite(self.origins)))
+
+    def subset(self, mask) -> "PointCloud":
+        """The returns selected by a boolean mask or index array."""
+        return PointCloud(self.points[mask], self.origins[mask], self.times[mask],
+                          self.sources[mask])
+
+    def shifted(self, convert) -> "PointCloud":
+        """The cloud with points and origins mapped by `convert` ((n, 3) -> (n, 3)), e.g.
+        `site.to_site` from the local frame to the site's coordinates."""
+        return PointCloud(convert(self.points), convert(self.origins), self.times, self.sources)
+
+    def crop(self, lo, hi, margin: float = 0.0) -> "PointCloud":
+        """The returns inside the axis-aligned box [lo - margin, hi + margin], m."""
+        lo, hi = np.asarray(lo, float) - margin, np.asarray(hi, float) + margin
+        return self.subset(np.all((self.points >= lo) & (self.points <= hi), axis=1))
+
+    def thin(self, voxel: float) -> "PointCloud":
+        """One return per cube of side `voxel` m (the earliest), keeping its origin and time."""
+        if not voxel > 0:
+            raise ValueError(f"thin: voxel must be > 0 m, got {voxel}")
+        keys = np.floor((self.points - self.points.min(axis=0)) / voxel).astype(np.int64)
+        _, first = np.unique(keys, axis=0, return_index=True)
+        return self.subset(np.sort(first))
+
+
+def from_scan_log(log: ScanLog, sources=SOURCES) -> PointCloud:
+    """The returns (beams with a finite range) of every batch in `log` from the named
+    `sources`, in the log's frame (navigation)."""
+    wanted = {SOURCES.index(s) for s in sources}
+    parts = []
+    for batch in log.batches():
+        if batch.source not in wanted:
+            continue
+        hit = np.isfinite(batch.ranges)
+        n = int(hit.sum())
+        if n:
+            parts.append((batch.points(), np.broadcast_to(batch.origin, (n, 3)),
+                          np.full(n, batch.time), np.full(n, batch.source, np.uint8)))
+    if not parts:
+        return PointCloud(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.uint8))
+    points, origins, times, srcs = (np.concatenate(p) for p in zip(*parts))
+    return PointCloud(points.astype(float), origins.astype(float), times, srcs)
+
+
+def write_ply(cloud: PointCloud, filename) -> None:
+    """Writes `cloud` as a binary little-endian PLY (vertex properties in the module doc)."""
+    dtype = np.dtype([(name, "<f8") for name in POSITION + ORIGIN + ("time",)]
+                     + [("source", "u1")])
+    data = np.empty(len(cloud), dtype)
+    for k, name in enumerate(POSITION):
+        data[name] = cloud.points[:, k]
+        data[ORIGIN[k]] = cloud.origins[:, k]
+    data["time"], data["source"] = cloud.times, cloud.sources
+    header = ["ply", "format binary_little_endian 1.0",
+              "comment drake_auv sonar returns; source: " + ", ".join(
+                  f"{k} {s}" for k, s in enumerate(SOURCES)),
+              f"element vertex {len(cloud)}"]
+    header += [f"property double {name}" for name in POSITION + ORIGIN + ("time",)]
+    header += ["property uchar source", "end_header"]
+    with open(filename, "wb") as f:
+        f.write(("\n".join(header) + "\n").encode("ascii"))
+        f.write(data.tobytes())
+
+
+def _ply_header(f, filename):
+    """(format, [(element, count, [(type, name)])]) of a PLY header; `f` left after it."""
+    if f.readline().strip() != b"ply":
+        raise ValueError(f"{filename}: not a PLY file (no 'ply' magic line)")
+    fmt, elements = None, []
+    while True:
+        line = f.readline()
+        if not line:
+            raise ValueError(f"{filename}: corrupt PLY, the header has no end_header")
+        words = line.decode("ascii", errors="replace").split()
+        if not words or words[0] in ("comment", "obj_info"):
+            continue
+        if words[0] == "end_header":
+            break
+        if words[0] == "format" and len(words) >= 2 and words[1] in _PLY_FORMATS:
+            fmt = words[1]
+        elif words[0] == "element" and len(words) == 3 and words[2].isdigit():
+            elements.append((words[1], int(words[2]), []))
+        elif words[0] == "property" and elements and len(words) == 3 \
+                and words[1] in _PLY_TYPES:
+            elements[-1][2].append((_PLY_TYPES[words[1]], words[2]))
+        elif words[0] == "property" and elements and words[1] == "list":
+            elements[-1][2].append(("list", words[-1]))
+        else:
+            raise ValueError(f"{filename}: corrupt PLY header line "
+                             f"{line.decode('ascii', errors='replace').strip()!r}")
+    if fmt is None:
+        raise ValueError(f"{filename}: the PLY header has no (known) format line")
+    return fmt, elements
+
+
+def read_ply(filename) -> PointCloud:
+    """Reads the `vertex` element of a PLY file (binary either endianness or ASCII): positions
+    `x y z` are required; `origin_*`, `time` and `source` are read when present (NaN origins
+    and times, source 0 otherwise)."""
+    path = FilePath(filename)
+    if not path.is_file():
+        raise FileNotFoundError(f"point cloud {path} does not exist")
+    with open(path, "rb") as f:
+        fmt, elements = _ply_header(f, path)
+        if not elements or elements[0][0] != "vertex":
+            raise ValueError(f"{path}: the PLY's first element must be 'vertex', got "
+                             f"{[e[0] for e in elements]}")
+        _, n, props = elements[0]
+        names = [name for _, name in props]
+        missing = [c for c in POSITION if c not in names]
+        if missing:
+            raise ValueError(f"{path}: the PLY's vertices have no position property "
+                             f"{', '.join(missing)} (properties: {', '.join(names) or 'none'})")
+        if any(t == "list" for t, _ in props):
+            raise ValueError(f"{path}: list properties in the vertex element are not supported")
+        if fmt == "ascii":
+            rows = np.loadtxt(f, max_rows=n, ndmin=2) if n else np.zeros((0, len(props)))
+            if rows.shape != (n, len(props)):
+                raise ValueError(f"{path}: corrupt PLY, {len(rows)} vertex rows of "
+                                 f"{rows.shape[1] if rows.ndim == 2 else 0} values, header "
+                                 f"says {n} of {len(props)}")
+            column = {name: rows[:, k] for k, name in enumerate(names)}
+        else:
+            dtype = np.dtype([(name, _PLY_FORMATS[fmt] + t) for t, name in props])
+            raw = f.read(n * dtype.itemsize)
+            if len(raw) < n * dtype.itemsize:
+                raise ValueError(f"{path}: corrupt or truncated PLY, {len(raw)} bytes of vertex "
+                                 f"data where the header says {n * dtype.itemsize}")
+            data = np.frombuffer(raw, dtype)
+            column = {name: data[name].astype(float) for name in names}
+
+    def stack(keys):
+        if all(k in column for k in keys):
+            return np.column_stack([column[k] for k in keys])
+        return np.full((n, 3), np.nan)
+
+    points = stack(POSITION)
+    if not np.all(np.isfinite(points)):
+        raise ValueError(f"{path}: the PLY has non-finite vertex positions")
+    return PointCloud(points, stack(ORIGIN), column.get("time", np.full(n, np.nan)),
+                      column.get("source", np.zeros(n)).astype(np.uint8))
+
+
+def _laspy():
+    try:
+        import laspy
+    except ImportError as err:
+        raise ValueError("LAS/LAZ files need the optional laspy package: "
+                         "pip install 'drake_auv[reconstruct]'") from err
+    return laspy
+
+
+def write_las(cloud: PointCloud, filename, scale: float = 1e-3) -> None:
+    """Writes `cloud` as LAS 1.4 (point format 6; `.laz` needs laspy's lazrs backend):
+    positions at `scale` m resolution, `gps_time` the time, `point_source_id` the source, and
+    extra dimensions origin_x, origin_y, origin_z (float64)."""
+    laspy = _laspy()
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    header.offsets = np.floor(cloud.points.min(axis=0)) if len(cloud) else np.zeros(3)
+    header.scales = np.full(3, scale)
+    header.add_extra_dims([laspy.ExtraBytesParams(name=name, type=np.float64)
+                           for name in ORIGIN])
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = cloud.points.T
+    las.gps_time = cloud.times
+    las.point_source_id = cloud.sources.astype(np.uint16)
+    for k, name in enumerate(ORIGIN):
+        las[name] = cloud.origins[:, k]
+    las.write(str(filename))
+
+
+def read_las(filename) -> PointCloud:
+    """Reads a LAS/LAZ file written by `write_las` (or any LAS: origins NaN when absent)."""
+    laspy = _laspy()
+    path = FilePath(filename)
+    if not path.is_file():
+        raise FileNotFoundError(f"point cloud {path} does not exist")
+    try:
+        las = laspy.read(str(path))
+    except Exception as err:  # laspy raises its own error types for corrupt files
+        raise ValueError(f"{path}: not a readable LAS/LAZ file ({err})") from err
+    n = len(las.points)
+    extra = set(las.point_format.extra_dimension_names)
+    origins = (np.column_stack([np.asarray(las[name], float) for name in ORIGIN])
+               if extra.issuperset(ORIGIN) else np.full((n, 3), np.nan))
+    times = (np.asarray(las.gps_time, float) if "gps_time" in las.point_format.dimension_names
+             else np.full(n, np.nan))
+    return PointCloud(np.column_stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)]),
+                      origins, times, np.asarray(las.point_source_id).astype(np.uint8))
+
+
+def read_point_cloud(filename) -> PointCloud:
+    """`read_ply` or `read_las` by the file's extension (.ply, .las, .laz)."""
+    suffix = FilePath(filename).suffix.lower()
+    if suffix in (".las", ".laz"):
+        return read_las(filename)
+    if suffix == ".ply":
+        return read_ply(filename)
+    raise ValueError(f"{filename}: unknown point-cloud extension {suffix!r} "
+                     "(use .ply, .las or .laz)")
+
+
+def write_point_cloud(cloud: PointCloud, filename) -> None:
+    """`write_ply` or `write_las` by the file's extension (.ply, .las, .laz)."""
+    suffix = FilePath(filename).suffix.lower()
+    if suffix in (".las", ".laz"):
+        write_las(cloud, filename)
+    elif suffix == ".ply":
+        write_ply(cloud, filename)
+    else:
+        raise ValueError(f"{filename}: unknown point-cloud extension {suffix!r} "
+                         "(use .ply, .las or .laz)")

@@ -1,0 +1,86 @@
+"""Scoring a reconstruction (or a raw point cloud) against the true structure.
+
+Accuracy: the distance from each reconstructed vertex (or point) to the true target surface,
+its mean and 95th percentile, m. Completeness: the share of the target's AREA lying within
+`tolerance` (0.5 m) of the reconstructed surface (or of a point), estimated on points sampled
+uniformly by area on the target's faces (seeded, about one per `spacing`^2). Both in one frame,
+the caller's (the missions use the local frame of the true target). Pure numpy/scipy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+from scipy.spatial import cKDTree
+
+from drake_auv.geometry.distance import mesh_distance
+
+TOLERANCE = 0.5  # m, completeness: a target point counts as reconstructed within this distance
+
+
+def surface_samples(mesh: trimesh.Trimesh, spacing: float = 0.1, seed: int = 0,
+                    max_samples: int = 100_000) -> np.ndarray:
+    """(m, 3) points uniform by area on `mesh`, about one per spacing^2 m^2 (at least 1000, at
+    most `max_samples`): face chosen with probability proportional to its area, then a uniform
+    barycentric point in it."""
+    areas = np.asarray(mesh.area_faces, dtype=float)
+    count = int(np.clip(areas.sum() / spacing ** 2, 1000, max_samples))
+    rng = np.random.default_rng(seed)
+    faces = rng.choice(len(areas), size=count, p=areas / areas.sum())
+    u, v = rng.random(count), rng.random(count)
+    flip = u + v > 1.0
+    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
+    a, b, c = np.asarray(mesh.triangles)[faces].transpose(1, 0, 2)
+    return a + u[:, None] * (b - a) + v[:, None] * (c - a)
+
+
+def accuracy(errors: np.ndarray) -> dict:
+    """`mean_m` and `p95_m` of distances to the truth, m, and their count `n`."""
+    if len(errors) == 0:
+        return dict(mean_m=None, p95_m=None, n=0)
+    return dict(mean_m=float(errors.mean()), p95_m=float(np.percentile(errors, 95)),
+                n=int(len(errors)))
+
+
+def completeness_of_points(points, samples, tolerance: float = TOLERANCE) -> float:
+    """Share of `samples` (target area) within `tolerance` m of some point of `points`."""
+    if len(points) == 0:
+        return 0.0
+    d, _ = cKDTree(np.asarray(points, dtype=float)).query(samples,
+                                                          distance_upper_bound=tolerance)
+    return float(np.mean(d <= tolerance))
+
+
+def completeness_of_mesh(mesh: trimesh.Trimesh, samples, tolerance: float = TOLERANCE) -> float:
+    """Share of `samples` (target area) within `tolerance` m of the surface of `mesh`."""
+    if len(mesh.faces) == 0:
+        return 0.0
+    return float(np.mean(mesh_distance(mesh, samples) <= tolerance))
+
+
+def score(target: trimesh.Trimesh, mesh: trimesh.Trimesh | None, points,
+          tolerance: float = TOLERANCE, spacing: float = 0.1,
+          seed: int = 0) -> tuple[dict, np.ndarray | None]:
+    """Accuracy and completeness of a reconstructed `mesh` (None: not scored) and of the raw
+    `points` (n, 3) it came from, against `target`; returns (summary, per-vertex distance to the
+    target of `mesh`, m, or None).
+
+    summary: `surface` and `point_cloud`, each with `accuracy_mean_m`, `accuracy_p95_m`,
+    `completeness` and the count of vertices or points; `tolerance_m`, `target_area_m2`.
+    """
+    samples = surface_samples(target, spacing, seed)
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    raw = accuracy(mesh_distance(target, points) if len(points) else np.zeros(0))
+    summary = dict(tolerance_m=tolerance, target_area_m2=float(target.area),
+                   point_cloud=dict(accuracy_mean_m=raw["mean_m"], accuracy_p95_m=raw["p95_m"],
+                                    completeness=completeness_of_points(points, samples,
+                                                                        tolerance),
+                                    points=raw["n"]))
+    if mesh is None:
+        return summary, None
+    errors = mesh_distance(target, np.asarray(mesh.vertices))
+    acc = accuracy(errors)
+    summary["surface"] = dict(accuracy_mean_m=acc["mean_m"], accuracy_p95_m=acc["p95_m"],
+                              completeness=completeness_of_mesh(mesh, samples, tolerance),
+                              vertices=acc["n"], faces=int(len(mesh.faces)))
+    return summary, errors
