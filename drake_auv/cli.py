@@ -7,7 +7,8 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "reconstruct")
+COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "reconstruct",
+            "campaign")
 
 
 def build_parser() -> argparse.ArgumentParser:

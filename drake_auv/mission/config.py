@@ -2,7 +2,8 @@
 
 A mission names a site (a built-in scenario or the user's own files), the error sources
 (navigation drift, sonar noise, prior-map shift), the replanner, the payload, the limits and the
-steps flown in order in one dive (`plan`, `follow`, `survey`). Units are SI with the unit in the
+steps flown in order in one dive (`plan`, `follow`, `survey`), and optional injected
+`faults` (a silent sonar, a failed thruster, a navigation jump) for campaigns. Units are SI with the unit in the
 key's name where it is not obvious (`_m`, `_s`, `_deg`); depths are positive down, metres.
 Paths are relative to the mission file and stored resolved absolute.
 
@@ -27,6 +28,7 @@ import yaml
 from drake_auv.replanning.section import ReplanningParameters
 from drake_auv.scenarios import list_scenarios
 from drake_auv.sonar.noise import SonarNoise
+from drake_auv.vehicle.model import THRUSTER_NAMES
 from drake_auv.vehicle.navigation import NavigationParams
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "missions"
@@ -384,6 +386,53 @@ class SurveyStep:
     max_time_s: float | None = None
 
 
+@dataclass(frozen=True)
+class SonarSilentFault:
+    """A sonar that returns nothing from `start_s` for `duration_s` s (None: no fault).
+    Attributes: sensor: "multibeam", "profiler" or "both"."""
+
+    sensor: str = "both"
+    start_s: float | None = None
+    duration_s: float = 30.0
+
+
+@dataclass(frozen=True)
+class ThrusterFailureFault:
+    """One thruster (`vehicle.model.THRUSTER_NAMES`) gives no force from `start_s` s on
+    (None: no fault); the allocation is not told."""
+
+    thruster: str = "surge_port"
+    start_s: float | None = None
+
+
+@dataclass(frozen=True)
+class NavigationJumpFault:
+    """A late position fix: at `time_s` s (None: no fault) the estimated position jumps by
+    `error_m` m horizontally towards `direction_deg` (deg from +x, local frame)."""
+
+    time_s: float | None = None
+    error_m: float = 3.0
+    direction_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class FaultsSpec:
+    """Injected faults (campaign variables), each off unless its time is set; the mission
+    supervisor detects and answers them (`drake_auv.mission.supervisor.SafetyRules`)."""
+
+    sonar_silent: SonarSilentFault = SonarSilentFault()
+    thruster_failure: ThrusterFailureFault = ThrusterFailureFault()
+    navigation_jump: NavigationJumpFault = NavigationJumpFault()
+
+    @property
+    def active(self) -> dict:
+        """{fault name: its spec} of the faults that happen."""
+        return {name: f for name, f in (("sonar_silent", self.sonar_silent),
+                                        ("thruster_failure", self.thruster_failure),
+                                        ("navigation_jump", self.navigation_jump))
+                if (f.time_s if name == "navigation_jump" else f.start_s) is not None}
+
+
 Step = PlanStep | FollowStep | SurveyStep
 STEP_KINDS = {cls.KIND: cls for cls in (PlanStep, FollowStep, SurveyStep)}
 
@@ -402,6 +451,7 @@ class MissionSpec:
     replanner: ReplannerSpec = ReplannerSpec()
     payload: PayloadSpec = PayloadSpec()
     limits: LimitsSpec = LimitsSpec()
+    faults: FaultsSpec = FaultsSpec()
     source: Path | None = field(default=None, compare=False)
 
 
@@ -449,12 +499,22 @@ _CHECKS = {
         corner_weight=_Number(0.0, 1.0), min_depth_m=_Number(0.0, 100.0, "m"),
         max_time_s=_TIME),
     SurveyStep: dict(replanning=_Bool(), max_time_s=_TIME),
+    SonarSilentFault: dict(sensor=_Choice(("multibeam", "profiler", "both")),
+                           start_s=_Number(0.0, unit="s", nullable=True),
+                           duration_s=_Number(0.0, unit="s", low_open=True)),
+    ThrusterFailureFault: dict(thruster=_Choice(THRUSTER_NAMES),
+                               start_s=_Number(0.0, unit="s", nullable=True)),
+    NavigationJumpFault: dict(time_s=_Number(0.0, unit="s", nullable=True),
+                              error_m=_Number(0.0, 100.0, "m"),
+                              direction_deg=_Number(-360.0, 360.0, "deg")),
 }
+FAULT_CLASSES = {"sonar_silent": SonarSilentFault, "thruster_failure": ThrusterFailureFault,
+                 "navigation_jump": NavigationJumpFault}
 _TOP = dict(name=_Text(), seed=_Number(0, integer=True), description=_Text(nullable=True))
 _SECTIONS = dict(site=SiteSpec, navigation=NavigationSpec, replanner=ReplannerSpec,
                  payload=PayloadSpec, limits=LimitsSpec)
 TOP_KEYS = ("name", "description", "seed", "site", "navigation", "sonar_noise", "replanner",
-            "payload", "limits", "steps")
+            "payload", "limits", "faults", "steps")
 _NOISE_FIELDS = tuple(f.name for f in dataclasses.fields(SonarNoise))
 _STEP_ALLOWED = "a non-empty list of one-key mappings: " + ", ".join(STEP_KINDS)
 
@@ -532,6 +592,11 @@ class _Reader:
                           match.group(1) if match else str(err))
         return SonarNoiseSpec("custom", {k: float(v) for k, v in raw.items()})
 
+    def faults(self, raw) -> FaultsSpec:
+        raw = self.mapping(raw, "faults", tuple(FAULT_CLASSES))
+        return FaultsSpec(**{name: self.section(cls, raw.get(name), f"faults.{name}")
+                             for name, cls in FAULT_CLASSES.items()})
+
     def steps(self, raw) -> tuple:
         if not isinstance(raw, list) or not raw:
             self.fail("steps", f"{raw!r} is not a non-empty list", _STEP_ALLOWED)
@@ -566,6 +631,7 @@ class _Reader:
                                                description=None))
         sections = {key: self.section(cls, raw.get(key), key) for key, cls in _SECTIONS.items()}
         return MissionSpec(**top, **sections, sonar_noise=self.sonar_noise(raw.get("sonar_noise")),
+                           faults=self.faults(raw.get("faults")),
                            steps=self.steps(raw["steps"]), source=source)
 
 
@@ -635,7 +701,9 @@ def mission_to_dict(spec: MissionSpec) -> dict:
                 site=plain(spec.site), navigation=plain(spec.navigation),
                 sonar_noise=dict(noise.params) if noise.preset == "custom" else noise.preset,
                 replanner=plain(spec.replanner), payload=plain(spec.payload),
-                limits=plain(spec.limits), steps=[{s.KIND: plain(s)} for s in spec.steps])
+                limits=plain(spec.limits),
+                faults={name: plain(getattr(spec.faults, name)) for name in FAULT_CLASSES},
+                steps=[{s.KIND: plain(s)} for s in spec.steps])
 
 
 # ---------------------------------------------------------------- overrides and loading
@@ -702,6 +770,17 @@ def _set(raw: dict, parts: list[str], value, label: str):
         node = (dict(REALISTIC_NOISE) if preset == "realistic"
                 else preset if isinstance(preset, dict) else {})
         raw["sonar_noise"], keys, offset = node, _NOISE_FIELDS, 1
+    elif head == "faults":  # faults.<kind>.<key>
+        if not isinstance(raw.get(head), dict):
+            raw[head] = {}
+        if rest[0] not in FAULT_CLASSES:
+            fail(1, "unknown fault", FAULT_CLASSES)
+        if len(rest) == 1:
+            raw[head][rest[0]] = value
+            return
+        if not isinstance(raw[head].get(rest[0]), dict):
+            raw[head][rest[0]] = {}
+        node, keys, offset = raw[head][rest[0]], _CHECKS[FAULT_CLASSES[rest[0]]], 2
     elif head in _SECTIONS:
         if not isinstance(raw.get(head), dict):
             raw[head] = {}
@@ -755,7 +834,8 @@ def load_mission(source, seed: int | None = None, overrides=()) -> MissionSpec:
     return mission_from_dict(raw, path.parent, label, source=path)
 
 
-__all__ = ["BUILTIN_DIR", "REALISTIC_NOISE", "FollowStep", "LimitsSpec", "MissionFileError",
-           "MissionSpec", "NavigationSpec", "PayloadSpec", "PlanStep", "ReplannerSpec",
+__all__ = ["BUILTIN_DIR", "FAULT_CLASSES", "REALISTIC_NOISE", "FaultsSpec", "FollowStep",
+           "LimitsSpec", "MissionFileError", "MissionSpec", "NavigationJumpFault",
+           "NavigationSpec", "SonarSilentFault", "ThrusterFailureFault", "PayloadSpec", "PlanStep", "ReplannerSpec",
            "SiteSpec", "SonarNoiseSpec", "Step", "SurveyStep", "apply_overrides",
            "builtin_missions", "load_mission", "mission_from_dict", "mission_to_dict"]

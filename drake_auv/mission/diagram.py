@@ -15,6 +15,10 @@ and `build_mission_diagram` is the one place that builds the whole mission.
 
 The true world reaches only the sonars' ray casting and the coverage recorders; everything
 that decides (supervisor, behaviours, mapper) sees the estimated state and the returns.
+A mission's `faults` splice small systems (`drake_auv.mission.faults`) into this wiring: a
+silence gate after a sonar, a failure between the allocation and the dynamics, a jump after
+the navigation; the supervisor sees the returns, the reference and the map to detect them, and
+drives the switch's fourth input, `response`, while it answers.
 Behaviours that are not flying skip their periodic updates, and `PortSwitch` evaluates only
 the selected reference.
 """
@@ -32,6 +36,7 @@ from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.mapping.mapper import OctreeMapper
 from drake_auv.mission.config import MissionSpec
+from drake_auv.mission.faults import NavigationJump, SonarSilence, ThrusterFailure
 from drake_auv.mission.plan import SENSOR_AZIMUTH, MissionPlan, plan_mission, terrain_elevation
 from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
@@ -46,7 +51,7 @@ LOG_PERIOD = 0.1  # s, of the state logs
 SUPERVISOR_PERIOD = 0.5  # s
 CAMERA_SIDE = {"port": (0.0, 1.0, 0.0), "starboard": (0.0, -1.0, 0.0),
                "down": (0.0, 0.0, -1.0), "forward": (1.0, 0.0, 0.0)}
-BEHAVIOURS = ("path", "follow", "replan")  # the reference switch's inputs, in this order
+BEHAVIOURS = ("path", "follow", "replan", "response")  # the reference switch's inputs
 
 
 @dataclass
@@ -65,14 +70,40 @@ class MissionHandles:
     supervisor: MissionSupervisor
     camera_coverage: CoverageRecorder
     multibeam_coverage: CoverageRecorder
-    logs: dict  # name -> VectorLogSink: state, estimated_state, reference, leg, profile, replanning
+    logs: dict  # name -> VectorLogSink: state, estimated_state, reference, leg, response,
+    # profile, replanning
+    faults: dict  # fault name -> the system injecting it (only the mission's faults)
+
+
+def add_faults(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec):
+    """The thruster failure and the navigation jump of `spec.faults`, spliced in; returns
+    ({name: system}, the estimated-state port everything downstream reads)."""
+    faults, estimated = {}, vehicle.navigation.estimated_state_output
+    thruster = spec.faults.thruster_failure
+    if thruster.start_s is not None:
+        gate = faults["thruster_failure"] = builder.AddNamedSystem(
+            "thruster_failure", ThrusterFailure(thruster.thruster, thruster.start_s))
+        builder.Disconnect(vehicle.allocation.thrust_output, vehicle.dynamics.thrust_input)
+        builder.Connect(vehicle.allocation.thrust_output, gate.command_input)
+        builder.Connect(gate.thrust_output, vehicle.dynamics.thrust_input)
+    jump = spec.faults.navigation_jump
+    if jump.time_s is not None:
+        heading = np.radians(jump.direction_deg)
+        gate = faults["navigation_jump"] = builder.AddNamedSystem("navigation_jump", NavigationJump(
+            jump.time_s, jump.error_m * np.array([np.cos(heading), np.sin(heading)])))
+        builder.Disconnect(estimated, vehicle.tracker.state_input)
+        builder.Connect(estimated, gate.estimated_input)
+        builder.Connect(gate.estimated_state_output, vehicle.tracker.state_input)
+        estimated = gate.estimated_state_output
+    return faults, estimated
 
 
 def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
-               spec: MissionSpec, plan: MissionPlan, max_range: float):
+               spec: MissionSpec, plan: MissionPlan, max_range: float, estimated, faults):
     """The payload multibeam and the pencil-beam profiler (its head tilted to the vertical
     plane on vertical-following legs), ray casting on the true world, placing their returns
-    with the estimated state."""
+    with the `estimated` state; a silent-sonar fault gates their returns (added to
+    `faults`). Returns (multibeam, profiler, {sensor: returns port})."""
     noise = spec.sonar_noise.to_noise()
     multibeam = builder.AddNamedSystem("multibeam", MultibeamSonar(
         caster, max_range=max_range, mount=spec.payload.multibeam_mount, noise=noise,
@@ -81,17 +112,25 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
     profiler = builder.AddNamedSystem("profiler", PencilBeamProfiler(
         caster, scan_plane="horizontal", noise=noise, seed=spec.seed + 1,
         planes=plan.profiler_planes or None, **options))
-    for sonar in (multibeam, profiler):
+    silent = spec.faults.sonar_silent
+    returns = {}
+    for name, sonar in (("multibeam", multibeam), ("profiler", profiler)):
         builder.Connect(vehicle.dynamics.state_output, sonar.true_state_input)
-        builder.Connect(vehicle.navigation.estimated_state_output, sonar.estimated_state_input)
-    return multibeam, profiler
+        builder.Connect(estimated, sonar.estimated_state_input)
+        returns[name] = sonar.returns_output
+        if silent.start_s is not None and silent.sensor in (name, "both"):
+            gate = faults[f"sonar_silent_{name}"] = builder.AddNamedSystem(
+                f"{name}_silence", SonarSilence(silent.start_s, silent.duration_s, max_range))
+            builder.Connect(sonar.returns_output, gate.returns_input)
+            returns[name] = gate.returns_output
+    return multibeam, profiler, returns
 
 
 def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, mapper,
-                   spec: MissionSpec, plan: MissionPlan, site: Site):
+                   spec: MissionSpec, plan: MissionPlan, site: Site, estimated, returns):
     """The nominal plan's source, the three behaviours, the reference switch and the
-    supervisor, wired. Returns (path_reference, controller, replanner, supervisor, switch)."""
-    estimated = vehicle.navigation.estimated_state_output
+    supervisor (watching the sonars' `returns`, the reference and the map), wired. Returns
+    (path_reference, controller, replanner, supervisor, switch)."""
     source = None
     if plan.nominal is not None:  # the off-line plan, as a signal
         source = builder.AddNamedSystem("nominal_plan",
@@ -110,7 +149,7 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
     if plan.follow_legs:
         controller = builder.AddNamedSystem("profile_following", ProfileFollowingController(
             plan.follow_legs, period=profiler.period, seed=spec.seed))
-        builder.Connect(profiler.returns_output, controller.returns_input)
+        builder.Connect(returns["profiler"], controller.returns_input)
         behaviours["follow"] = controller
     if plan.replan_legs:
         replanner = builder.AddNamedSystem("replanner", Replanner(
@@ -128,6 +167,11 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
         builder.Connect(system.reference_output, switch.GetInputPort(name))
     if plan.profiler_planes:
         builder.Connect(supervisor.leg_output, profiler.leg_input)
+    builder.Connect(supervisor.response_reference_output, switch.GetInputPort("response"))
+    for name, port in returns.items():
+        builder.Connect(port, supervisor.returns_inputs[name])
+    builder.Connect(switch.get_output_port(), supervisor.reference_input)
+    builder.Connect(mapper.map_output, supervisor.map_input)
     builder.Connect(path_reference.status_output, supervisor.path_status_input)
     builder.Connect(estimated, supervisor.state_input)
     builder.Connect(supervisor.behaviour_output, switch.get_port_selector_input_port())
@@ -168,21 +212,23 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     builder = DiagramBuilder()
     vehicle = add_girona500(builder, navigation=spec.navigation.to_params(spec.seed),
                             initial_state=plan.start_state)
-    multibeam, profiler = add_sonars(builder, caster, vehicle, spec, plan, max_range)
+    faults, estimated = add_faults(builder, vehicle, spec)
+    multibeam, profiler, returns = add_sonars(builder, caster, vehicle, spec, plan, max_range,
+                                              estimated, faults)
     mapper = builder.AddNamedSystem("octree_mapper", OctreeMapper(
         resolution=spec.replanner.voxel_m))
-    builder.Connect(multibeam.returns_output, mapper.multibeam_input)
-    builder.Connect(profiler.returns_output, mapper.profiler_input)
+    builder.Connect(returns["multibeam"], mapper.multibeam_input)
+    builder.Connect(returns["profiler"], mapper.profiler_input)
     path_reference, controller, replanner, supervisor, switch = add_behaviours(
-        builder, vehicle, profiler, mapper, spec, plan, site)
+        builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns)
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
                                                         max_range)
     logs = {
         "state": LogVectorOutput(vehicle.dynamics.state_output, builder, LOG_PERIOD),
-        "estimated_state": LogVectorOutput(vehicle.navigation.estimated_state_output, builder,
-                                           LOG_PERIOD),
+        "estimated_state": LogVectorOutput(estimated, builder, LOG_PERIOD),
         "reference": LogVectorOutput(switch.get_output_port(), builder, LOG_PERIOD),
         "leg": LogVectorOutput(supervisor.leg_output, builder, SUPERVISOR_PERIOD),
+        "response": LogVectorOutput(supervisor.response_output, builder, SUPERVISOR_PERIOD),
     }
     if controller is not None:
         logs["profile"] = LogVectorOutput(controller.profile_output, builder, LOG_PERIOD)
@@ -191,7 +237,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     for name, log in logs.items():
         log.set_name(f"{name}_log")
     builder.ExportOutput(vehicle.dynamics.state_output, "state")
-    builder.ExportOutput(vehicle.navigation.estimated_state_output, "estimated_state")
+    builder.ExportOutput(estimated, "estimated_state")
     builder.ExportOutput(mapper.map_output, "map")
     builder.ExportOutput(supervisor.leg_output, "leg")
     if scene is not None:
@@ -205,5 +251,6 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     diagram = builder.Build()
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,
-                             controller, replanner, supervisor, camera, multibeam_coverage, logs)
+                             controller, replanner, supervisor, camera, multibeam_coverage, logs,
+                             faults)
     return diagram, handles

@@ -5,13 +5,16 @@ Diagram, written by `write_outputs`.
 (fractions of the target's area, union over the dive), `min_clearance_m` (true, to anything),
 `contact`, `distance_to_target` (`mean_m`, `sd_m`, `min_m` over the survey samples within
 2 Omega of the target, and `map_mean_m`, the same against the on-line map's voxels on the
-target, as the reference reports it), `phases` (`name`, `start_s`, `end_s`, one time axis).
+target, as the reference reports it), `phases` (`name`, `start_s`, `end_s`, one time axis),
+`faults` (the injected ones, as in the mission file), `responses` (the supervisor's answers:
+`response`, `cause`, `start_s`, `end_s`) and `mission.aborted`.
 Everything but `timing` depends only on the mission file and its seed.
 """
 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 from pathlib import Path as FilePath
 
@@ -125,6 +128,7 @@ def summarise(result: MissionResult) -> dict:
     summary = dict(
         mission=dict(name=result.spec.name, seed=result.spec.seed,
                      site=result.site.name, completed=result.completed,
+                     aborted="aborted" in result.outcomes,
                      target_area_m2=float(areas.sum())),
         coverage=dict(multibeam=coverage_share(result.multibeam_best, areas),
                       camera=coverage_share(result.camera_best, areas),
@@ -141,6 +145,8 @@ def summarise(result: MissionResult) -> dict:
         navigation_error_max_m=float(np.linalg.norm(
             result.estimated[:, :3] - result.state[:, :3], axis=1).max()),
         phases=phases,
+        faults={name: dataclasses.asdict(f) for name, f in result.spec.faults.active.items()},
+        responses=result.responses,
         plan=plan_summary(result),
         config=mission_to_dict(result.spec),
     )

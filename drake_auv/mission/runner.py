@@ -10,7 +10,7 @@ point-to-mesh distance, on the true world.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from pydrake.systems.analysis import Simulator, SimulatorStatus
@@ -23,6 +23,7 @@ from drake_auv.mission.config import MissionSpec
 from drake_auv.mission.diagram import MissionHandles, build_mission_diagram
 from drake_auv.mission.plan import MissionPlan, plan_mission
 from drake_auv.mission.site import Site, load_site, check_against_site
+from drake_auv.mission.supervisor import responses_from_log
 from drake_auv.replanning.replanner import STEP_FIELDS
 
 VEHICLE_RADIUS = 1.0  # m, a sphere around the GIRONA 500's hulls for the contact check
@@ -60,6 +61,7 @@ class MissionResult:
         diagram_dot: the Diagram's Graphviz text.
         diagram, handles, context: the simulated Diagram, its `MissionHandles` and the root
             Context at the end, for inspection.
+        responses: the supervisor's answers to faults ({response, cause, start_s, end_s}).
     """
 
     spec: MissionSpec
@@ -86,6 +88,7 @@ class MissionResult:
     diagram: object = None
     handles: MissionHandles | None = None
     context: object = None
+    responses: list = field(default_factory=list)
 
     @property
     def areas(self) -> np.ndarray:
@@ -175,4 +178,4 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
         replanning, handles.mapper.scan_log(mapper_context),
         handles.mapper.map_output.Eval(mapper_context), completed, profile,
         logs["reference"].data().T[:len(times)].copy(), wall, diagram.GetGraphvizString(),
-        diagram, handles, context)
+        diagram, handles, context, responses_from_log(logs["response"]))

@@ -7,12 +7,22 @@ which leg flies and since when; its `behaviour` output selects the tracker's ref
 `PortSwitch`. After the last leg `done` is set, and `monitor` (a Simulator monitor) ends the
 simulation with `EventStatus.ReachedTermination`.
 
-Discrete-state groups: `leg` ([index, start time]), `progress` (of the current leg: see
-`legs.PROGRESS_SIZE`), `outcomes` (per leg: 0 not ended, 1 goal reached, 2 timed out) and
-`done` (1 after the last leg).
+It also applies the safety rules (`drake_auv.mission.safety`): from the sonars' returns, the
+reference being tracked and the estimated state it detects a silent sonar, a tracking error
+that grows (a failed thruster) and a jump of the estimate, and answers by holding, backing off
+from the mapped structure or aborting to the surface. While a response flies, `behaviour`
+selects the switch's `response` input, fed by `response_reference`; an abort ends the dive.
 
-Ports: inputs `estimated_state` (12), `path_status` (2), `replanner_status` (3) (either may be
-left unconnected when no leg needs it); outputs `leg` (2), `behaviour` (`InputPortIndex`).
+Discrete-state groups: `leg` ([index, start time]), `progress` (of the current leg: see
+`legs.PROGRESS_SIZE`), `outcomes` (per leg: 0 not ended, 1 goal reached, 2 timed out, 3
+aborted), `done` (1 after the last leg or an abort), `watch` (`WATCH_FIELDS`) and `response`
+(`safety.RESPONSE_FIELDS`).
+
+Ports: inputs `estimated_state` (12), `path_status` (2), `replanner_status` (3),
+`multibeam_returns`, `profiler_returns` (`SonarReturns`), `reference` (8), `map`
+(`OnlineMap`) (all but the first may be left unconnected: the rule that needs one is then
+off); outputs `leg` (2), `behaviour` (`InputPortIndex`), `response` (10: the `response`
+group, for a log) and `response_reference` (8).
 """
 
 from __future__ import annotations
@@ -22,11 +32,19 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, InputPortIndex, LeafSystem
 
 from drake_auv.leg_signal import LEG_SIZE
+from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mission.legs import (PROGRESS_SIZE, Leg, advance_progress, goal_reached,
                                     start_progress)
+from drake_auv.mission.safety import (CAUSES, RESPONSE_FIELDS, RESPONSES, SENSORS, SafetyRules,
+                                      abort_target, back_off_target, relied_sensors,
+                                      response_record, response_reference)
+from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.model import STATE_SIZE
 
-OUTCOMES = ("flying", "goal", "timed out")
+OUTCOMES = ("flying", "goal", "timed out", "aborted")
+# last return time of each of `SENSORS` (s), tracking error above threshold since (s, -1: not),
+# previous estimated position (m)
+WATCH_FIELDS = ("multibeam_hit_s", "profiler_hit_s", "tracking_since_s", "x", "y", "z")
 
 
 class MissionSupervisor(LeafSystem):
@@ -34,12 +52,14 @@ class MissionSupervisor(LeafSystem):
 
     Args:
         legs: the mission's legs, in order (at least one).
-        behaviour_ports: {behaviour name: index of the PortSwitch input it drives}.
+        behaviour_ports: {behaviour name: index of the PortSwitch input it drives}, and
+            "response" for the `response_reference` output (needed by the safety rules).
         period: judging period, s, in (0, 5].
+        rules: the `SafetyRules` (default thresholds).
     """
 
     def __init__(self, legs: tuple[Leg, ...], behaviour_ports: dict[str, int],
-                 period: float = 0.5):
+                 period: float = 0.5, rules: SafetyRules | None = None):
         super().__init__()
         if not legs:
             raise ValueError("a mission needs at least one leg")
@@ -50,19 +70,36 @@ class MissionSupervisor(LeafSystem):
             raise ValueError(f"MissionSupervisor period must be in (0, 5] s, got {period}")
         self.legs = tuple(legs)
         self.behaviour_ports = dict(behaviour_ports)
+        self.rules = rules if rules is not None else SafetyRules()
         self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
         self.path_status_input = self.DeclareVectorInputPort("path_status", 2)
         self.replanner_status_input = self.DeclareVectorInputPort("replanner_status", 3)
+        empty = AbstractValue.Make(SonarReturns.empty(1.0))
+        self.returns_inputs = {name: self.DeclareAbstractInputPort(f"{name}_returns", empty)
+                               for name in SENSORS}
+        self.reference_input = self.DeclareVectorInputPort("reference", 8)
+        self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
         self._leg = self.DeclareDiscreteState(LEG_SIZE)
         self._progress = self.DeclareDiscreteState(PROGRESS_SIZE)
         self._outcomes = self.DeclareDiscreteState(len(self.legs))
         self._done = self.DeclareDiscreteState(1)
+        self._watch = self.DeclareDiscreteState(len(WATCH_FIELDS))
+        self._response = self.DeclareDiscreteState(len(RESPONSE_FIELDS))
         self.DeclareInitializationDiscreteUpdateEvent(self._start_mission)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update_leg)
         self.leg_output = self.DeclareStateOutputPort("leg", self._leg)
         self.behaviour_output = self.DeclareAbstractOutputPort(
             "behaviour", lambda: AbstractValue.Make(InputPortIndex(0)), self._calc_behaviour,
-            prerequisites_of_calc={self.discrete_state_ticket(self._leg)})
+            prerequisites_of_calc={self.discrete_state_ticket(self._leg),
+                                   self.discrete_state_ticket(self._response)})
+        self.response_output = self.DeclareStateOutputPort("response", self._response)
+        self.response_reference_output = self.DeclareVectorOutputPort(
+            "response_reference", 8,
+            lambda context, output: output.SetFromVector(response_reference(
+                self.rules, context.get_discrete_state(self._response).get_value(),
+                context.get_time())),
+            prerequisites_of_calc={self.discrete_state_ticket(self._response),
+                                   self.time_ticket()})
 
     def _status(self, port, context, size: int) -> np.ndarray:
         return port.Eval(context) if port.HasValue(context) else np.full(size, -1.0)
@@ -71,6 +108,66 @@ class MissionSupervisor(LeafSystem):
         x = self.state_input.Eval(context)
         discrete_state.set_value(self._leg, [0.0, context.get_time()])
         discrete_state.set_value(self._progress, start_progress(self.legs[0], x))
+        t = context.get_time()
+        discrete_state.set_value(self._watch, [t, t, -1.0, *x[:3]])
+
+    def _watched(self, context, t: float, x: np.ndarray) -> tuple[np.ndarray, bool, bool]:
+        """The `watch` group updated at `t` from the returns, the reference and the estimate
+        `x`; and whether the estimate jumped and the tracking error lasted too long."""
+        watch = context.get_discrete_state(self._watch).get_value().copy()
+        for k, name in enumerate(SENSORS):
+            port = self.returns_inputs[name]
+            if port.HasValue(context):
+                returns = port.Eval(context)
+                if returns.sequence > 0 and returns.hit.any():
+                    watch[k] = max(watch[k], returns.time)
+        jumped = bool(np.linalg.norm(x[:3] - watch[3:6]) > self.rules.jump_m)
+        watch[3:6] = x[:3]
+        if self.reference_input.HasValue(context):
+            error = np.linalg.norm(x[:3] - self.reference_input.Eval(context)[:3])
+            watch[2] = (watch[2] if watch[2] >= 0 else t) if error > self.rules.tracking_error_m \
+                else -1.0
+        tracking = watch[2] >= 0 and t - watch[2] >= self.rules.tracking_s
+        return watch, jumped, tracking
+
+    def _respond(self, context, t: float, x: np.ndarray, watch: np.ndarray, jumped: bool,
+                 tracking: bool, start: float) -> np.ndarray | None:
+        """The `response` group after this period's checks, or None to go on with the leg."""
+        rules = self.rules
+        record = context.get_discrete_state(self._response).get_value()
+        mode, cause = RESPONSES[int(record[0])], CAUSES[int(record[1])]
+        elapsed = t - record[2]
+        if mode in ("none", "hold"):
+            if jumped:
+                return response_record("abort", "navigation_jump", t, x, abort_target(rules, x))
+            if tracking:
+                online = self.map_input.Eval(context) if self.map_input.HasValue(context) else None
+                target = back_off_target(rules, x, online.map.occupied_points()
+                                         if online is not None else np.zeros((0, 3)))
+                if target is None:
+                    return response_record("abort", "tracking_error", t, x,
+                                           abort_target(rules, x))
+                return response_record("back_off", "tracking_error", t, x, target)
+        sensors = relied_sensors(self.legs[int(context.get_discrete_state(self._leg)[0])]
+                                 .behaviour)
+        since = [t - max(watch[SENSORS.index(s)], start) for s in sensors
+                 if self.returns_inputs[s].HasValue(context)]
+        if mode == "none":
+            if since and max(since) >= rules.silence_s:
+                return response_record("hold", "sonar_silent", t, x, x[:3])
+            return None
+        if mode == "hold":
+            if since and max(since) < rules.silence_s:
+                return np.zeros(len(RESPONSE_FIELDS))  # the sonar is back: resume the leg
+            if elapsed >= rules.hold_max_s:
+                return response_record("abort", cause, t, x, abort_target(rules, x))
+            return record
+        if mode == "back_off":
+            if (np.linalg.norm(x[:3] - record[7:10]) <= rules.surface_tolerance_m
+                    or elapsed >= rules.backoff_max_s):
+                return response_record("abort", cause, t, x, abort_target(rules, x))
+            return record
+        return record  # abort: ended by _update_leg
 
     def _update_leg(self, context, discrete_state):
         if context.get_discrete_state(self._done)[0]:
@@ -80,6 +177,20 @@ class MissionSupervisor(LeafSystem):
         index = int(index)
         leg = self.legs[index]
         x = self.state_input.Eval(context)
+        watch, jumped, tracking = self._watched(context, t, x)
+        discrete_state.set_value(self._watch, watch)
+        response = self._respond(context, t, x, watch, jumped, tracking, start)
+        if response is not None:
+            discrete_state.set_value(self._response, response)
+            if RESPONSES[int(response[0])] != "none":
+                if RESPONSES[int(response[0])] == "abort" and (
+                        x[2] >= response[9] - self.rules.surface_tolerance_m
+                        or t - response[2] >= self.rules.abort_max_s):
+                    outcomes = context.get_discrete_state(self._outcomes).get_value().copy()
+                    outcomes[index] = OUTCOMES.index("aborted")
+                    discrete_state.set_value(self._outcomes, outcomes)
+                    discrete_state.set_value(self._done, [1.0])
+                return  # the leg waits while a response flies
         progress = advance_progress(leg, context.get_discrete_state(self._progress).get_value(),
                                     x)
         outcome = 0
@@ -102,6 +213,9 @@ class MissionSupervisor(LeafSystem):
         discrete_state.set_value(self._progress, progress)
 
     def _calc_behaviour(self, context, output):
+        if context.get_discrete_state(self._response)[0] > 0:
+            output.set_value(InputPortIndex(self.behaviour_ports["response"]))
+            return
         index = int(context.get_discrete_state(self._leg)[0])
         output.set_value(InputPortIndex(self.behaviour_ports[self.legs[index].behaviour]))
 
@@ -115,3 +229,21 @@ class MissionSupervisor(LeafSystem):
         """Per leg, how it ended (`OUTCOMES`), from this system's `context`."""
         values = context.get_discrete_state(self._outcomes).get_value()
         return [OUTCOMES[int(v)] for v in values]
+
+
+def responses_from_log(log) -> list[dict]:
+    """The responses flown, from a `VectorLog` of the `response` output: per response
+    {response, cause, start_s, end_s} (end_s None: still flying when the dive ended)."""
+    out = []
+    previous = None
+    for t, record in zip(log.sample_times(), log.data().T):
+        current = (int(record[0]), int(record[1]), float(record[2]))
+        if current == previous:
+            continue
+        if out and out[-1]["end_s"] is None:
+            out[-1]["end_s"] = float(t)
+        if current[0] > 0:
+            out.append(dict(response=RESPONSES[current[0]], cause=CAUSES[current[1]],
+                            start_s=current[2], end_s=None))
+        previous = current
+    return out

@@ -1,0 +1,94 @@
+"""`drake-auv campaign MISSION --seeds A:B [--vary KEY=V1,V2,...]... -o OUT`: seeded Monte
+Carlo runs of a mission on Dask.
+
+Every (seed, variant) is one task: the worker builds and flies the mission and returns a
+metrics row, which this process appends to OUT/results.csv at once. A rerun with the same OUT
+runs only the rows missing. At the end OUT/summary.md, summary.json and the plots are written
+from every row of results.csv. `--workers N` starts a local cluster of N processes (default:
+the machine's cores); `--scheduler tcp://HOST:8786` uses a running Dask cluster instead (see
+docs/campaigns.md).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+CAMPAIGN_FILE = "campaign.json"
+
+
+def add_parser(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "campaign", help="seeded Monte Carlo runs of a mission over errors and faults, on Dask",
+        description="Runs a mission for every seed of --seeds and every combination of the "
+                    "--vary values, one Dask task per run, and writes results.csv (a row per "
+                    "run, appended as it finishes; a rerun runs only the missing rows), "
+                    "summary.md, summary.json and plots into OUT.")
+    parser.add_argument("mission", help="a mission YAML file or a built-in mission's name")
+    parser.add_argument("--seeds", required=True,
+                        help="A:B runs seeds A, A+1, ..., B-1 (or one seed)")
+    parser.add_argument("--vary", action="append", default=[], metavar="KEY=V1,V2,...",
+                        help="a dotted key of the mission file and its values (repeatable: "
+                             "the runs cover every combination), e.g. "
+                             "site.prior_error_m=0,2.5,5")
+    parser.add_argument("--set", dest="overrides", action="append", default=[],
+                        metavar="KEY=VALUE", help="a fixed override for every run (repeatable)")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None,
+                       help="local worker processes (default: this machine's cores)")
+    where.add_argument("--scheduler", default=None,
+                       help="address of a running Dask scheduler, e.g. tcp://HOST:8786")
+    parser.add_argument("-o", "--out", required=True, help="output folder")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.set_defaults(func=run)
+
+
+def _check_same_campaign(out: Path, meta: dict) -> None:
+    """Writes OUT/campaign.json, or checks that a rerun is of the same campaign (the same base
+    mission, fixed overrides and varied keys; seeds and values may be added)."""
+    path = out / CAMPAIGN_FILE
+    fixed = {k: meta[k] for k in ("base_mission", "overrides", "vary_keys")}
+    if path.exists():
+        old = json.loads(path.read_text())
+        for key, value in fixed.items():
+            if old.get(key) != value:
+                raise ValueError(f"{out}: holds another campaign ({key} differs from this "
+                                 f"command's); allowed: the same mission, --set and --vary "
+                                 "keys, or another -o folder")
+    out.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(meta, indent=2) + "\n")
+
+
+def run(args) -> int:
+    from drake_auv.campaign import (ResultsFile, connect, expand_runs, parse_seeds, parse_vary,
+                                    run_campaign, write_summary)
+    from drake_auv.mission.config import load_mission, mission_to_dict
+
+    seeds = parse_seeds(args.seeds)
+    vary = parse_vary(args.vary)
+    base = mission_to_dict(load_mission(args.mission, overrides=args.overrides))
+    base.pop("seed")
+    runs = expand_runs(args.mission, seeds, vary, args.overrides)
+    out = Path(args.out)
+    keys = [k for k, _ in vary]
+    meta = dict(mission=base["name"], seeds=args.seeds, vary=dict(vary),
+                vary_keys=keys, overrides=list(args.overrides), base_mission=base)
+    _check_same_campaign(out, meta)
+    results = ResultsFile(out / "results.csv", keys)
+    client, cluster = connect(args.workers, args.scheduler)
+    try:
+        counts = run_campaign(runs, results, client, progress=not args.quiet)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    rows = results.rows()  # this command's and earlier ones' (more seeds, more values)
+    seeds_done = sorted({int(r["seed"]) for r in rows})
+    meta.pop("base_mission")
+    meta["seeds"] = f"{seeds_done[0]}..{seeds_done[-1]} ({len(seeds_done)} seeds)"
+    summary = write_summary(rows, keys, out, meta)
+    overall = summary["overall"]
+    print(f"campaign {base['name']}: {counts['total']} runs ({counts['skipped']} already in "
+          f"results.csv, {counts['ok']} ok, {counts['failed']} failed now); contacts "
+          f"{overall['contacts']}/{overall['ok']}; summary in {out / 'summary.md'}")
+    return 0

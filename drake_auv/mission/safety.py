@@ -1,0 +1,108 @@
+"""The mission supervisor's safety rules: detecting a fault from what the vehicle knows, and
+the answer. Pure (numpy); `MissionSupervisor` applies them every period.
+
+Detection (never from the true world or the injected fault itself):
+- sonar silent: the sonar a leg relies on (`relied_sensors`: a follow leg the profiler, a
+  replanning survey the multibeam, which builds most of the map) has had no beam return for
+  `silence_s` s.
+- thruster failure: the estimated position is more than `tracking_error_m` from the reference
+  being tracked for `tracking_s` s (a failed thruster makes the others saturate and the error
+  grow; the allocation is not told which one failed).
+- navigation jump: the estimated position moved more than `jump_m` in one supervisor period
+  (the vehicle flies at most ~0.5 m/s: 0.25 m a period).
+
+Answers (`RESPONSES`), each a straight-line reference from the estimated pose where it began:
+- hold: hold that pose. On a silent sonar: until it returns again (then the leg resumes) or
+  `hold_max_s` s have passed (then abort).
+- back_off: `backoff_m` m horizontally away from the nearest occupied voxel of the on-line map
+  (at the same depth), then abort; straight to abort when nothing is mapped within
+  `backoff_range_m`. The answer to a thruster failure: leave the structure first.
+- abort: straight up to `surface_z` (the vehicle rises to the surface where it is, which
+  needs neither the map nor the estimate's absolute position); the dive ends on reaching it
+  (within `surface_tolerance_m`) or after `abort_max_s` s. The answer to a navigation jump
+  (the on-line map no longer agrees with the estimate), to a hold that lasts too long and
+  after a back-off.
+Responses move at `speed` m/s and never go back to a leg, except a hold on a silent sonar
+(the leg's behaviour keeps running meanwhile, unselected, and its time budget runs on).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+RESPONSES = ("none", "hold", "back_off", "abort")
+CAUSES = ("none", "sonar_silent", "tracking_error", "navigation_jump")
+SENSORS = ("multibeam", "profiler")
+# the `response` discrete-state group: mode, cause, start time, start pose, target
+RESPONSE_FIELDS = ("mode", "cause", "start_s", "x0", "y0", "z0", "yaw0", "x1", "y1", "z1")
+
+
+@dataclass(frozen=True)
+class SafetyRules:
+    """Thresholds of the detection and the answers (m, s, m/s); see the module docstring."""
+
+    silence_s: float = 5.0
+    hold_max_s: float = 60.0
+    tracking_error_m: float = 2.0
+    tracking_s: float = 5.0
+    jump_m: float = 1.5
+    backoff_m: float = 5.0
+    backoff_range_m: float = 15.0
+    backoff_max_s: float = 60.0
+    surface_z: float = -1.0
+    surface_tolerance_m: float = 0.5
+    abort_max_s: float = 300.0
+    speed: float = 0.3
+
+    def __post_init__(self):
+        for name, value in vars(self).items():
+            if name != "surface_z" and not (np.isfinite(value) and value > 0):
+                raise ValueError(f"SafetyRules.{name} must be > 0, got {value!r}")
+
+
+def relied_sensors(behaviour: str) -> tuple[str, ...]:
+    """The sonars (`SENSORS`) a leg flown by `behaviour` relies on."""
+    return {"follow": ("profiler",), "replan": ("multibeam",)}.get(behaviour, ())
+
+
+def response_record(mode: str, cause: str, t: float, x: np.ndarray, target) -> np.ndarray:
+    """The `response` group's value (`RESPONSE_FIELDS`) of `mode` for `cause`, begun at `t`
+    from the estimated state `x` (12) towards `target` (3,)."""
+    return np.array([RESPONSES.index(mode), CAUSES.index(cause), t, x[0], x[1], x[2], x[5],
+                     *np.asarray(target, dtype=float)])
+
+
+def back_off_target(rules: SafetyRules, x: np.ndarray, occupied: np.ndarray):
+    """(3,) `backoff_m` away from the nearest occupied voxel (horizontally, same depth), or
+    None when no voxel lies within `backoff_range_m` of the estimated position."""
+    if len(occupied) == 0:
+        return None
+    d = np.linalg.norm(occupied - x[:3], axis=1)
+    nearest = occupied[int(np.argmin(d))]
+    if d.min() > rules.backoff_range_m:
+        return None
+    away = x[:2] - nearest[:2]
+    norm = np.linalg.norm(away)
+    away = away / norm if norm > 1e-6 else np.array([np.cos(x[5] + np.pi), np.sin(x[5] + np.pi)])
+    return np.array([*(x[:2] + rules.backoff_m * away), x[2]])
+
+
+def abort_target(rules: SafetyRules, x: np.ndarray) -> np.ndarray:
+    """(3,) straight above the estimated position, at `surface_z`."""
+    return np.array([x[0], x[1], max(rules.surface_z, x[2])])
+
+
+def response_reference(rules: SafetyRules, record: np.ndarray, t: float) -> np.ndarray:
+    """The 8-vector reference `[x, y, z, yaw, vx, vy, vz, yaw_rate]` of a response `record`
+    at `t` s: from its start position to its target at `speed`, then held; yaw held."""
+    start, target = record[3:6], record[7:10]
+    step = target - start
+    length = float(np.linalg.norm(step))
+    travelled = rules.speed * max(t - record[2], 0.0)
+    if length < 1e-9 or travelled >= length:
+        return np.array([*target, record[6], 0.0, 0.0, 0.0, 0.0])
+    direction = step / length
+    return np.array([*(start + travelled * direction), record[6],
+                     *(rules.speed * direction), 0.0])
