@@ -191,15 +191,13 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
                 planes[index] = "vertical"
             position = np.array([*xy, z])  # where the next transit is planned from
         elif isinstance(step, SurveyStep):
+            add_transit(k, nominal.points[0], float(nominal.heading[0]), TRANSIT_SPEED)
             duration = step.max_time_s or (margin * nominal.times(survey_speed)[-1]
                                            + TIME_SLACK)
-            if step.replanning:  # the replanner flies the way to the plan too, on the map
-                gap = np.linalg.norm(nominal.points[0] - position) / TRANSIT_SPEED
-                index = add(Leg("survey", k, "replan", "replanner",
-                                step.max_time_s or duration + margin * gap))
+            if step.replanning:
+                index = add(Leg("survey", k, "replan", "replanner", duration))
                 replan_legs.append(index)
             else:
-                add_transit(k, nominal.points[0], float(nominal.heading[0]), TRANSIT_SPEED)
                 index = add(Leg("survey", k, "path", "path_end", duration))
                 path_legs[index] = PathLeg("nominal", speed=survey_speed)
             position = nominal.points[-1]
