@@ -13,7 +13,7 @@ from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mapping.scan_log import ScanBatch, ScanLog
 from drake_auv.mission.config import MissionFileError, load_mission, mission_from_dict, \
     mission_to_dict
-from drake_auv.mission.faults import NavigationJump, SonarSilence, ThrusterFailure
+from drake_auv.mission.faults import NavigationJump, SonarSilence, ThrusterFailure, silenced
 from drake_auv.mission.legs import Leg
 from drake_auv.mission.safety import (RESPONSES, SafetyRules, abort_target, back_off_target,
                                       response_reference)
@@ -53,6 +53,7 @@ def test_fault_systems_inject_from_their_time():
         silence.returns_input.FixValue(context, _returns(t, True, 3))
         out = silence.returns_output.Eval(context)
         assert out.hit.any() != silent and out.sequence == 3 and out.time == t
+        assert (len(out) == 0) == silent  # silent: no beams at all, not beams without echo
     failure = ThrusterFailure("sway", 20.0)
     context = failure.CreateDefaultContext()
     failure.command_input.FixValue(context, np.arange(1.0, 6.0))
@@ -115,13 +116,18 @@ def test_supervisor_holds_on_a_silent_sonar_and_resumes_when_it_returns():
     sup.returns_inputs["multibeam"].FixValue(context, _returns(3.0, True, 2))
     simulator.AdvanceTo(3.2)
     assert _mode(sup, context) == ("none", 2)
-    sup.returns_inputs["multibeam"].FixValue(context, _returns(3.5, False, 3))
+    sup.returns_inputs["multibeam"].FixValue(context, silenced(_returns(3.5, True, 3)))
     simulator.AdvanceTo(7.9)
     assert _mode(sup, context)[0] == "none"  # silent for 4.5 s at the last check: not yet
     simulator.AdvanceTo(8.1)
     assert _mode(sup, context) == ("hold", 3)
     sup.returns_inputs["multibeam"].FixValue(context, _returns(9.0, True, 4))
     simulator.AdvanceTo(9.1)
+    assert _mode(sup, context) == ("none", 2)
+    # Beams without an echo (open water beside a side-looking fan) are data, not silence.
+    for k, t in enumerate(np.arange(9.5, 20.0, 0.5)):
+        sup.returns_inputs["multibeam"].FixValue(context, _returns(t, False, 5 + k))
+        simulator.AdvanceTo(t + 0.1)
     assert _mode(sup, context) == ("none", 2)
 
 

@@ -21,10 +21,11 @@ from drake_auv.vehicle.model import NUM_THRUSTERS, STATE_SIZE, THRUSTER_NAMES
 
 
 def silenced(returns: SonarReturns) -> SonarReturns:
-    """`returns` with no beam returned (NaN ranges and points), same time and sequence."""
-    nan = np.full_like(np.asarray(returns.points_nav), np.nan)
-    return SonarReturns(returns.time, returns.origin_nav, returns.angles,
-                        np.full(len(returns), np.nan), returns.directions_nav, nan, nan,
+    """What a silent sonar delivers in place of `returns`: an update with no beams at all
+    (same time and sequence). Not the same as beams without an echo, which a working sonar
+    gives over open water."""
+    return SonarReturns(returns.time, returns.origin_nav, np.zeros(0), np.zeros(0),
+                        np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)),
                         returns.max_range, returns.sequence)
 
 

@@ -3,8 +3,9 @@ the answer. Pure (numpy); `MissionSupervisor` applies them every period.
 
 Detection (never from the true world or the injected fault itself):
 - sonar silent: the sonar a leg relies on (`relied_sensors`: a follow leg the profiler, a
-  replanning survey the multibeam, which builds most of the map) has had no beam return for
-  `silence_s` s.
+  replanning survey the multibeam, which builds most of the map) has delivered no beams for
+  `silence_s` s. Beams without an echo are data (open water, a side-looking fan over a flat
+  seabed), not silence.
 - thruster failure: the estimated position is more than `tracking_error_m` from the reference
   being tracked for `tracking_s` s (a failed thruster makes the others saturate and the error
   grow; the allocation is not told which one failed).

@@ -119,7 +119,7 @@ class MissionSupervisor(LeafSystem):
             port = self.returns_inputs[name]
             if port.HasValue(context):
                 returns = port.Eval(context)
-                if returns.sequence > 0 and returns.hit.any():
+                if returns.sequence > 0 and len(returns) > 0:  # beams fired, echo or not
                     watch[k] = max(watch[k], returns.time)
         jumped = bool(np.linalg.norm(x[:3] - watch[3:6]) > self.rules.jump_m)
         watch[3:6] = x[:3]
