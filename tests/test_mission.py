@@ -185,8 +185,8 @@ def test_demo_writes_every_output(tmp_path):
 
 
 def test_a_dive_stopped_before_its_survey_still_reports(tmp_path):
-    # 20 s: the breakwater's transit only, no survey or follow sample to score
-    result = run_mission(load_mission("breakwater", overrides=["limits.max_time_s=20"]),
+    # 10 s: the breakwater's transit only, no survey or follow sample to score
+    result = run_mission(load_mission("breakwater", overrides=["limits.max_time_s=10"]),
                          progress=False)
     summary = summarise(result)
     assert summary["distance_to_target"]["mean_m"] is None

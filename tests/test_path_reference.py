@@ -102,6 +102,11 @@ def test_leg_goals():
     assert not goal_reached(arrive, 2, 3.0, x, progress, [2, 4.0], [-1, 0, 0])  # path not done
     assert goal_reached(arrive, 2, 5.0, x, progress, [2, 4.0], [-1, 0, 0])
     assert not goal_reached(arrive, 2, 5.0, x, progress, [1, 4.0], [-1, 0, 0])  # other leg's
+    handing = Leg("transit", 2, "path", "arrive", 100.0, target=(10.0, 0.0, 0.0), handover=5.0)
+    x[0] = 4.0
+    assert not goal_reached(handing, 2, 1.0, x, progress, [2, 40.0], [-1, 0, 0])  # 6 m away
+    x[0] = 5.5
+    assert goal_reached(handing, 2, 1.0, x, progress, [2, 40.0], [-1, 0, 0])  # path not done
     replan = Leg("survey", 3, "replan", "replanner", 100.0)
     assert goal_reached(replan, 3, 0.0, x, progress, [-1, 0], [3, 1, 7])
     assert not goal_reached(replan, 3, 0.0, x, progress, [-1, 0], [2, 1, 7])

@@ -30,6 +30,8 @@ class Leg:
             the path reference's path; "replanner" when the replanner has visited every
             waypoint.
         max_duration: the leg ends anyway after this, s (a timed-out leg is reported).
+        handover: an "arrive" leg ends as soon as the vehicle is within this distance of
+            `target`, m (the next behaviour flies the rest; None: it ends on arrival).
     """
 
     phase: str
@@ -44,6 +46,7 @@ class Leg:
     direction: tuple | None = None
     distance: float | None = None
     end_depth: float | None = None
+    handover: float | None = None
 
     def __post_init__(self):
         if self.behaviour not in BEHAVIOURS:
@@ -81,8 +84,10 @@ def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.nda
     `x` (12), its progress record, the path reference's status `[leg, end_time]` and the
     replanner's `[leg, finished, next_index]`."""
     if leg.goal == "arrive":
-        return (path_status[0] == index and t >= path_status[1]
-                and np.linalg.norm(x[:3] - np.asarray(leg.target)) <= leg.tolerance)
+        distance = np.linalg.norm(x[:3] - np.asarray(leg.target))
+        if leg.handover is not None and path_status[0] == index and distance <= leg.handover:
+            return True
+        return path_status[0] == index and t >= path_status[1] and distance <= leg.tolerance
     if leg.goal == "path_end":
         return path_status[0] == index and t >= path_status[1]
     if leg.goal == "replanner":

@@ -139,12 +139,13 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
         budget += leg.max_duration
         return len(legs) - 1
 
-    def add_transit(step_index: int, target, end_yaw, speed: float) -> None:
+    def add_transit(step_index: int, target, end_yaw, speed: float,
+                    handover: float | None = None) -> None:
         nonlocal position, yaw
         target = np.asarray(target, dtype=float)
         duration = margin * np.linalg.norm(target - position) / speed + TIME_SLACK
         index = add(Leg("transit", step_index, "path", "arrive", duration,
-                        target=tuple(target), tolerance=1.5))
+                        target=tuple(target), tolerance=1.5, handover=handover))
         path_legs[index] = PathLeg("goto", tuple(target), end_yaw, speed)
         position, yaw = target, yaw if end_yaw is None else end_yaw
 
@@ -191,7 +192,11 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
                 planes[index] = "vertical"
             position = np.array([*xy, z])  # where the next transit is planned from
         elif isinstance(step, SurveyStep):
-            add_transit(k, nominal.points[0], float(nominal.heading[0]), TRANSIT_SPEED)
+            # Before a replanned survey the transit hands over within R of the plan's first
+            # sample (placed on the shifted prior map, it may lie near the real structure):
+            # the replanner flies the rest against the on-line map.
+            add_transit(k, nominal.points[0], float(nominal.heading[0]), TRANSIT_SPEED,
+                        handover=spec.replanner.R if step.replanning else None)
             duration = step.max_time_s or (margin * nominal.times(survey_speed)[-1]
                                            + TIME_SLACK)
             if step.replanning:
