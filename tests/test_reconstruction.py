@@ -230,7 +230,7 @@ def test_mission_writes_its_points(tmp_path):
     from drake_auv.mission.runner import run_mission
 
     # 45 s: the transit and the start of the survey (the report needs survey samples).
-    result = run_mission(load_mission("breakwater", overrides=["limits.max_time_s=45"]),
+    result = run_mission(load_mission("breakwater", overrides=["limits.max_time_s=12"]),
                          progress=False)
     summary = write_outputs(result, tmp_path)
     cloud = read_ply(tmp_path / "points.ply")
