@@ -72,7 +72,8 @@ class OctreeMapper(LeafSystem):
             raise ValueError(f"OctreeMapper period must be in [0.01, 10] s, got {period}")
         if int(multibeam_stride) != multibeam_stride or multibeam_stride < 1:
             raise ValueError(f"multibeam_stride must be an integer >= 1, got {multibeam_stride}")
-        OctreeMap(resolution)  # checks the resolution
+        if not (np.isfinite(resolution) and 0.01 < resolution <= 10.0):
+            raise ValueError(f"OctreeMapper resolution must be in (0.01, 10] m, got {resolution}")
         self.resolution = float(resolution)
         self.period = float(period)
         self.multibeam_stride = int(multibeam_stride)
