@@ -76,6 +76,15 @@ def test_two_contexts_of_one_diagram_have_their_own_maps():
     assert len(mapper.map_output.Eval(other).map.occupied_points()) == 0
 
 
+def test_the_multibeam_is_scored_at_every_ping():
+    """The multibeam coverage recorder casts with the multibeam, not at the camera's 2 Hz."""
+    spec = load_mission("breakwater")
+    _, handles = build_mission_diagram(load_site(spec.site, spec.seed), spec)
+    period = handles.multibeam_coverage.GetUniquePeriodicDiscreteUpdateAttribute().period_sec()
+    assert period == handles.multibeam.period == 0.1
+    assert handles.camera_coverage.GetUniquePeriodicDiscreteUpdateAttribute().period_sec() == 0.5
+
+
 def test_same_seed_same_numbers_and_the_seed_matters():
     overrides = ["limits.max_time_s=40"]
 

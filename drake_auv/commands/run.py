@@ -2,7 +2,7 @@
 
 Writes `report.md`, `report.json`, the figures, `mission.html`, `trajectory.csv` and
 `diagram.dot` into OUT. `--set KEY=VALUE` overrides the file's values by dotted keys into its
-sections (`--set replanner.optimizer=none`, `--set sonar_noise=realistic`,
+sections (`--set replanner.optimizer=none`, `--set sonar_noise=clean`,
 `--set steps.2.survey.replanning=false`).
 """
 

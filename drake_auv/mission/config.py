@@ -230,11 +230,12 @@ class NavigationSpec:
 
 @dataclass(frozen=True)
 class SonarNoiseSpec:
-    """Sonar errors: `preset` "clean" (none), "realistic" (`REALISTIC_NOISE`) or "custom"
-    (`params` given in the file), `params` being `SonarNoise` fields."""
+    """Sonar errors: `preset` "realistic" (`REALISTIC_NOISE`, the default: range noise,
+    dropouts, clutter, side lobes, surface multipath), "clean" (none, asked for explicitly)
+    or "custom" (`params` given in the file), `params` being `SonarNoise` fields."""
 
-    preset: str = "clean"
-    params: dict = field(default_factory=dict)
+    preset: str = "realistic"
+    params: dict = field(default_factory=lambda: dict(REALISTIC_NOISE))
 
     def to_noise(self) -> SonarNoise | None:
         """The `SonarNoise`, or None for a clean sonar."""
@@ -573,10 +574,10 @@ class _Reader:
 
     def sonar_noise(self, raw) -> SonarNoiseSpec:
         allowed = "clean, realistic or a mapping of " + ", ".join(_NOISE_FIELDS)
-        if raw is None or raw == "clean":
+        if raw == "clean":
             return SonarNoiseSpec("clean", {})
-        if raw == "realistic":
-            return SonarNoiseSpec("realistic", dict(REALISTIC_NOISE))
+        if raw is None or raw == "realistic":
+            return SonarNoiseSpec()
         if not isinstance(raw, dict):
             self.fail("sonar_noise", f"{raw!r} is not a preset or a mapping", allowed)
         raw = self.mapping(raw, "sonar_noise", _NOISE_FIELDS)
@@ -767,7 +768,7 @@ def _set(raw: dict, parts: list[str], value, label: str):
         node, keys, offset = step[kind], _CHECKS[STEP_KINDS[kind]], 3
     elif head == "sonar_noise":
         preset = raw.get("sonar_noise")
-        node = (dict(REALISTIC_NOISE) if preset == "realistic"
+        node = (dict(REALISTIC_NOISE) if preset in (None, "realistic")
                 else preset if isinstance(preset, dict) else {})
         raw["sonar_noise"], keys, offset = node, _NOISE_FIELDS, 1
     elif head == "faults":  # faults.<kind>.<key>

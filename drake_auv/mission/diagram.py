@@ -180,8 +180,12 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
 
 
 def add_coverage_recorders(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
-                           spec: MissionSpec, site: Site, max_range: float):
-    """What the payload camera and multibeam have seen of the target, on the true world."""
+                           spec: MissionSpec, site: Site, max_range: float,
+                           multibeam_rate: float):
+    """What the payload camera (2 frames/s) and multibeam (every ping, at `multibeam_rate`)
+    have seen of the target, on the true world. The multibeam is scored at its own ping rate:
+    at 2 Hz and 0.3 m/s its vertical fan would sweep the face every 0.15 m and miss parts of
+    0.25 m faces it did ping."""
     mount = spec.payload.multibeam_mount
     camera = builder.AddNamedSystem("camera_coverage", CoverageRecorder(
         caster, site.target_faces, sensor="camera",
@@ -189,7 +193,7 @@ def add_coverage_recorders(builder: DiagramBuilder, caster: RayCaster, vehicle: 
         axis_body=CAMERA_SIDE[mount], rate=2.0))
     multibeam = builder.AddNamedSystem("multibeam_coverage", CoverageRecorder(
         caster, site.target_faces, sensor="multibeam", max_range=max_range, mount=mount,
-        rate=2.0))
+        rate=multibeam_rate))
     for recorder in (camera, multibeam):
         builder.Connect(vehicle.dynamics.state_output, recorder.true_state_input)
     return camera, multibeam
@@ -222,7 +226,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     path_reference, controller, replanner, supervisor, switch = add_behaviours(
         builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns)
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
-                                                        max_range)
+                                                        max_range, 1.0 / multibeam.period)
     logs = {
         "state": LogVectorOutput(vehicle.dynamics.state_output, builder, LOG_PERIOD),
         "estimated_state": LogVectorOutput(estimated, builder, LOG_PERIOD),
