@@ -235,21 +235,3 @@ def test_cost_is_the_weighted_sum_of_its_terms_with_the_terminal_goal_on_the_las
                                                    * t["progress"][..., -1])
     assert np.allclose(cost(rollouts), expected, rtol=1e-12, atol=1e-12)
 
-
-def test_warm_start_is_cut_at_the_horizon_and_then_takes_no_waypoints_beyond():
-    """A previous plan that outgrew its section (progress stalled around a corner) is cut
-    `horizon` m from the vehicle; a short one is extended by the section's next waypoints."""
-    from drake_auv.replanning.section import Polyline, warm_start
-    route = Polyline(WAYPOINTS[:12])
-    section = WAYPOINTS[1:8]
-    s = np.arange(1.0, 8.0)
-    # A loop at the offset: 30 m of trajectory that never advances past y = 2 along the route.
-    a = np.linspace(0.0, 2.0 * np.pi, 61)
-    loop = np.column_stack([6.0 * np.sin(a), 2.0 - 6.0 * np.cos(a) + 6.0, np.full(61, -5.0)])
-    loop = np.vstack([[0.0, 0.0, -5.0], [0.0, 2.0, -5.0], loop[1:]])
-    cut = warm_start([0.0, 0.0, -5.0], loop, route, section, s, 0.5, horizon=10.0)
-    arc = np.linalg.norm(np.diff(cut, axis=0), axis=1).sum()
-    assert 9.0 <= arc <= 10.5
-    assert np.linalg.norm(cut[-1] - WAYPOINTS[7]) > 1.0  # not extended to the section's end
-    short = warm_start([0.0, 0.0, -5.0], WAYPOINTS[:3], route, section, s, 0.5, horizon=10.0)
-    np.testing.assert_allclose(short[-1], WAYPOINTS[7])

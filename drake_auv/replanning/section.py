@@ -54,8 +54,6 @@ class ReplanningParameters:
             "3d": the 3D distance to any voxel, the offset along the surface normal of the
             slicing planner (sloping faces, as on the boulder).
         spacing: distance between trajectory points, m (> 0).
-        horizon: longest warm-started trajectory, m (> 0; None: 2 R, the polyline from the
-            vehicle to waypoints within R and back across the ball).
         margin: how far the optimised trajectory may leave the initial one (the largest
             prior-map plus navigation error the plan assumes), m (> 0); sizes the map query.
         min_log_odds: log-odds a voxel needs to count in the cost (1.5: two hits more than
@@ -73,7 +71,6 @@ class ReplanningParameters:
     depth_band: float = 1.5
     offset_metric: str = "horizontal"
     spacing: float = 0.5
-    horizon: float | None = None
     margin: float = 6.0
     min_log_odds: float = 1.5
     huber: float = 1.0
@@ -89,10 +86,8 @@ class ReplanningParameters:
         patience=8))
 
     def __post_init__(self):
-        if self.horizon is None:
-            object.__setattr__(self, "horizon", 2.0 * self.radius)
         for name in ("radius", "omega", "clearance", "depth_band", "spacing", "margin",
-                     "huber", "horizon"):
+                     "huber"):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be > 0 m, got {value}")
@@ -417,31 +412,21 @@ def initial_trajectory(position, section_points, spacing: float) -> np.ndarray:
 
 
 def warm_start(position, previous: np.ndarray, route: Polyline, section_points: np.ndarray,
-               waypoint_s: np.ndarray, spacing: float, horizon: float) -> np.ndarray:
+               waypoint_s: np.ndarray, spacing: float) -> np.ndarray:
     """STOMP's initial trajectory from the last step's optimised one (receding horizon): from
     the vehicle, the part of `previous` (N', 3) ahead of it up to the section's last waypoint
-    (by arclength along `route`; `waypoint_s`, m, per waypoint), to where it turns back
-    along the route, or to `horizon` m from the vehicle, then (unless the horizon cut it) the
-    section's waypoints beyond that part's end; resampled every `spacing` m.
-
-    The horizon bounds the trajectory's length, hence STOMP's cost per step: around a convex
-    corner the offset path is longer than the route inside it, its progress along the route
-    stalls, and without the bound each step appended the next waypoints to a trajectory that
-    still ended at the corner (52 points instead of ~20 at the breakwater's end)."""
+    (by arclength along `route`; `waypoint_s`, m, per waypoint) or to where it turns back
+    along the route, then the section's waypoints
+    beyond that part's end; resampled every `spacing` m."""
     x = _check_position(position)
     s_x, _ = Polyline(previous).project(x[None])
-    arc = _arclength(previous) - s_x[0]
-    ahead = previous[arc > 0.5 * spacing]
+    ahead = previous[_arclength(previous) > s_x[0] + 0.5 * spacing]
     # Up to the section's end, and up to where it would turn back along the route: the
     # trajectory neither outgrows the section nor carries a fold into the next step.
     progress = route.project(ahead)[0] if len(ahead) else np.zeros(0)
     stop = (progress > waypoint_s[-1] + spacing) | (
         progress < np.maximum.accumulate(progress) - spacing)
-    keep = np.cumsum(stop) == 0
-    beyond = keep & (arc[arc > 0.5 * spacing] > horizon)
-    ahead = ahead[keep & ~beyond]
-    if beyond.any():
-        return resample_polyline(np.vstack([x, ahead]), spacing)
+    ahead = ahead[np.cumsum(stop) == 0]
     s_end = route.project(ahead[-1:])[0][0] if len(ahead) else 0.0
     extra = section_points[waypoint_s > s_end + spacing]
     return resample_polyline(np.vstack([x, ahead, extra]), spacing)
@@ -551,7 +536,7 @@ def replan_section(position, waypoints, next_index: int, occupied,
     waypoint_s = np.append(route.s0, route.length)[1:len(idx) + 1]
     if optimizer == "stomp" and previous is not None and len(previous) >= 2:
         theta0 = warm_start(x, np.asarray(previous, dtype=float), route, section, waypoint_s,
-                            params.spacing, params.horizon)
+                            params.spacing)
     else:
         theta0 = initial_trajectory(x, section, params.spacing)
     # A trajectory point keeps the offset when the waypoint it leads to does.
