@@ -196,6 +196,7 @@ class _DistanceField2D:
         free[cells[:, 0], cells[:, 1]] = False
         self.field = (ndimage.distance_transform_edt(free, sampling=resolution) if len(cells)
                       else np.full(shape, np.inf))
+        self._last = (np.array(shape) - 1)[:, None]  # the largest cell index per axis
 
     def _coords(self, points: np.ndarray) -> np.ndarray:
         return ((points[:, :2] - self.origin) / self.cell).T
@@ -209,8 +210,8 @@ class _DistanceField2D:
         """(n,) at most the distance from `points` (inside the box) to the nearest column:
         the nearest cell's value less half a cell diagonal."""
         idx = np.rint(self._coords(points)).astype(int)
-        for k, n in enumerate(self.field.shape):
-            np.clip(idx[k], 0, n - 1, out=idx[k])
+        np.maximum(idx, 0, out=idx)
+        np.minimum(idx, self._last, out=idx)
         return self.field[idx[0], idx[1]] - self.cell * np.sqrt(0.5)
 
 
@@ -304,20 +305,26 @@ class Polyline:
         self.length = float(self.seg_len.sum())
         self.a_ab = np.einsum("mk,mk->m", self.a, self.ab)
         self.a_sq = np.einsum("mk,mk->m", self.a, self.a)
+        self._ab_a = np.vstack([self.ab, -2.0 * self.a]).T  # (3, 2m): p.ab and -2 p.a at once
 
     def project(self, points: np.ndarray):
         flat = points.reshape(-1, 3)
-        # |p - a - t ab|^2 = |p - a|^2 - 2 t (p - a).ab + t^2 |ab|^2, from (n, 3) x (3, m)
-        # products (the segments' a and ab are fixed).
-        u = flat @ self.ab.T - self.a_ab  # (p - a).ab
-        t = np.clip(u / self.seg_sq, 0.0, 1.0)
-        gap_sq = (np.einsum("nk,nk->n", flat, flat)[:, None] - 2.0 * (flat @ self.a.T)
-                  + self.a_sq - 2.0 * t * u + t * t * self.seg_sq)
-        best = np.argmin(gap_sq, axis=1)
+        # |p - a - t ab|^2 = |p|^2 - 2 p.a + |a|^2 - 2 t (p - a).ab + t^2 |ab|^2 from one
+        # (n, 3) x (3, 2m) product (the segments' a and ab are fixed); |p|^2 is the same for
+        # every segment, so it is added after the nearest segment is chosen.
+        m = len(self.a)
+        products = flat @ self._ab_a
+        u = products[:, :m] - self.a_ab  # (p - a).ab
+        t = u / self.seg_sq
+        np.minimum(t, 1.0, out=t)
+        np.maximum(t, 0.0, out=t)
+        gap = products[:, m:] + self.a_sq + t * (t * self.seg_sq - 2.0 * u)
+        best = np.argmin(gap, axis=1)
         rows = np.arange(len(best))
         s = self.s0[best] + t[rows, best] * self.seg_len[best]
+        gap_sq = gap[rows, best] + np.einsum("nk,nk->n", flat, flat)
         return (s.reshape(points.shape[:-1]),
-                np.sqrt(np.maximum(gap_sq[rows, best], 0.0)).reshape(points.shape[:-1]))
+                np.sqrt(np.maximum(gap_sq, 0.0)).reshape(points.shape[:-1]))
 
 
 def polyline_progress(points: np.ndarray, polyline: np.ndarray):
@@ -366,6 +373,7 @@ class ReplanningCost:
         n = len(self.z_ref)
         self.keep = (np.ones(n, bool) if keep_offset is None
                      else np.asarray(keep_offset, dtype=bool))
+        self._keep_all = bool(self.keep.all())
         self.s_ref = np.linspace(0.0, self.route.length if goal is None else goal, n)
         depth = np.full(n, params.depth_weight)
         if params.offset_metric == "3d":
@@ -375,27 +383,38 @@ class ReplanningCost:
     def terms(self, trajectories: np.ndarray) -> dict:
         """The unweighted per-point terms (K, N) of `trajectories` (K, N, 3)."""
         p = self.params
-        zero = np.zeros(trajectories.shape[:-1])
-        offset = zero.copy()
-        if self.keep.any():
-            d = self.slice_map.offset(trajectories[..., self.keep, :])
-            offset[..., self.keep] = np.where(np.isfinite(d), _huber(d - p.omega, p.huber), 0.0)
+        shape = trajectories.shape[:-1]
+        if self._keep_all:  # contours: every point keeps the offset, none follows the route
+            d = self.slice_map.offset(trajectories)
+            offset = np.where(np.isfinite(d), _huber(d - p.omega, p.huber), 0.0)
+        else:
+            offset = np.zeros(shape)
+            if self.keep.any():
+                d = self.slice_map.offset(trajectories[..., self.keep, :])
+                offset[..., self.keep] = np.where(np.isfinite(d), _huber(d - p.omega, p.huber),
+                                                  0.0)
         c = self.slice_map.clearance(trajectories, p.clearance)
         s, gap = self.route.project(trajectories)
-        route = np.where(self.keep, 0.0, gap ** 2)
-        progress = np.maximum(0.0, self.s_ref - s) ** 2
-        step = np.diff(trajectories, axis=-2)
-        spacing = np.zeros_like(zero)
+        route = np.zeros(shape) if self._keep_all else np.where(self.keep, 0.0, gap * gap)
+        lag = self.s_ref - s
+        np.maximum(lag, 0.0, out=lag)
+        obstacle = p.clearance - c
+        np.maximum(obstacle, 0.0, out=obstacle)
+        step = trajectories[..., 1:, :] - trajectories[..., :-1, :]
+        spacing = np.empty(shape)
+        spacing[..., 0] = 0.0
         spacing[..., 1:] = (np.sqrt(np.einsum("...k,...k->...", step, step)) - p.spacing) ** 2
-        return dict(offset=offset, obstacle=np.maximum(0.0, p.clearance - c) ** 2,
-                    depth=(trajectories[..., 2] - self.z_ref) ** 2, route=route,
-                    progress=progress, spacing=spacing)
+        depth = trajectories[..., 2] - self.z_ref
+        return dict(offset=offset, obstacle=obstacle * obstacle, depth=depth * depth,
+                    route=route, progress=lag * lag, spacing=spacing)
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
         p, t = self.params, self.terms(trajectories)
         cost = (p.offset_weight * t["offset"] + p.obstacle_weight * t["obstacle"]
-                + self.depth_weight * t["depth"] + p.route_weight * t["route"]
-                + p.progress_weight * t["progress"] + p.spacing_weight * t["spacing"])
+                + self.depth_weight * t["depth"] + p.progress_weight * t["progress"]
+                + p.spacing_weight * t["spacing"])
+        if not self._keep_all:
+            cost += p.route_weight * t["route"]
         cost[..., -1] += p.terminal_weight * (p.offset_weight * t["offset"][..., -1]
                                               + p.progress_weight * t["progress"][..., -1])
         return cost
