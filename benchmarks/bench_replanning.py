@@ -23,6 +23,7 @@ Runs `--jobs` dives at once (each builds its own Diagram from the mission and se
 
     .venv/bin/python benchmarks/bench_replanning.py [--error 5] [--seed 0] [--noise realistic]
     .venv/bin/python benchmarks/bench_replanning.py --ablation 10 [--jobs 2] [--json FILE]
+        [--figure docs/replanning_breakwater.png]
 """
 
 from __future__ import annotations
@@ -73,16 +74,68 @@ def ablation_run(task: tuple) -> dict:
     d = summary["distance_to_target"]
     near = result.distance[_scored_samples(result)]
     steps = 1e3 * result.replanning[:, STEP_FIELDS.index("wall_time")]
-    return dict(seed=seed, optimizer=optimizer, mean_m=d["mean_m"], sd_m=d["sd_m"],
+    track = dict(times=result.times, xy=result.state[:, :2], distance=result.distance,
+                 nominal=result.plan.nominal.points[:, :2], target=_outline(result))
+    return dict(seed=seed, optimizer=optimizer, track=track, mean_m=d["mean_m"], sd_m=d["sd_m"],
                 min_m=d["min_m"], abs_error_m=float(np.abs(near - result.plan.omega).mean()),
                 map_mean_m=d["map_mean_m"], map_sd_m=d["map_sd_m"],
                 contact=summary["contact"], min_clearance_m=summary["min_clearance_m"],
                 survey_clearance_m=min(phase["clearance_min_m"] for phase in summary["phases"]
                                        if phase["name"] == "survey"),
-                multibeam=summary["coverage"]["multibeam"],
+                omega=float(result.plan.omega), multibeam=summary["coverage"]["multibeam"],
                 camera=summary["coverage"]["camera"], completed=bool(result.completed),
                 step_median_ms=float(np.median(steps)),
                 step_p95_ms=float(np.percentile(steps, 95)))
+
+
+def _outline(result) -> np.ndarray:
+    """(m, 2) horizontal vertices of the target's faces (the block seen from above)."""
+    world = result.site.world
+    faces = world.faces[np.flatnonzero(result.site.target_faces)]
+    return world.vertices[np.unique(faces)][:, :2]
+
+
+def draw_ablation(rows: list[dict], path: str, seed: int = 0) -> None:
+    """The ablation's figure: seed `seed`'s true tracks with each optimiser over the target
+    and the nominal (prior-map) contour; its true distance to the target against time; the
+    multibeam coverage per seed."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    colours = {"stomp": "tab:blue", "none": "tab:orange"}
+    fig, (top, dist, cover) = plt.subplots(1, 3, figsize=(17, 5.5),
+                                           gridspec_kw=dict(width_ratios=[1.1, 1.2, 1.0]))
+    mine = {r["optimizer"]: r for r in rows if r["seed"] == seed}
+    any_track = next(iter(mine.values()))["track"]
+    top.plot(*any_track["target"].T, "s", color="0.35", ms=1.5, label="target (true)")
+    top.plot(*any_track["nominal"].T, ".--", color="tab:green", ms=3, lw=1,
+             label="nominal (prior map)")
+    for name, row in mine.items():
+        top.plot(*row["track"]["xy"].T, color=colours[name], lw=1.2, label=f"flown, {name}")
+        dist.plot(row["track"]["times"], row["track"]["distance"], color=colours[name],
+                  lw=1, label=name)
+    omega = rows[0]["omega"]
+    dist.axhline(omega, color="k", lw=0.8, ls="--", label=f"Omega = {omega:g} m")
+    dist.axhline(VEHICLE_RADIUS, color="tab:red", lw=0.8, ls=":", label="contact")
+    top.set(aspect="equal", xlabel="x (m)", ylabel="y (m)",
+            title=f"breakwater, seed {seed}: true tracks")
+    top.legend(fontsize=8, loc="lower left")
+    dist.set(xlabel="time (s)", ylabel="true distance to the target (m)", ylim=(0, 16),
+             title="distance to the block")
+    dist.legend(fontsize=8)
+    seeds = sorted({r["seed"] for r in rows})
+    for k, name in enumerate(("stomp", "none")):
+        values = [next(r["multibeam"] for r in rows if r["seed"] == s and r["optimizer"] == name)
+                  for s in seeds]
+        cover.bar(np.array(seeds) + (k - 0.5) * 0.4, values, 0.4, color=colours[name],
+                  label=name)
+    cover.set(xlabel="seed", ylabel="multibeam coverage of the block", ylim=(0, 1),
+              xticks=seeds, title="multibeam coverage per seed")
+    cover.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 ABLATION_COLUMNS = ("mean_m", "sd_m", "min_m", "abs_error_m", "map_mean_m", "map_sd_m",
@@ -135,15 +188,19 @@ def main() -> None:
                         help="run the stomp / none ablation over N seeds instead")
     parser.add_argument("--jobs", type=int, default=2, help="ablation dives at once")
     parser.add_argument("--json", help="write the ablation's rows to this file")
+    parser.add_argument("--figure", help="draw the ablation's figure (PNG) to this file")
     args = parser.parse_args()
     if args.ablation:
         print(machine())
         start = time.perf_counter()
         rows = ablation(args.ablation, args.jobs, args.noise, args.error)
         print(f"\n{len(rows)} dives in {time.perf_counter() - start:.0f} s")
+        if args.figure:
+            draw_ablation(rows, args.figure)
         if args.json:
             with open(args.json, "w") as f:
-                json.dump(rows, f, indent=1)
+                json.dump([{k: v for k, v in r.items() if k != "track"} for r in rows], f,
+                          indent=1)
         return
     scenario = get_scenario("breakwater")
     print(machine())

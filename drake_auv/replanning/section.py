@@ -215,6 +215,42 @@ class _DistanceField2D:
         return self.field[idx[0], idx[1]] - self.cell * np.sqrt(0.5)
 
 
+class _TubeField3D:
+    """The exact 3D distance to a KD-tree's points at the grid nodes (spacing `cell`, m)
+    around a trajectory (N, 3), read by trilinear interpolation: NaN where a point's cell has
+    a corner that was not computed (more than `pad` m from every trajectory point).
+
+    STOMP's rollouts stay near the trajectory it starts from, and exact nearest-voxel queries
+    from 6-10 m away cost ~3 us a point (1 ms for 11 rollouts of 30 points, 40 times a step
+    on the boulder); computing the nodes once and interpolating costs one query per node.
+    The distance field is smooth away from the surface, so at 0.5 m nodes the interpolation
+    error is millimetres at the offset."""
+
+    def __init__(self, tree: cKDTree, trajectory: np.ndarray, pad: float, cell: float):
+        self.cell = cell
+        self.origin = np.floor((trajectory.min(axis=0) - pad) / cell) * cell - cell
+        self.shape = tuple(np.floor((trajectory.max(axis=0) + pad - self.origin) / cell)
+                           .astype(int) + 3)
+        reach = pad / cell + np.sqrt(3.0)  # cells: every corner of a point within pad
+        r = int(np.ceil(reach))
+        grid = np.arange(-r, r + 1)
+        offsets = np.stack(np.meshgrid(grid, grid, grid, indexing="ij"), axis=-1).reshape(-1, 3)
+        offsets = offsets[np.einsum("ij,ij->i", offsets, offsets) <= reach * reach]
+        centres = np.rint((trajectory - self.origin) / cell).astype(int)
+        nodes = (centres[:, None, :] + offsets[None]).reshape(-1, 3)
+        nodes = nodes[np.all((nodes >= 0) & (nodes < self.shape), axis=1)]
+        flat = np.unique(np.ravel_multi_index(nodes.T, self.shape))
+        self.field = np.full(self.shape, np.nan)
+        node_points = np.column_stack(np.unravel_index(flat, self.shape)) * cell + self.origin
+        self.field.flat[flat] = tree.query(node_points)[0]
+        self.nodes = len(flat)
+
+    def interpolate(self, points: np.ndarray) -> np.ndarray:
+        """(n,) trilinear interpolation at `points` (n, 3); NaN outside the computed nodes."""
+        return ndimage.map_coordinates(self.field, ((points - self.origin) / self.cell).T,
+                                       order=1, mode="constant", cval=np.nan)
+
+
 class SliceMap:
     """The on-line map near a section, as the fields the replanning cost reads.
 
@@ -260,6 +296,16 @@ class SliceMap:
         self._slab_field = _DistanceField2D(slab[:, :2], lo, hi, resolution) if len(
             slab) else None
         self.slab_tree_3d = _kdtree(slab) if len(slab) else None
+        self._tube = None
+        self.resolution = resolution
+
+    def prepare_tube(self, trajectory: np.ndarray, pad: float) -> None:
+        """Metric "3d": precomputes the offset on the grid nodes within `pad` m of
+        `trajectory` (N, 3) (`_TubeField3D`); `offset` interpolates there and queries the
+        KD-tree exactly elsewhere. No effect for the horizontal metric (already a field)."""
+        if self.dims == 3 and self.band_tree is not None:
+            self._tube = _TubeField3D(self.band_tree, np.asarray(trajectory, dtype=float),
+                                      pad, self.resolution)
 
     def clearance(self, points: np.ndarray, upper_bound: float) -> np.ndarray:
         """3D distance to the nearest counted voxel centre, inf beyond `upper_bound`, m."""
@@ -279,7 +325,13 @@ class SliceMap:
         if self.band_tree is None:
             return np.full(shape, np.inf)
         if self._field is None:
-            d, _ = self.band_tree.query(points.reshape(-1, 3))
+            flat = points.reshape(-1, 3)
+            if self._tube is None:
+                return self.band_tree.query(flat)[0].reshape(shape)
+            d = self._tube.interpolate(flat)
+            outside = np.isnan(d)
+            if outside.any():
+                d[outside] = self.band_tree.query(flat[outside])[0]
             return d.reshape(shape)
         return self._field.interpolate(points.reshape(-1, 3)).reshape(shape)
 
@@ -520,13 +572,19 @@ def replan_section(position, waypoints, next_index: int, occupied,
         return None
     section = waypoints[idx]
     pts = np.vstack([x, section])
+    keep = (np.ones(len(waypoints), bool) if keep_offset is None
+            else np.asarray(keep_offset, dtype=bool))[idx]
     # Within reach: where the trajectory may go (the points plus the margin), plus the
     # offset's range (Omega + 1 m) or the clearance, and the depths of the offset band and
-    # of the clearance slab.
-    reach = params.margin + max(params.omega + 1.0, params.clearance)
-    z_reach = max(params.depth_band, params.clearance + DEPTH_MARGIN)
-    if params.offset_metric == "3d":
-        z_reach = max(z_reach, reach)
+    # of the clearance slab. A section without offset (lanes, transits) needs only the
+    # clearance: on the boulder's lanes the offset's reach took in the seabed below.
+    if keep.any():
+        reach = params.margin + max(params.omega + 1.0, params.clearance)
+        z_reach = max(params.depth_band, params.clearance + DEPTH_MARGIN)
+        if params.offset_metric == "3d":
+            z_reach = max(z_reach, reach)
+    else:
+        reach, z_reach = params.margin + params.clearance, params.clearance + DEPTH_MARGIN
     lo = pts.min(axis=0) - [reach, reach, z_reach]
     hi = pts.max(axis=0) + [reach, reach, z_reach]
     start = time.perf_counter()
@@ -546,8 +604,6 @@ def replan_section(position, waypoints, next_index: int, occupied,
                          params.clearance, metric=params.offset_metric, log_odds=log_odds,
                          min_log_odds=params.min_log_odds, box=(lo, hi),
                          resolution=resolution)
-    keep = (np.ones(len(waypoints), bool) if keep_offset is None
-            else np.asarray(keep_offset, dtype=bool))[idx]
     # The path of the progress and route terms: from the vehicle through the section and on
     # through the next 3 waypoints, so that the section's end is not the end of progress.
     route = Polyline(np.vstack([x, waypoints[int(idx[0]):min(int(idx[-1]) + 4,
@@ -564,6 +620,9 @@ def replan_section(position, waypoints, next_index: int, occupied,
     cost = ReplanningCost(slice_map, route, theta0, params, keep_points,
                           goal=float(waypoint_s[-1]))
     if optimizer == "stomp":
+        if keep_points.any():  # the rollouts' reach: twice the largest per-point noise
+            slice_map.prepare_tube(theta0[keep_points],
+                                   2.0 * float(np.max(params.stomp.noise_std)))
         result = stomp(theta0, cost, params.stomp, seed=seed, matrices=_matrices(len(theta0)),
                        free_end=True)
         trajectory, initial_cost = result.trajectory, result.initial_cost
