@@ -250,10 +250,22 @@ def test_3d_offset_near_the_trajectory_is_interpolated_and_exact_elsewhere():
     trajectory = np.column_stack([11.0 * np.cos(a), 11.0 * np.sin(a), np.zeros(20)])
     exact = slice_map.offset(trajectory + 0.0)
     slice_map.prepare_tube(trajectory, pad=1.0)
+
+    class Counting:  # the KD-tree, counting the points queried after the tube was built
+        def __init__(self, tree):
+            self.tree, self.points = tree, 0
+
+        def query(self, x, *args, **kwargs):
+            self.points += len(x)
+            return self.tree.query(x, *args, **kwargs)
+
+    tree = slice_map.band_tree = Counting(slice_map.band_tree)
     near = trajectory[None] + rng.uniform(-0.5, 0.5, (8, 20, 3))
-    d, e = slice_map.offset(near), slice_map.band_tree.query(near.reshape(-1, 3))[0]
-    assert np.abs(d.ravel() - e).max() < 0.02
+    d = slice_map.offset(near)
+    assert tree.points == 0  # all read from the tube's nodes
+    assert np.abs(d.ravel() - tree.tree.query(near.reshape(-1, 3))[0]).max() < 0.02
     np.testing.assert_allclose(slice_map.offset(trajectory), exact, atol=0.02)
     far = trajectory + [0.0, 0.0, 4.0]  # 4 m above the tube: no computed node
-    np.testing.assert_array_equal(slice_map.offset(far),
-                                  slice_map.band_tree.query(far)[0])
+    tree.points = 0
+    np.testing.assert_array_equal(slice_map.offset(far), tree.tree.query(far)[0])
+    assert tree.points == len(far)
