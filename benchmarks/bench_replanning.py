@@ -23,7 +23,7 @@ Runs `--jobs` dives at once (each builds its own Diagram from the mission and se
 
     .venv/bin/python benchmarks/bench_replanning.py [--error 5] [--seed 0] [--noise realistic]
     .venv/bin/python benchmarks/bench_replanning.py --ablation 10 [--jobs 2] [--json FILE]
-        [--figure docs/replanning_breakwater.png]
+        [--figure docs/replanning_breakwater.png] [--set replanner.iterations=20 ...]
 """
 
 from __future__ import annotations
@@ -66,10 +66,10 @@ def bench_insertion(scenario, stride: int) -> np.ndarray:
 
 def ablation_run(task: tuple) -> dict:
     """One dive of the ablation: (seed, optimizer, noise, error) -> a metrics row."""
-    seed, optimizer, noise, error = task
+    seed, optimizer, noise, error, extra = task
     result = run_mission(load_mission("breakwater", seed=seed, overrides=[
         f"replanner.optimizer={optimizer}", f"sonar_noise={noise}",
-        f"site.prior_error_m={error}"]), progress=False)
+        f"site.prior_error_m={error}", *extra]), progress=False)
     summary = summarise(result)
     d = summary["distance_to_target"]
     near = result.distance[_scored_samples(result)]
@@ -142,14 +142,15 @@ ABLATION_COLUMNS = ("mean_m", "sd_m", "min_m", "abs_error_m", "map_mean_m", "map
                     "multibeam", "camera", "step_median_ms", "step_p95_ms")
 
 
-def ablation(seeds: int, jobs: int, noise: str, error: float) -> list[dict]:
+def ablation(seeds: int, jobs: int, noise: str, error: float, extra=()) -> list[dict]:
     """Runs the ablation and prints its tables (markdown); returns the rows."""
-    tasks = [(seed, optimizer, noise, error) for seed in range(seeds)
+    tasks = [(seed, optimizer, noise, error, tuple(extra)) for seed in range(seeds)
              for optimizer in ("stomp", "none")]
     with multiprocessing.get_context("spawn").Pool(jobs) as pool:
         rows = pool.map(ablation_run, tasks, chunksize=1)
     print(f"\nbreakwater, prior error {error} m, navigation drift, sonar_noise {noise}, "
-          f"seeds 0-{seeds - 1}, {jobs} dives at once\n")
+          f"seeds 0-{seeds - 1}, {jobs} dives at once"
+          + (f", {' '.join(extra)}" if extra else "") + "\n")
     print("| seed | optimizer | mean d | sd d | min d | mean abs(d - Omega) | map mean | map sd "
           "| min clearance: dive / survey | multibeam | camera | step median / p95 (ms) |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
@@ -189,11 +190,14 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2, help="ablation dives at once")
     parser.add_argument("--json", help="write the ablation's rows to this file")
     parser.add_argument("--figure", help="draw the ablation's figure (PNG) to this file")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="extra mission override for every ablation dive (repeatable), "
+                             "e.g. replanner.iterations=20")
     args = parser.parse_args()
     if args.ablation:
         print(machine())
         start = time.perf_counter()
-        rows = ablation(args.ablation, args.jobs, args.noise, args.error)
+        rows = ablation(args.ablation, args.jobs, args.noise, args.error, args.set)
         print(f"\n{len(rows)} dives in {time.perf_counter() - start:.0f} s")
         if args.figure:
             draw_ablation(rows, args.figure)
