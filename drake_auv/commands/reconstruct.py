@@ -47,7 +47,7 @@ def run(args) -> int:
     import numpy as np
     import trimesh
 
-    from drake_auv.mission.site import _load_mesh
+    from drake_auv.mission.site import load_mesh
     from drake_auv.reconstruction.pointcloud import read_point_cloud
     from drake_auv.reconstruction.products import ERROR_VMAX, error_colours
     from drake_auv.reconstruction.scoring import score
@@ -59,7 +59,7 @@ def run(args) -> int:
         raise ValueError(f"--crop must be >= 0 m, got {args.crop}")
     check_parameters(10 ** 9, args.depth, args.k, args.trim)  # the options, before any work
     cloud = read_point_cloud(args.points)
-    target = _load_mesh(FilePath(args.target), "--target", "reconstruct") if args.target \
+    target = load_mesh(FilePath(args.target), "--target", "reconstruct") if args.target \
         else None
     if args.crop is not None:
         cloud = cloud.crop(*target.bounds, args.crop)

@@ -83,9 +83,10 @@ def _state(xyz, yaw: float) -> np.ndarray:
     return state
 
 
-def _load_mesh(path, where: str, label: str) -> trimesh.Trimesh:
+def load_mesh(path, where: str, label: str) -> trimesh.Trimesh:
     """A mesh file as one finite, non-empty Trimesh (a Scene is concatenated; coordinates as
-    stored, z up, also for GLB, whose convention is y up)."""
+    stored, z up, also for GLB, whose convention is y up). A missing, unreadable or empty file
+    raises `MissionFileError` naming `where` (the field or option) and `label` (the file)."""
     if not path.is_file():
         raise MissionFileError(label, where, f"{path.name} not found ({path})",
                                "an existing PLY, OBJ, STL or GLB mesh file")
@@ -142,7 +143,7 @@ def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
         return Site(spec.scenario, scenario.world, scenario.target_faces, prior, np.zeros(2),
                     None, start, spec.max_range_m, scenario,
                     prior_offset(spec.prior_error_m, seed))
-    world = _load_mesh(spec.world, "site.world", label)
+    world = load_mesh(spec.world, "site.world", label)
     lo, hi = world.bounds
     if lo[2] >= 0.0:
         raise MissionFileError(label, "site.world", f"{spec.world.name} lies entirely above "
@@ -153,7 +154,7 @@ def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
     if spec.target is None:
         target = np.ones(len(world.faces), bool)
     else:
-        target = _target_faces(world, _load_mesh(spec.target, "site.target", label), origin,
+        target = _target_faces(world, load_mesh(spec.target, "site.target", label), origin,
                                spec.target.name, label)
     if spec.prior is None:
         prior = top_surface(world, spec.prior_spacing_m or DEFAULT_PRIOR_SPACING)
