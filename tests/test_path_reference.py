@@ -39,6 +39,16 @@ def _context(system, x):
     return context
 
 
+def test_a_steep_lift_does_not_turn_the_transit():
+    """The pool's shallow end: 13 cm across, lifted 2.5 m over the terrain in between. The
+    yaw goes the 94 deg from the start's to the goal's, not round through the drift's -137."""
+    path = transit((-5.91, 0.09, -4.0), (-6.0, 0.0, -3.0), np.radians(-626.4), 0.0,
+                   terrain=lambda x, y: np.full(np.shape(x), -4.5), clearance=3.0)
+    assert path.points[1:-1, 2].max() == pytest.approx(-1.5)
+    turned = np.degrees(np.diff(path.unwrapped_heading()))
+    assert np.abs(turned).sum() == pytest.approx(93.6, abs=0.1)
+
+
 def test_goto_leg_is_timed_from_the_leg_start_and_ends_at_the_target():
     reference = PathReference({1: PathLeg("goto", (10.0, 0.0, -5.0), 0.0, speed=0.5)})
     x = np.zeros(12)

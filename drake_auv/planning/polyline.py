@@ -37,15 +37,23 @@ def length(points: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(np.asarray(points, float), axis=0), axis=1).sum())
 
 
-def motion_heading(points: np.ndarray, fallback: float = 0.0) -> np.ndarray:
+def motion_heading(points: np.ndarray, fallback: float = 0.0,
+                   min_horizontal: float = 0.0) -> np.ndarray:
     """(N,) yaw of the horizontal direction of motion at each sample (the next segment's; the
-    last sample keeps the previous one; a vertical or zero move keeps the previous heading)."""
+    last sample keeps the previous one; a vertical or zero move keeps the previous heading).
+
+    `min_horizontal` in [0, 1): a segment whose horizontal length is at most that share of its
+    3D length counts as vertical (a climb of 2.5 m with 6 cm of drift has no direction worth
+    turning to)."""
     points = np.asarray(points, dtype=float)
     n = len(points)
     if n < 2:
         return np.full(n, fallback)
     d = np.diff(points[:, :2], axis=0)
-    moving = np.linalg.norm(d, axis=1) > 1e-9
+    horizontal = np.linalg.norm(d, axis=1)
+    moving = horizontal > 1e-9
+    if min_horizontal > 0.0:
+        moving &= horizontal > min_horizontal * np.linalg.norm(np.diff(points, axis=0), axis=1)
     yaw = np.arctan2(d[:, 1], d[:, 0])
     # Carry the last valid yaw forward over stationary or vertical segments.
     idx = np.where(moving, np.arange(len(d)), -1)
