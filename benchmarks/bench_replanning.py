@@ -142,14 +142,16 @@ ABLATION_COLUMNS = ("mean_m", "sd_m", "min_m", "abs_error_m", "map_mean_m", "map
                     "multibeam", "camera", "step_median_ms", "step_p95_ms")
 
 
-def ablation(seeds: int, jobs: int, noise: str, error: float, extra=()) -> list[dict]:
+def ablation(seeds: int, jobs: int, noise: str, error: float, extra=(),
+             first_seed: int = 0) -> list[dict]:
     """Runs the ablation and prints its tables (markdown); returns the rows."""
-    tasks = [(seed, optimizer, noise, error, tuple(extra)) for seed in range(seeds)
+    tasks = [(seed, optimizer, noise, error, tuple(extra))
+             for seed in range(first_seed, first_seed + seeds)
              for optimizer in ("stomp", "none")]
     with multiprocessing.get_context("spawn").Pool(jobs) as pool:
         rows = pool.map(ablation_run, tasks, chunksize=1)
     print(f"\nbreakwater, prior error {error} m, navigation drift, sonar_noise {noise}, "
-          f"seeds 0-{seeds - 1}, {jobs} dives at once"
+          f"seeds {first_seed}-{first_seed + seeds - 1}, {jobs} dives at once"
           + (f", {' '.join(extra)}" if extra else "") + "\n")
     print("| seed | optimizer | mean d | sd d | min d | mean abs(d - Omega) | map mean | map sd "
           "| min clearance: dive / survey | multibeam | camera | step median / p95 (ms) |")
@@ -188,6 +190,8 @@ def main() -> None:
     parser.add_argument("--ablation", type=int, default=0, metavar="N",
                         help="run the stomp / none ablation over N seeds instead")
     parser.add_argument("--jobs", type=int, default=2, help="ablation dives at once")
+    parser.add_argument("--first-seed", type=int, default=0,
+                        help="the ablation's seeds are first-seed .. first-seed + N - 1")
     parser.add_argument("--json", help="write the ablation's rows to this file")
     parser.add_argument("--figure", help="draw the ablation's figure (PNG) to this file")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -197,10 +201,11 @@ def main() -> None:
     if args.ablation:
         print(machine())
         start = time.perf_counter()
-        rows = ablation(args.ablation, args.jobs, args.noise, args.error, args.set)
+        rows = ablation(args.ablation, args.jobs, args.noise, args.error, args.set,
+                        args.first_seed)
         print(f"\n{len(rows)} dives in {time.perf_counter() - start:.0f} s")
         if args.figure:
-            draw_ablation(rows, args.figure)
+            draw_ablation(rows, args.figure, seed=args.first_seed)
         if args.json:
             with open(args.json, "w") as f:
                 json.dump([{k: v for k, v in r.items() if k != "track"} for r in rows], f,
