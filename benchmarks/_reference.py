@@ -17,10 +17,8 @@ import subprocess
 import time
 
 import numpy as np
-from pydrake.systems.analysis import Simulator
 
 from drake_auv.planning import Path
-from drake_auv.vehicle.diagram import build_tracking_diagram
 
 SIM_SECONDS = 600.0
 
@@ -36,7 +34,12 @@ def lawnmower() -> Path:
 
 def vehicle_real_time_factor(scene=None) -> float:
     """Simulated over wall seconds of 600 s of `lawnmower` tracking (one run); with a
-    `Scene`, the Meshcat visualiser records meanwhile."""
+    `Scene`, the Meshcat visualiser records meanwhile. (Drake is imported here, so that
+    `machine` serves a benchmark run in a Python without it.)"""
+    from pydrake.systems.analysis import Simulator
+
+    from drake_auv.vehicle.diagram import build_tracking_diagram
+
     diagram, handles = build_tracking_diagram(lawnmower(), scene=scene)
     simulator = Simulator(diagram)
     simulator.Initialize()
@@ -53,19 +56,24 @@ def reference_factor(runs: int = 3) -> float:
 
 
 def machine() -> str:
-    """CPU model, cores, load average, date, Python and Drake versions: one line."""
+    """CPU model, cores, load average, date, Python and Drake versions: one line ("drake not
+    installed" in a Python without it)."""
     try:
         lscpu = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
         model = next(line.split(":", 1)[1].strip() for line in lscpu.splitlines()
                      if line.startswith("Model name"))
     except (OSError, subprocess.CalledProcessError, StopIteration):
         model = platform.processor() or platform.machine()
-    from importlib.metadata import version
+    from importlib.metadata import PackageNotFoundError, version
 
+    try:
+        drake = f"drake {version('drake')}"
+    except PackageNotFoundError:
+        drake = "drake not installed"
     load = ", ".join(f"{x:.2f}" for x in os.getloadavg())
     return (f"machine: {model}, {os.cpu_count()} cores, load average {load}; "
             f"{datetime.date.today().isoformat()}; Python {platform.python_version()}, "
-            f"drake {version('drake')}")
+            f"{drake}")
 
 
 def print_reference(factor: float) -> None:

@@ -35,11 +35,8 @@ prints one line and moves on):
 from __future__ import annotations
 
 import argparse
-import datetime
 import importlib.metadata
 import os
-import platform
-import subprocess
 import sys
 import time
 
@@ -54,30 +51,14 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-try:  # the replanner's map (numpy/scipy only); the worktree's copy
-    from drake_auv.replanning.section import ReplanningParameters, SliceMap, replan_section
-except ImportError:
-    SliceMap = None
+# numpy/scipy only: they import in a Python without Drake
+from _reference import machine  # noqa: E402
+from drake_auv.planning.polyline import resample  # noqa: E402
+from drake_auv.replanning.section import (ReplanningParameters, SliceMap,  # noqa: E402
+                                           replan_section)
 
 OMEGA, CLEARANCE, DEPTH, BAND, VOXEL = 6.0, 3.0, -5.0, 1.5, 0.5  # m
 CHECK_STEP, COST_STEP = 0.25, 0.5  # m, motion validity / motion cost spacing
-
-
-def machine() -> str:
-    try:
-        from _reference import machine as reference_machine  # imports pydrake
-        return reference_machine()
-    except ImportError:
-        pass
-    try:
-        lscpu = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
-        model = next(line.split(":", 1)[1].strip() for line in lscpu.splitlines()
-                     if line.startswith("Model name"))
-    except StopIteration:
-        model = platform.processor() or "unknown CPU"
-    load = "/".join(f"{v:.2f}" for v in os.getloadavg())
-    return (f"machine: {model}, {os.cpu_count()} cores, load {load}, "
-            f"{datetime.datetime.now():%Y-%m-%d %H:%M}, Python {platform.python_version()}")
 
 
 def voxels() -> np.ndarray:
@@ -115,12 +96,6 @@ def contour(r: float = OMEGA, step: float = 0.05) -> np.ndarray:
 
 def arclength(p: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
-
-
-def resample(p: np.ndarray, step: float) -> np.ndarray:
-    s = arclength(p)
-    q = np.append(np.arange(0.0, s[-1], step), s[-1])
-    return np.column_stack([np.interp(q, s, p[:, k]) for k in range(3)])
 
 
 def sections(n: int, seed: int, r: float = OMEGA) -> list[np.ndarray]:
@@ -243,16 +218,15 @@ def per_check_us(tree, local, lo, hi, seed: int, n: int = 20000):
     t = time.perf_counter()
     tree.query(pts, distance_upper_bound=CLEARANCE)
     out["cKDTree.query, one batch"] = 1e6 * (time.perf_counter() - t) / n
-    if SliceMap is not None:
-        smap = SliceMap(local, (DEPTH, DEPTH), BAND, CLEARANCE, box=(lo, hi))
-        m = n // 4
-        t = time.perf_counter()
-        for s in states[:m]:
-            smap.clearance(np.array([[s[0], s[1], s[2]]]), CLEARANCE)
-        out["SliceMap.clearance"] = 1e6 * (time.perf_counter() - t) / m
-        t = time.perf_counter()
-        smap.clearance(pts, CLEARANCE)
-        out["SliceMap.clearance, one batch"] = 1e6 * (time.perf_counter() - t) / n
+    smap = SliceMap(local, (DEPTH, DEPTH), BAND, CLEARANCE, box=(lo, hi))
+    m = n // 4
+    t = time.perf_counter()
+    for s in states[:m]:
+        smap.clearance(np.array([[s[0], s[1], s[2]]]), CLEARANCE)
+    out["SliceMap.clearance"] = 1e6 * (time.perf_counter() - t) / m
+    t = time.perf_counter()
+    smap.clearance(pts, CLEARANCE)
+    out["SliceMap.clearance, one batch"] = 1e6 * (time.perf_counter() - t) / n
     return out
 
 
@@ -269,9 +243,8 @@ def main():
     ou.setLogLevel(ou.LOG_ERROR)
     ou.RNG.setSeed(args.seed + 1)  # OMPL's seed of seeds (time-limited solves still vary)
     print(machine())
-    where = sys.modules[SliceMap.__module__].__file__ if SliceMap else None
-    print(f"ompl {importlib.metadata.version('ompl')}, numpy {np.__version__}; SliceMap "
-          f"{'from ' + where if where else 'not importable'}")
+    print(f"ompl {importlib.metadata.version('ompl')}, numpy {np.__version__}; SliceMap from "
+          f"{sys.modules[SliceMap.__module__].__file__}")
     occupied = voxels()
     secs = sections(args.sections, args.seed)
     print(f"{len(occupied)} voxels; {len(secs)} sections, "
@@ -308,8 +281,6 @@ def bench_set(occupied, secs, runs):
     print(f"straight chord valid in {np.mean(chord_ok):.0%} of sections; mean |d - {OMEGA:.0f}| "
           f"(m): section polyline {ref[:, 0].mean():.3f}, straight chord {ref[:, 1].mean():.3f}")
     for planner, limit, which in runs:
-        if SliceMap is None and (which == "SliceMap" or planner == "STOMP"):
-            continue
         rows = []
         for sec in secs:
             lo, hi = sec.min(axis=0) - [6.0, 6.0, 4.0], sec.max(axis=0) + [6.0, 6.0, 4.0]

@@ -16,9 +16,11 @@ mission's real-time factor over the reference's, and the step's median in vehicl
 
 With `--ablation N`, instead: the optimiser's contribution (issue 11), the breakwater mission
 (5 m prior error, navigation drift, `sonar_noise: realistic` unless `--noise`) over seeds
-0 .. N-1 with `replanner.optimizer` stomp and none: true distance to the block (mean, sd,
-min, mean |d - Omega|), distance to the on-line map's voxels on the block, contacts (minimum
-clearance to anything over the dive, and over its replanned survey phase), multibeam and camera coverage, replanning step median and p95; per seed and averaged.
+F .. F+N-1 (`--first-seed`, default 0) with `replanner.optimizer` stomp and none: true
+distance to the block (mean, sd, min, mean |d - Omega|), distance to the on-line map's voxels
+on the block, contacts (minimum clearance to anything over the dive, and over its replanned
+survey phase), multibeam and camera coverage, replanning step median and p95; per seed and
+averaged. `--set` adds mission overrides to every dive.
 Runs `--jobs` dives at once (each builds its own Diagram from the mission and seed).
 
     .venv/bin/python benchmarks/bench_replanning.py [--error 5] [--seed 0] [--noise realistic]

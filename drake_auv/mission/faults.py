@@ -42,10 +42,11 @@ class SonarSilence(LeafSystem):
         model = AbstractValue.Make(SonarReturns.empty(max_range))
         self.returns_input = self.DeclareAbstractInputPort("returns_in", model)
         self.returns_output = self.DeclareAbstractOutputPort(
-            "returns", lambda: AbstractValue.Make(SonarReturns.empty(max_range)), self._calc,
+            "returns", lambda: AbstractValue.Make(SonarReturns.empty(max_range)),
+            self._calc_returns,
             prerequisites_of_calc={self.all_input_ports_ticket(), self.time_ticket()})
 
-    def _calc(self, context, output):
+    def _calc_returns(self, context, output):
         returns = self.returns_input.Eval(context)
         silent = self.start <= returns.time < self.end and self.start <= context.get_time()
         output.set_value(silenced(returns) if silent else returns)
@@ -62,10 +63,10 @@ class ThrusterFailure(LeafSystem):
         self.index, self.start = THRUSTER_NAMES.index(thruster), float(start)
         self.command_input = self.DeclareVectorInputPort("thrust_command", NUM_THRUSTERS)
         self.thrust_output = self.DeclareVectorOutputPort(
-            "thrust", NUM_THRUSTERS, self._calc,
+            "thrust", NUM_THRUSTERS, self._calc_thrust,
             prerequisites_of_calc={self.all_input_ports_ticket(), self.time_ticket()})
 
-    def _calc(self, context, output):
+    def _calc_thrust(self, context, output):
         thrust = self.command_input.Eval(context).copy()
         if context.get_time() >= self.start:
             thrust[self.index] = 0.0
@@ -83,10 +84,10 @@ class NavigationJump(LeafSystem):
             raise ValueError(f"NavigationJump offset must be 2 finite numbers, got {offset}")
         self.estimated_input = self.DeclareVectorInputPort("estimated_in", STATE_SIZE)
         self.estimated_state_output = self.DeclareVectorOutputPort(
-            "estimated_state", STATE_SIZE, self._calc,
+            "estimated_state", STATE_SIZE, self._calc_estimated_state,
             prerequisites_of_calc={self.all_input_ports_ticket(), self.time_ticket()})
 
-    def _calc(self, context, output):
+    def _calc_estimated_state(self, context, output):
         x = self.estimated_input.Eval(context).copy()
         if context.get_time() >= self.time:
             x[:2] += self.offset

@@ -12,8 +12,8 @@ At each replanning step, with the vehicle at x (navigation frame):
    the vehicle's projection on the nominal path, has passed are marked visited (progress, not
    nearness to the waypoints, which the vehicle may never approach when the prior map is
    wrong).
-`replan_section` runs `passed_index` and 1-3. Names: the on-line map is `octree_map` (the reference's M);
-STOMP's smoothing matrix is `StompMatrices.smoothing`.
+`replan_section` runs `passed_index` and 1-3. Names: the on-line map is `octree_map` (the
+reference's M); STOMP's smoothing matrix is `StompMatrices.smoothing`.
 
 Choices the reference leaves open (docs/replanning.md): the offset Omega is kept in the
 horizontal plane against occupied voxels within a depth band around the trajectory (the slice
@@ -215,6 +215,17 @@ class _DistanceField2D:
         return self.field[idx[0], idx[1]] - self.cell * np.sqrt(0.5)
 
 
+@lru_cache(maxsize=8)
+def _ball_offsets(radius: float) -> np.ndarray:
+    """(m, 3) integer grid offsets within `radius` + sqrt(3) cells of the origin: every
+    corner of the cells of points within `radius` cells."""
+    reach = radius + np.sqrt(3.0)
+    r = int(np.ceil(reach))
+    grid = np.arange(-r, r + 1)
+    offsets = np.stack(np.meshgrid(grid, grid, grid, indexing="ij"), axis=-1).reshape(-1, 3)
+    return offsets[np.einsum("ij,ij->i", offsets, offsets) <= reach * reach]
+
+
 class _TubeField3D:
     """The exact 3D distance to a KD-tree's points at the grid nodes (spacing `cell`, m)
     around a trajectory (N, 3), read by trilinear interpolation: NaN where a point's cell has
@@ -231,19 +242,13 @@ class _TubeField3D:
         self.origin = np.floor((trajectory.min(axis=0) - pad) / cell) * cell - cell
         self.shape = tuple(np.floor((trajectory.max(axis=0) + pad - self.origin) / cell)
                            .astype(int) + 3)
-        reach = pad / cell + np.sqrt(3.0)  # cells: every corner of a point within pad
-        r = int(np.ceil(reach))
-        grid = np.arange(-r, r + 1)
-        offsets = np.stack(np.meshgrid(grid, grid, grid, indexing="ij"), axis=-1).reshape(-1, 3)
-        offsets = offsets[np.einsum("ij,ij->i", offsets, offsets) <= reach * reach]
         centres = np.rint((trajectory - self.origin) / cell).astype(int)
-        nodes = (centres[:, None, :] + offsets[None]).reshape(-1, 3)
+        nodes = (centres[:, None, :] + _ball_offsets(pad / cell)[None]).reshape(-1, 3)
         nodes = nodes[np.all((nodes >= 0) & (nodes < self.shape), axis=1)]
         flat = np.unique(np.ravel_multi_index(nodes.T, self.shape))
         self.field = np.full(self.shape, np.nan)
         node_points = np.column_stack(np.unravel_index(flat, self.shape)) * cell + self.origin
         self.field.flat[flat] = tree.query(node_points)[0]
-        self.nodes = len(flat)
 
     def interpolate(self, points: np.ndarray) -> np.ndarray:
         """(n,) trilinear interpolation at `points` (n, 3); NaN outside the computed nodes."""
