@@ -139,3 +139,35 @@ def localise(mission: VehicleMission, lonlat_to_local, north_azimuth=None) -> tu
                              None if it.start_depth is None else -float(it.start_depth),
                              it.speed, float(it.tolerance), float(it.hold_s), yaw))
     return tuple(legs)
+
+
+@dataclass(frozen=True)
+class FlownMission:
+    """A vehicle mission as one leg flies it.
+
+    Attributes:
+        autopilot: "cola2" or "ardusub" (`items.AUTOPILOTS`).
+        legs: its items in the local frame (`items.localise`), at least one.
+        heave_in_3d: COLA2's heave_in_3D (depth interpolated along sections).
+        default_speed: m/s where an item gives none (ArduSub before any DO_CHANGE_SPEED).
+        source: the file's name, for messages.
+    """
+
+    autopilot: str
+    legs: tuple[LocalLeg, ...]
+    heave_in_3d: bool = False
+    default_speed: float = 0.5
+    source: str = ""
+
+    def __post_init__(self):
+        if self.autopilot not in AUTOPILOTS:
+            raise ValueError(f"FlownMission autopilot must be one of {AUTOPILOTS}, got "
+                             f"{self.autopilot!r}")
+        if not self.legs:
+            raise ValueError(f"{self.source or 'the mission'} has no item to fly")
+        if not (np.isfinite(self.default_speed) and self.default_speed > 0):
+            raise ValueError(f"FlownMission default_speed must be > 0 m/s, got "
+                             f"{self.default_speed}")
+
+    def speed(self, leg: LocalLeg) -> float:
+        return leg.speed if leg.speed is not None else self.default_speed

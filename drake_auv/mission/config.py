@@ -388,6 +388,35 @@ class SurveyStep:
 
 
 @dataclass(frozen=True)
+class FlyStep:
+    """An exported vehicle mission flown the way its autopilot executes it
+    (`drake_auv.autopilot`): COLA2 goto/section/park or ArduSub AUTO waypoints.
+
+    Attributes:
+        file: the mission file, relative to the mission file: COLA2 mission XML (`.xml`) or a
+            QGroundControl plan (`.plan`, flown as ArduSub AUTO); the extension names the
+            format.
+        heave_in_3d: COLA2 only: the vehicle is configured with heave_in_3D (depth
+            interpolated along each section).
+        speed: m/s where the file commands none (ArduSub before its first DO_CHANGE_SPEED).
+        max_time_s: cap, s (None: the file's nominal duration times `limits.time_margin`).
+    """
+
+    KIND: ClassVar[str] = "fly"
+    file: Path
+    heave_in_3d: bool = False
+    speed: float = 0.5
+    max_time_s: float | None = None
+
+    @property
+    def autopilot(self) -> str:
+        return FLY_FORMATS[self.file.suffix.lower()]
+
+
+FLY_FORMATS = {".xml": "cola2", ".plan": "ardusub"}
+
+
+@dataclass(frozen=True)
 class SonarSilentFault:
     """A sonar that returns nothing from `start_s` for `duration_s` s (None: no fault).
     Attributes: sensor: "multibeam", "profiler" or "both"."""
@@ -434,8 +463,8 @@ class FaultsSpec:
                 if (f.time_s if name == "navigation_jump" else f.start_s) is not None}
 
 
-Step = PlanStep | FollowStep | SurveyStep
-STEP_KINDS = {cls.KIND: cls for cls in (PlanStep, FollowStep, SurveyStep)}
+Step = PlanStep | FollowStep | SurveyStep | FlyStep
+STEP_KINDS = {cls.KIND: cls for cls in (PlanStep, FollowStep, SurveyStep, FlyStep)}
 
 
 @dataclass(frozen=True)
@@ -500,6 +529,9 @@ _CHECKS = {
         corner_weight=_Number(0.0, 1.0), min_depth_m=_Number(0.0, 100.0, "m"),
         max_time_s=_TIME),
     SurveyStep: dict(replanning=_Bool(), max_time_s=_TIME),
+    FlyStep: dict(file=_File("a COLA2 mission (.xml) or QGroundControl plan (.plan) file, "
+                             "relative to the mission file"),
+                  heave_in_3d=_Bool(), speed=_Number(0.05, 1.4, "m/s"), max_time_s=_TIME),
     SonarSilentFault: dict(sensor=_Choice(("multibeam", "profiler", "both")),
                            start_s=_Number(0.0, unit="s", nullable=True),
                            duration_s=_Number(0.0, unit="s", low_open=True)),
@@ -676,7 +708,23 @@ def _follow_rule(reader: _Reader, v: dict, where: str):
                             "null for a horizontal follow (it ends after `loops` laps)")
 
 
-_RULES = {SiteSpec: _site_rule, PlanStep: _plan_rule, FollowStep: _follow_rule}
+def _fly_rule(reader: _Reader, v: dict, where: str):
+    path = v["file"]
+    allowed = _CHECKS[FlyStep]["file"].allowed
+    if path is None:
+        reader.fail(f"{where}.file", "missing (required)", allowed)
+    if path.suffix.lower() not in FLY_FORMATS:
+        reader.fail(f"{where}.file", f"{path.name}: unknown mission format "
+                    f"{path.suffix or '(no extension)'!r}", ", ".join(FLY_FORMATS))
+    if not path.is_file():
+        reader.fail(f"{where}.file", f"{path.name} not found ({path})", allowed)
+    if v["heave_in_3d"] and FLY_FORMATS[path.suffix.lower()] != "cola2":
+        reader.fail(f"{where}.heave_in_3d", "only for COLA2 missions (.xml)",
+                    "false for a .plan file")
+
+
+_RULES = {SiteSpec: _site_rule, PlanStep: _plan_rule, FollowStep: _follow_rule,
+          FlyStep: _fly_rule}
 
 
 def mission_from_dict(raw: dict, base_dir, label: str, source: Path | None = None

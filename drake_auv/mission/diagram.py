@@ -5,7 +5,8 @@ and `build_mission_diagram` is the one place that builds the whole mission.
 
     nominal_plan ──> path_reference ──┐
          │      profile_following ────┤ reference_switch ─> tracker ─> allocation ─> dynamics
-         └──────────> replanner ──────┘        ^ behaviour                               │
+         └──────────> replanner ──────┤        ^ behaviour                               │
+        dvl ──> autopilot (fly) ──────┘        │                                         │
                   ^ map      ^ status    mission_supervisor <─ path/replanner status     │
              octree_mapper   └──────────────── leg ─────> behaviours, profiler head      │
                   ^                                                                      │
@@ -32,6 +33,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, LogVectorOutput, PortSwitch
 
+from drake_auv.autopilot.pilot import AutopilotPilot
 from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.mapping.mapper import OctreeMapper
@@ -42,6 +44,7 @@ from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
 from drake_auv.perception.controller import ProfileFollowingController
 from drake_auv.replanning.replanner import Replanner
+from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.sonar.profiler import FOLLOWING_SETUP, PencilBeamProfiler
 from drake_auv.vehicle.diagram import VehicleSystems, add_girona500
@@ -51,7 +54,7 @@ LOG_PERIOD = 0.1  # s, of the state logs
 SUPERVISOR_PERIOD = 0.5  # s
 CAMERA_SIDE = {"port": (0.0, 1.0, 0.0), "starboard": (0.0, -1.0, 0.0),
                "down": (0.0, 0.0, -1.0), "forward": (1.0, 0.0, 0.0)}
-BEHAVIOURS = ("path", "follow", "replan", "response")  # the reference switch's inputs
+BEHAVIOURS = ("path", "follow", "replan", "autopilot", "response")  # the switch's inputs
 
 
 @dataclass
@@ -73,6 +76,8 @@ class MissionHandles:
     logs: dict  # name -> VectorLogSink: state, estimated_state, reference, leg, response,
     # profile, replanning
     faults: dict  # fault name -> the system injecting it (only the mission's faults)
+    autopilot: AutopilotPilot | None = None  # with a fly step: the pilot and its DVL
+    dvl: DvlAltimeter | None = None
 
 
 def add_faults(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec):
@@ -126,11 +131,29 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
     return multibeam, profiler, returns
 
 
+def add_autopilot(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
+                  spec: MissionSpec, plan: MissionPlan, estimated):
+    """The DVL (ray casting on the true world, realistic unless the sonars are clean) and the
+    autopilot pilot that flies the fly steps' exported files on the DVL's seabed; returns
+    (pilot, dvl), (None, None) without a fly step."""
+    if not plan.autopilot_legs:
+        return None, None
+    dvl = builder.AddNamedSystem("dvl", DvlAltimeter(
+        caster, noise=spec.sonar_noise.to_noise() is not None, seed=spec.seed + 2))
+    builder.Connect(vehicle.dynamics.state_output, dvl.true_state_input)
+    builder.Connect(estimated, dvl.estimated_state_input)
+    pilot = builder.AddNamedSystem("autopilot", AutopilotPilot(plan.autopilot_legs))
+    builder.Connect(dvl.seabed_output, pilot.seabed_input)
+    return pilot, dvl
+
+
 def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, mapper,
-                   spec: MissionSpec, plan: MissionPlan, site: Site, estimated, returns):
-    """The nominal plan's source, the three behaviours, the reference switch and the
-    supervisor (watching the sonars' `returns`, the reference and the map), wired. Returns
-    (path_reference, controller, replanner, supervisor, switch)."""
+                   spec: MissionSpec, plan: MissionPlan, site: Site, estimated, returns,
+                   pilot: AutopilotPilot | None = None):
+    """The nominal plan's source, the behaviours (with `pilot`, the autopilot flying exported
+    files), the reference switch and the supervisor (watching the sonars' `returns`, the
+    reference and the map), wired. Returns (path_reference, controller, replanner,
+    supervisor, switch)."""
     source = None
     if plan.nominal is not None:  # the off-line plan, as a signal
         source = builder.AddNamedSystem("nominal_plan",
@@ -161,6 +184,9 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
         builder.Connect(source.get_output_port(), replanner.nominal_input)
         builder.Connect(replanner.status_output, supervisor.replanner_status_input)
         behaviours["replan"] = replanner
+    if pilot is not None:
+        builder.Connect(pilot.status_output, supervisor.autopilot_status_input)
+        behaviours["autopilot"] = pilot
     for name, system in behaviours.items():
         builder.Connect(estimated, system.state_input)
         builder.Connect(supervisor.leg_output, system.leg_input)
@@ -223,8 +249,9 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
         resolution=spec.replanner.voxel_m))
     builder.Connect(returns["multibeam"], mapper.multibeam_input)
     builder.Connect(returns["profiler"], mapper.profiler_input)
+    pilot, dvl = add_autopilot(builder, caster, vehicle, spec, plan, estimated)
     path_reference, controller, replanner, supervisor, switch = add_behaviours(
-        builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns)
+        builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns, pilot)
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
                                                         max_range, 1.0 / multibeam.period)
     logs = {
@@ -256,5 +283,5 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,
                              controller, replanner, supervisor, camera, multibeam_coverage, logs,
-                             faults)
+                             faults, pilot, dvl)
     return diagram, handles

@@ -1,7 +1,8 @@
 """Legs: a mission's steps as the supervisor flies them, and when each one is done. Pure.
 
 A mission step becomes one or two legs: a transit to where the step begins, then the step's
-own behaviour (profile following, the nominal plan, or the replanner). A leg is done by its
+own behaviour (profile following, the nominal plan, the replanner, or an exported vehicle
+mission flown by the autopilot pilot, which needs no transit: its first item is one). A leg is done by its
 goal, judged only on what the vehicle knows (its estimated state, the behaviours' status, the
 operator's chart of the site), or by its time budget.
 """
@@ -12,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BEHAVIOURS = ("path", "follow", "replan")
-GOALS = ("arrive", "loops", "distance", "path_end", "replanner")
+BEHAVIOURS = ("path", "follow", "replan", "autopilot")
+GOALS = ("arrive", "loops", "distance", "path_end", "replanner", "autopilot")
 
 
 @dataclass(frozen=True)
@@ -28,7 +29,7 @@ class Leg:
             turns around `centre` (x, y); "distance" m along `direction` (x, y) from where the
             leg began, and shallower than `end_depth` m if given; "path_end" past the end of
             the path reference's path; "replanner" when the replanner has visited every
-            waypoint.
+            waypoint; "autopilot" when the autopilot pilot has flown the file's last item.
         max_duration: the leg ends anyway after this, s (a timed-out leg is reported).
         handover: an "arrive" leg ends as soon as the vehicle is within this distance of
             `target`, m (the next behaviour flies the rest; None: it ends on arrival).
@@ -79,10 +80,12 @@ def advance_progress(leg: Leg, progress: np.ndarray, x: np.ndarray) -> np.ndarra
 
 
 def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.ndarray,
-                 path_status: np.ndarray, replanner_status: np.ndarray) -> bool:
+                 path_status: np.ndarray, replanner_status: np.ndarray,
+                 autopilot_status: np.ndarray | None = None) -> bool:
     """Whether leg number `index` has reached its goal at time `t` s, from the estimated state
-    `x` (12), its progress record, the path reference's status `[leg, end_time]` and the
-    replanner's `[leg, finished, next_index]`."""
+    `x` (12), its progress record, the path reference's status `[leg, end_time]`, the
+    replanner's `[leg, finished, next_index]` and the autopilot pilot's `[leg, finished,
+    item]`."""
     if leg.goal == "arrive":
         distance = np.linalg.norm(x[:3] - np.asarray(leg.target))
         if leg.handover is not None and path_status[0] == index and distance <= leg.handover:
@@ -92,6 +95,9 @@ def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.nda
         return path_status[0] == index and t >= path_status[1]
     if leg.goal == "replanner":
         return replanner_status[0] == index and replanner_status[1] > 0
+    if leg.goal == "autopilot":
+        return (autopilot_status is not None and autopilot_status[0] == index
+                and autopilot_status[1] > 0)
     if leg.goal == "loops":
         return abs(progress[1]) >= 2.0 * np.pi * leg.loops
     along = (x[0] - progress[2]) * leg.direction[0] + (x[1] - progress[3]) * leg.direction[1]

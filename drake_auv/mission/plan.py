@@ -3,7 +3,9 @@
 `plan_mission` runs the `plan` step off-line on the site's prior map (the coverage planner, or
 the offset contour of the structure at one depth), then turns every simulated step into legs
 (`drake_auv.mission.legs`): a transit to where the step begins, then the step's behaviour,
-each with the parameters its LeafSystem needs and a time budget.
+each with the parameters its LeafSystem needs and a time budget. A `fly` step reads its
+exported file and places its items in the local frame (`flown_mission`); it needs no transit,
+its first item (a COLA2 goto, ArduSub's first waypoint) is one.
 
 Where a follow step begins, unless the file says: on the line from the vehicle's previous
 position to the structure's charted centre, `offset` + 4 m outside the structure's cross-
@@ -13,11 +15,14 @@ the target's footprint as the operator charts it, i.e. on the prior map (shifted
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from drake_auv.mission.config import FollowStep, MissionSpec, PlanStep, SurveyStep
+from drake_auv.autopilot.items import FlownMission, localise
+from drake_auv.autopilot.semantics import mission_duration
+from drake_auv.mission.config import (FlyStep, FollowStep, MissionFileError, MissionSpec,
+                                      PlanStep, SurveyStep)
 from drake_auv.mission.legs import Leg
 from drake_auv.mission.site import Site
 from drake_auv.perception.behaviours import EstimatorParams, FollowingParams
@@ -42,9 +47,10 @@ class MissionPlan:
         omega: the plan's offset, m (None without a plan step).
         method: the plan step's method ("coverage" or "contour"; the replanner's offset metric
             follows it).
-        legs: every leg in order; path_legs, follow_legs, replan_legs: the parameters of the
-            legs each behaviour flies, by leg index; profiler_planes: legs whose profiler
-            scans the vertical plane.
+        legs: every leg in order; path_legs, follow_legs, replan_legs, autopilot_legs: the
+            parameters of the legs each behaviour flies, by leg index (autopilot_legs: the
+            exported missions the fly steps fly); profiler_planes: legs whose profiler scans
+            the vertical plane.
         survey_speed: m/s along the nominal path (the plan step's).
         start_state: (12,) where the vehicle starts (local frame).
         budget: sum of the legs' time budgets, s.
@@ -62,6 +68,7 @@ class MissionPlan:
     survey_speed: float
     start_state: np.ndarray
     budget: float
+    autopilot_legs: dict[int, FlownMission] = field(default_factory=dict)
 
 
 def _plan_step(step: PlanStep, site: Site):
@@ -83,6 +90,52 @@ def _plan_step(step: PlanStep, site: Site):
         kwargs["min_area"] = step.min_area_m2
     plan = plan_coverage(site.prior, **kwargs)
     return plan.path, plan
+
+
+def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMission:
+    """The fly step's file read and placed in the site's local frame. Raises
+    MissionFileError (one line naming `where`) for a site without a CRS, a file that does not
+    parse, an item outside the world or above the sea surface."""
+    from drake_auv.autopilot.files import read_vehicle_mission
+    from drake_auv.planning.geo import GeoFrame
+
+    if site.prior.crs is None:
+        raise MissionFileError(label, where, "the site has no CRS, so the file's WGS 84 "
+                               "positions cannot be placed",
+                               "a site whose prior raster or site.crs gives its CRS")
+    try:
+        mission = read_vehicle_mission(step.file, step.autopilot, step.heave_in_3d)
+    except (ValueError, OSError) as err:
+        raise MissionFileError(label, f"{where}.file", " ".join(str(err).split()),
+                               f"a valid {step.file.suffix} {step.autopilot} mission") from None
+    geo = GeoFrame(site.prior)
+    legs = localise(mission, geo.from_lonlat, geo.grid_north_azimuth)
+    (x0, y0), (x1, y1) = site.world.bounds[:, :2]
+    for k, (item, leg) in enumerate(zip(mission.items, legs)):
+        points = [leg.end] + ([leg.start] if leg.start is not None else [])
+        if not all(x0 <= x <= x1 and y0 <= y <= y1 for x, y in points):
+            (sx0, sy0), (sx1, sy1) = site.to_site(site.world.bounds[:, :2])
+            raise MissionFileError(label, f"{where}.file", f"{step.file.name}: item {k + 1} "
+                                   f"at lon {item.lon:.6f}, lat {item.lat:.6f} lies outside "
+                                   "the world (a file for another site?)",
+                                   f"positions in x [{sx0:.1f}, {sx1:.1f}], y [{sy0:.1f}, "
+                                   f"{sy1:.1f}] m of the site's CRS {site.prior.crs}")
+        depths = [item.z] if item.z_mode == "depth" else []
+        depths += [item.start_depth] if item.start_depth is not None else []
+        if any(d < 0 for d in depths):
+            raise MissionFileError(label, f"{where}.file", f"{step.file.name}: item {k + 1} "
+                                   f"commands depth {min(depths):g} m, above the sea surface",
+                                   "depths >= 0 m (positive down)")
+    return FlownMission(mission.autopilot, legs, mission.heave_in_3d, step.speed,
+                        step.file.name)
+
+
+def _first_position(mission: FlownMission, site: Site) -> np.ndarray:
+    """(3,) where the fly step's first item puts the vehicle (altitude over the prior)."""
+    leg = mission.legs[0]
+    xy = np.asarray(leg.start if leg.start is not None else leg.end, float)
+    z = -leg.z if leg.z_mode == "depth" else float(site.prior.elevation_at(*xy)) + leg.z
+    return np.array([xy[0], xy[1], min(z, -0.5)])
 
 
 def charted_centre(site: Site) -> np.ndarray:
@@ -119,17 +172,22 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             method = step.method
             omega = step.omega
             survey_speed = step.speed
+    label = spec.source.name if spec.source is not None else spec.name
+    flown = {k: flown_mission(step, site, label, f"steps[{k}].fly")
+             for k, step in enumerate(spec.steps) if isinstance(step, FlyStep)}
     start = site.start_state
     if start is None:  # at the beginning of the first simulated step
         start = np.zeros(12)
         first = next(s for s in spec.steps if not isinstance(s, PlanStep))
-        if isinstance(first, SurveyStep):
+        if isinstance(first, FlyStep):
+            start[:3] = _first_position(flown[spec.steps.index(first)], site)
+        elif isinstance(first, SurveyStep):
             start[:3], start[5] = nominal.points[0], nominal.heading[0]
         else:
             xy = (site.to_local(np.asarray(first.start[:2], dtype=float))
                   if first.start is not None else charted_centre(site) + [-30.0, 0.0])
             start[:3] = (xy[0], xy[1], -(first.depth or 5.0))
-    legs, path_legs, follow_legs, replan_legs, planes = [], {}, {}, [], {}
+    legs, path_legs, follow_legs, replan_legs, planes, autopilot_legs = [], {}, {}, [], {}, {}
     position, yaw = np.asarray(start[:3], float), float(start[5])
     budget = 0.0
 
@@ -206,12 +264,20 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
                 index = add(Leg("survey", k, "path", "path_end", duration))
                 path_legs[index] = PathLeg("nominal", speed=survey_speed)
             position = nominal.points[-1]
+        elif isinstance(step, FlyStep):
+            mission = flown[k]
+            duration = step.max_time_s or (margin * mission_duration(
+                mission.legs, position, step.speed) + TIME_SLACK)
+            index = add(Leg("survey", k, "autopilot", "autopilot", duration))
+            autopilot_legs[index] = mission
+            last = mission.legs[-1]
+            position = np.array([*last.end, -last.z if last.z_mode == "depth" else
+                                 float(site.prior.elevation_at(*last.end)) + last.z])
     if not legs:
         raise ValueError(f"mission {spec.name!r} has no simulated step (follow or survey)")
     return MissionPlan(nominal, coverage, omega, method, tuple(legs), path_legs,
                        follow_legs, tuple(replan_legs), planes, survey_speed,
-                       np.asarray(start, float),
-                       budget)
+                       np.asarray(start, float), budget, autopilot_legs)
 
 
 def terrain_elevation(site: Site):

@@ -1,0 +1,130 @@
+"""`DvlAltimeter`: the altitude over the seabed as the vehicle's DVL measures it.
+
+A Doppler velocity log (the GIRONA 500's Teledyne RDI Explorer class) sends four beams in a
+Janus configuration, `beam_deg` from the body's -z axis, at 45, 135, 225 and 315 deg about it.
+Each beam's first hit on the true world gives a slant range; the DVL reports the altitude as
+the mean of the beams' vertical ranges (slant range times the cosine of the beam's angle to the
+world vertical, so roll and pitch are accounted for) and has bottom lock with at least
+`min_beams` valid beams. Noise: each beam's range gets a Gaussian error of
+`range_sigma_fraction` of the range plus `range_sigma_m`, and is lost with `dropout_prob`.
+Without bottom lock the altitude is NaN. Update n draws from `default_rng([seed, n])`.
+
+This is what an autopilot holding altitude reads (COLA2 altitude mode, ArduSub's frame 10 via
+its downward rangefinder); the true world reaches the mission only through this ray casting.
+
+Ports: inputs `true_state` (12); outputs `altitude` (1, m, NaN without bottom lock) and
+`seabed_elevation` (1: the measured seabed under the vehicle, `z_est - altitude`, with the
+`estimated_state` input (12): the elevation in the navigation frame, NaN without lock).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+from drake_auv.geometry.raycast import RayCaster
+from drake_auv.vehicle.control import rotation_world_body
+from drake_auv.vehicle.model import STATE_SIZE
+
+
+@dataclass(frozen=True)
+class DvlParams:
+    """A DVL's beams and errors (defaults: a 600 kHz RDI Explorer).
+
+    Attributes:
+        beam_deg: angle of each beam from the body's -z axis, deg, in [0, 60].
+        max_range: bottom-track range, m, > 0.
+        rate: measurements per second, in (0, 50].
+        range_sigma_fraction, range_sigma_m: range noise, a fraction of the range and m, >= 0.
+        dropout_prob: probability that a beam is lost, in [0, 1].
+        min_beams: valid beams needed for bottom lock, in 1..4.
+    """
+
+    beam_deg: float = 30.0
+    max_range: float = 80.0
+    rate: float = 5.0
+    range_sigma_fraction: float = 0.01
+    range_sigma_m: float = 0.02
+    dropout_prob: float = 0.02
+    min_beams: int = 3
+
+    def __post_init__(self):
+        checks = (("beam_deg", 0.0 <= self.beam_deg <= 60.0, "[0, 60] deg"),
+                  ("max_range", self.max_range > 0, "> 0 m"),
+                  ("rate", 0 < self.rate <= 50.0, "(0, 50] Hz"),
+                  ("range_sigma_fraction", self.range_sigma_fraction >= 0, ">= 0"),
+                  ("range_sigma_m", self.range_sigma_m >= 0, ">= 0 m"),
+                  ("dropout_prob", 0 <= self.dropout_prob <= 1, "[0, 1]"),
+                  ("min_beams", self.min_beams in (1, 2, 3, 4), "1, 2, 3 or 4"))
+        for name, ok, allowed in checks:
+            if not (np.isfinite(getattr(self, name)) and ok):
+                raise ValueError(f"DvlParams.{name} must be in {allowed}, got "
+                                 f"{getattr(self, name)}")
+
+    def beams_body(self) -> np.ndarray:
+        """(4, 3) unit beam directions in the body frame (x forward, y left, z up)."""
+        b = np.radians(self.beam_deg)
+        azimuth = np.radians([45.0, 135.0, 225.0, 315.0])
+        return np.column_stack([np.sin(b) * np.cos(azimuth), np.sin(b) * np.sin(azimuth),
+                                np.full(4, -np.cos(b))])
+
+
+def measure_altitude(caster: RayCaster, params: DvlParams, state: np.ndarray,
+                     rng: np.random.Generator | None = None) -> float:
+    """The DVL's altitude at the true `state` (12), m; NaN without bottom lock. `rng` None:
+    no noise."""
+    rot = rotation_world_body(state[3], state[4], state[5])
+    directions = params.beams_body() @ rot.T
+    ranges, _ = caster.cast_unit(np.asarray(state[:3], float), directions, params.max_range)
+    if rng is not None:
+        sigma = params.range_sigma_fraction * np.nan_to_num(ranges) + params.range_sigma_m
+        ranges = ranges + sigma * rng.standard_normal(4)
+        ranges[rng.random(4) < params.dropout_prob] = np.nan
+    vertical = ranges * -directions[:, 2]
+    valid = np.isfinite(vertical) & (vertical > 0)
+    return float(vertical[valid].mean()) if valid.sum() >= params.min_beams else float("nan")
+
+
+class DvlAltimeter(LeafSystem):
+    """The DVL's altitude, measured at `params.rate` (see the module docstring).
+
+    Args:
+        world: the true world's `RayCaster`.
+        params: the DVL (default `DvlParams()`); noise: False for a perfect DVL.
+        seed: of the noise draws.
+    """
+
+    def __init__(self, world: RayCaster, params: DvlParams | None = None, noise: bool = True,
+                 seed: int = 0):
+        super().__init__()
+        self.caster, self.params = world, params if params is not None else DvlParams()
+        self.noise, self.seed = bool(noise), int(seed)
+        self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
+        self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
+        self._measurement = self.DeclareDiscreteState(np.array([np.nan, 0.0]))  # altitude, n
+        self.DeclarePeriodicDiscreteUpdateEvent(1.0 / self.params.rate, 0.0,
+                                                self._update_measurement)
+        self.altitude_output = self.DeclareVectorOutputPort(
+            "altitude", 1, self._calc_altitude,
+            prerequisites_of_calc={self.discrete_state_ticket(self._measurement)})
+        self.seabed_output = self.DeclareVectorOutputPort(
+            "seabed_elevation", 1, self._calc_seabed_elevation,
+            prerequisites_of_calc={self.discrete_state_ticket(self._measurement),
+                                   self.input_port_ticket(
+                                       self.estimated_state_input.get_index())})
+
+    def _update_measurement(self, context, discrete_state):
+        n = int(context.get_discrete_state(self._measurement)[1])
+        rng = np.random.default_rng([self.seed, n]) if self.noise else None
+        altitude = measure_altitude(self.caster, self.params,
+                                    self.true_state_input.Eval(context), rng)
+        discrete_state.set_value(self._measurement, [altitude, n + 1])
+
+    def _calc_altitude(self, context, output: BasicVector):
+        output.SetAtIndex(0, context.get_discrete_state(self._measurement)[0])
+
+    def _calc_seabed_elevation(self, context, output: BasicVector):
+        altitude = context.get_discrete_state(self._measurement)[0]
+        output.SetAtIndex(0, self.estimated_state_input.Eval(context)[2] - altitude)
