@@ -43,9 +43,12 @@ def angle_stats(best: np.ndarray, areas: np.ndarray) -> tuple[float, float]:
 
 def near_distance(result: MissionResult) -> float:
     """The band (m) within which survey samples count for the distance statistics: 2 Omega
-    (2 x the largest following offset without a plan)."""
+    (2 x the largest following offset without a plan; every sample when neither is known, as
+    for a mission that only flies an exported file)."""
     if result.plan.omega is not None:
         return 2.0 * result.plan.omega
+    if not result.plan.follow_legs:
+        return float("inf")
     return 2.0 * max(step.params.offset for step in result.plan.follow_legs.values())
 
 
