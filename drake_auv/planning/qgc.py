@@ -172,6 +172,16 @@ class QGCMission:
         return _subset(self.waypoints, np.arange(a, b))
 
 
+def check_options(max_items, frames: str) -> None:
+    """ValueError naming the option when `max_items` or `frames` is out of range."""
+    if isinstance(max_items, bool) or not isinstance(max_items, (int, np.integer)) or max_items < 4:
+        raise ValueError(f"--max-items must be an integer >= 4 (home, DO_CHANGE_SPEED and two "
+                         f"waypoints), got {max_items!r}")
+    if frames not in ARDUSUB_FRAMES:
+        raise ValueError(f"--ardusub-frames must be one of {', '.join(ARDUSUB_FRAMES)}, got "
+                         f"{frames!r}")
+
+
 def budget_mission(plan, max_items: int = DEFAULT_MAX_ITEMS,
                    frames: str = "terrain") -> QGCMission:
     """The waypoints of `plan.path` for ArduSub within `max_items` per file (module docstring).
@@ -181,12 +191,7 @@ def budget_mission(plan, max_items: int = DEFAULT_MAX_ITEMS,
             >= 4.
         frames: "terrain" (frame 10 on lanes) or "depth" (frame 3 everywhere).
     """
-    if isinstance(max_items, bool) or not isinstance(max_items, (int, np.integer)) or max_items < 4:
-        raise ValueError(f"--max-items must be an integer >= 4 (home, DO_CHANGE_SPEED and two "
-                         f"waypoints), got {max_items!r}")
-    if frames not in ARDUSUB_FRAMES:
-        raise ValueError(f"--ardusub-frames must be one of {', '.join(ARDUSUB_FRAMES)}, got "
-                         f"{frames!r}")
+    check_options(max_items, frames)
     p, surface, path = plan.parameters, plan.surface, plan.path
     labels = ALTITUDE_LABELS if frames == "terrain" else ()
     omega, min_depth = p["omega"], p["min_depth"]
