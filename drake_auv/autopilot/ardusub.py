@@ -26,7 +26,8 @@ from drake_auv.planning.surface import TerrainSurface
 
 
 def replay_ardusub(legs, seabed, start, spacing: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Where ArduSub AUTO takes the vehicle along `legs`, sampled every `spacing` m or closer.
+    """Where ArduSub AUTO takes the vehicle along `legs`, sampled every `spacing` m or closer
+    along each leg's track (x, y and its held coordinate: elevation or altitude).
 
     Args:
         legs: `LocalLeg`s of kind "waypoint" (`items.localise` of a QGC plan); z_mode "depth"

@@ -29,10 +29,10 @@ REFERENCE_TABLE3 = {
 def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", surface=None) -> dict:
     """A FeatureCollection (RFC 7946) of the path's segments in WGS 84, Shapefile-safe.
 
-    One 2D LineString [[lon, lat], [lon, lat]] (degrees) per segment between consecutive
-    samples: RFC 7946's third coordinate is a height above the WGS 84 ellipsoid, and the path's
-    vertical references are depths below mean sea level and altitudes above the seabed, so they
-    are properties. Properties (scalars, names of at most 10 characters, as a Shapefile's DBF
+    One 2D LineString [[lon, lat], [lon, lat]] (degrees, 6 decimals) per segment between
+    consecutive samples: RFC 7946's third coordinate is a height above the WGS 84 ellipsoid,
+    and the path's vertical references are depths below mean sea level and altitudes above the
+    seabed, so they are properties. Properties (scalars, names of at most 10 characters, as a Shapefile's DBF
     takes them), a segment taking its end sample's label like `Path.length_by_label`:
     `label`; `run` (index of the run of one label); `seq` (segment index); `heave`
     ("altitude" on lanes, "depth" elsewhere); `depth_a`, `depth_b` (m below the sea surface at
@@ -41,7 +41,7 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", surface=None)
     azimuth, degrees clockwise from true north, and depression, degrees below the horizontal;
     90 looks straight down). A single-sample path gives one zero-length segment."""
     pts = path.points
-    lonlat = np.round(geo.to_lonlat(pts[:, :2]), 9)
+    lonlat = np.round(geo.to_lonlat(pts[:, :2]), 6)  # RFC 7946 section 11.2: about 0.1 m
     s = path.sensor_dir
     azimuth = np.degrees(np.mod(np.arctan2(s[:, 0], s[:, 1])
                                 + geo.grid_north_azimuth(pts[:, :2]), 2 * np.pi))
