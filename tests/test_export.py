@@ -32,18 +32,29 @@ def read_cola2(filename):
     return ll, mans
 
 
-def read_qgc(filename):
-    plan = json.loads(FilePath(filename).read_text())
-    assert plan["fileType"] == "Plan" and plan["mission"]["version"] == 2
-    items = plan["mission"]["items"]
-    assert all(i["type"] == "SimpleItem" and i["command"] == 16 for i in items)
+def read_qgc(outdir):
+    """The waypoints of mission.plan or mission_1.plan, ... (DO_CHANGE_SPEED first in each)."""
+    files = sorted(FilePath(outdir).glob("mission*.plan"))
+    assert files
+    items = []
+    for f in files:
+        plan = json.loads(f.read_text())
+        assert plan["fileType"] == "Plan" and plan["mission"]["version"] == 2
+        its = plan["mission"]["items"]
+        assert its[0]["command"] == 178
+        assert all(i["type"] == "SimpleItem" and i["command"] == 16 for i in its[1:])
+        items += its[1:]
     return plan, items
 
 
 def read_geojson(filename):
+    """The file and its (lon, lat, elevation) vertices: 2D positions, depths as properties."""
     gj = json.loads(FilePath(filename).read_text())
     assert "crs" not in gj  # RFC 7946: WGS 84, no crs member
-    return gj, np.vstack([f["geometry"]["coordinates"] for f in gj["features"]])
+    return gj, np.vstack([np.column_stack([f["geometry"]["coordinates"],
+                                           [-f["properties"]["depth_a"],
+                                            -f["properties"]["depth_b"]]])
+                          for f in gj["features"]])
 
 
 def nearest_distance(points, samples):
@@ -68,7 +79,7 @@ def check_exports(plan, outdir, origin=None):
         for tag in ("initial_latitude", "initial_longitude", "initial_depth", "final_altitude",
                     "surge_velocity", "tolerance_xy", "no_altitude_goes_up"):
             assert m.find(tag) is not None, tag
-    qgc, items = read_qgc(outdir / "mission.plan")
+    qgc, items = read_qgc(outdir)
     p = np.array([i["params"][4:7] for i in items])
     frames = np.array([i["frame"] for i in items])
     assert set(frames.tolist()) <= {3, 10}
@@ -82,9 +93,8 @@ def check_exports(plan, outdir, origin=None):
     assert nearest_distance(back, pts).max() < 0.1
     assert nearest_distance(pts, back).max() < 0.1  # every sample is in the file
     for f in gj["features"]:
-        n = len(f["geometry"]["coordinates"])
-        assert len(f["properties"]["sensor_azimuth_deg"]) == n
-        assert f["properties"]["heave_mode"] in ("altitude", "depth")
+        assert len(f["geometry"]["coordinates"]) == 2
+        assert f["properties"]["heave"] in ("altitude", "depth")
     return coords[:, :2]
 
 
@@ -135,8 +145,9 @@ def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
     ll, _ = read_cola2(tmp_path / "mission.xml")
     back = np.column_stack([geo.from_lonlat(ll[:, :2]), -ll[:, 2]])
     assert nearest_distance(back, path.points).max() < 0.1
-    _, items = read_qgc(tmp_path / "mission.plan")
-    assert len(items) == len(ll) - 1  # the COLA2 park repeats the last waypoint
+    _, items = read_qgc(tmp_path)
+    p = np.array([i["params"][4:6] for i in items])
+    assert nearest_distance(geo.from_lonlat(p[:, ::-1]), path.points[:, :2]).max() < 0.1
     # The tile name's extent; the raster itself overhangs it by 0.00051 deg on every side
     # (its transform: 5.5 cells), and the path covers the raster's cell centres.
     lon0, lon1, lat0, lat1 = (float(v) for v in re.findall(r"-?\d+\.\d+", tile.stem))

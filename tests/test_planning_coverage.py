@@ -210,7 +210,9 @@ def test_monterey_tiles(tile):
     check_clearance(plan, 20.0, n_check=40)
     assert plan.path.points[:, 2].max() <= -1.0 and plan.lawnmower.points[:, 2].max() <= -1.0
     gj = json.loads(json.dumps(path_to_geojson(plan.path, GeoFrame(plan.bathy))))
-    coords = np.vstack([np.asarray(f["geometry"]["coordinates"]) for f in gj["features"]])
+    coords = np.vstack([np.column_stack([f["geometry"]["coordinates"],
+                                         [-f["properties"]["depth_a"], -f["properties"]["depth_b"]]])
+                        for f in gj["features"]])
     import rasterio
     from pyproj import Transformer
 

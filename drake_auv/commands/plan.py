@@ -7,7 +7,7 @@
 
 Writes path.csv (world frame), report.md and report.json (the Table 3 comparison), PNG figures
 and the --export formats (default geojson when the grid is georeferenced): mission.xml (COLA2),
-mission.plan (QGroundControl, ArduSub), path.geojson and lawnmower.geojson (WGS 84) into OUTDIR.
+mission.plan (QGroundControl, ArduSub; mission_1.plan, ... past --max-items), path.geojson and lawnmower.geojson (WGS 84) into OUTDIR.
 """
 
 from __future__ import annotations
@@ -72,6 +72,14 @@ def add_parser(subparsers) -> None:
                              "(the caldera site defaults to the Santorini caldera)")
     parser.add_argument("--speed", type=float, default=0.5,
                         help="mission surge speed, m/s, > 0 (default 0.5)")
+    parser.add_argument("--max-items", type=int, default=700,
+                        help="QGC/ArduSub: mission items a board stores per file, home and "
+                             "DO_CHANGE_SPEED included, >= 4; longer missions are split into "
+                             "mission_1.plan, mission_2.plan, ... (default 700)")
+    parser.add_argument("--ardusub-frames", choices=("terrain", "depth"), default="terrain",
+                        help="QGC/ArduSub: terrain = frame 10 (altitude, needs a downward "
+                             "rangefinder and ArduSub 4.5+) on lanes, depth = frame 3 "
+                             "everywhere from the prior map (default terrain)")
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     parser.add_argument("--no-3d-metrics", action="store_true",
                         help="skip the occluded 3D metrics on the grid's mesh (seconds on large "
@@ -119,7 +127,8 @@ def run(args) -> int:
                          progress=True)
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
                           exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
-                          metrics_3d=not args.no_3d_metrics)
+                          metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
+                          ardusub_frames=args.ardusub_frames)
     print(table3_markdown(plan.metrics))
     print(f"wrote {len(files)} files to {args.outdir}")
     return 0

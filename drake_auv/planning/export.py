@@ -1,8 +1,9 @@
 """Exports of a `CoveragePlan`: CSV (world frame), RFC 7946 GeoJSON (WGS 84), the COLA2 and
-QGroundControl missions (`planning.missions`), and the Table 3 report.
+QGroundControl missions (`planning.missions`, `planning.qgc`), and the Table 3 report.
 
-GeoJSON: one 3D LineString feature per run of samples with the same label, coordinates
-[lon, lat, elevation] through pyproj from the grid's CRS (no `crs` member: RFC 7946 is WGS 84).
+GeoJSON: one 2D LineString feature per path segment, [lon, lat] through pyproj from the grid's
+CRS (no `crs` member: RFC 7946 is WGS 84), depths and altitudes as properties
+(`path_to_geojson`).
 """
 
 from __future__ import annotations
@@ -25,46 +26,52 @@ REFERENCE_TABLE3 = {
 }
 
 
-def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path") -> dict:
-    """A FeatureCollection (RFC 7946) of the path's labelled runs in WGS 84.
+def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", surface=None) -> dict:
+    """A FeatureCollection (RFC 7946) of the path's segments in WGS 84, Shapefile-safe.
 
-    Coordinates are [longitude, latitude, elevation] (degrees, degrees, m; negative below the
-    sea surface). Each feature's properties: `label`, `index`, `length_m`, `heave_mode`
-    ("altitude" on lanes, "depth" elsewhere) and per vertex the sensor axis as
-    `sensor_azimuth_deg` (clockwise from true north) and `sensor_depression_deg` (below the
-    horizontal; 90 looks straight down)."""
-    lonlat = geo.to_lonlat(path.points[:, :2])
-    coords = np.column_stack([np.round(lonlat, 9), np.round(path.points[:, 2], 3)])
+    One 2D LineString [[lon, lat], [lon, lat]] (degrees, 6 decimals) per segment between
+    consecutive samples: RFC 7946's third coordinate is a height above the WGS 84 ellipsoid,
+    and the path's vertical references are depths below mean sea level and altitudes above the
+    seabed, so they are properties. Properties (scalars, names of at most 10 characters, as a Shapefile's DBF
+    takes them), a segment taking its end sample's label like `Path.length_by_label`:
+    `label`; `run` (index of the run of one label); `seq` (segment index); `heave`
+    ("altitude" on lanes, "depth" elsewhere); `depth_a`, `depth_b` (m below the sea surface at
+    the segment's start and end); `alt_a`, `alt_b` (m above the prior seabed, with `surface`;
+    else absent); `length_m` (3D); `sens_az`, `sens_dep` (the sensor axis at the end sample:
+    azimuth, degrees clockwise from true north, and depression, degrees below the horizontal;
+    90 looks straight down). A single-sample path gives one zero-length segment."""
+    pts = path.points
+    lonlat = np.round(geo.to_lonlat(pts[:, :2]), 6)  # RFC 7946 section 11.2: about 0.1 m
     s = path.sensor_dir
     azimuth = np.degrees(np.mod(np.arctan2(s[:, 0], s[:, 1])
-                                + geo.grid_north_azimuth(path.points[:, :2]), 2 * np.pi))
+                                + geo.grid_north_azimuth(pts[:, :2]), 2 * np.pi))
     depression = np.degrees(np.arcsin(np.clip(-s[:, 2], -1.0, 1.0)))
-    labels = path.labels
-    breaks = np.flatnonzero(labels[1:] != labels[:-1]) + 1
-    starts = np.concatenate([[0], breaks])
-    ends = np.concatenate([breaks, [len(path)]])
+    labels = path.labels.astype(str)
+    a = np.arange(max(len(path) - 1, 1))
+    b = np.minimum(a + 1, len(path) - 1)
+    run = np.concatenate([[0], np.cumsum(labels[1:] != labels[:-1])])
+    depth = np.round(-pts[:, 2], 3)
+    length = np.round(np.linalg.norm(pts[b] - pts[a], axis=1), 3)
+    alt = (None if surface is None else
+           np.round(pts[:, 2] - surface.elevation(pts[:, 0], pts[:, 1]), 3))
+    heave = np.where(np.isin(labels, ALTITUDE_LABELS), "altitude", "depth")
     features = []
-    for k, (a, b) in enumerate(zip(starts, ends)):
-        lo = max(a - 1, 0)  # each run starts at the previous run's last sample: lines join up
-        idx = np.arange(lo, b) if b - lo >= 2 else np.array([lo, lo])
-        label = str(labels[a])
-        features.append({
-            "type": "Feature",
-            "properties": {
-                "name": name, "label": label, "index": k,
-                "length_m": round(float(np.linalg.norm(np.diff(path.points[idx], axis=0),
-                                                       axis=1).sum()), 3),
-                "heave_mode": "altitude" if label in ALTITUDE_LABELS else "depth",
-                "sensor_azimuth_deg": np.round(azimuth[idx], 2).tolist(),
-                "sensor_depression_deg": np.round(depression[idx], 2).tolist()},
-            "geometry": {"type": "LineString", "coordinates": coords[idx].tolist()},
-        })
+    for k, (i, j) in enumerate(zip(a.tolist(), b.tolist())):
+        props = {"label": labels[j], "run": int(run[j]), "seq": k, "heave": str(heave[j]),
+                 "depth_a": float(depth[i]), "depth_b": float(depth[j])}
+        if alt is not None:
+            props.update(alt_a=float(alt[i]), alt_b=float(alt[j]))
+        props.update(length_m=float(length[k]), sens_az=round(float(azimuth[j]), 2),
+                     sens_dep=round(float(depression[j]), 2))
+        features.append({"type": "Feature", "properties": props,
+                         "geometry": {"type": "LineString",
+                                      "coordinates": [lonlat[i].tolist(), lonlat[j].tolist()]}})
     return {"type": "FeatureCollection", "name": name, "features": features}
 
 
-def write_geojson(path: Path, geo: GeoFrame, filename, name: str = "path") -> None:
+def write_geojson(path: Path, geo: GeoFrame, filename, name: str = "path", surface=None) -> None:
     with open(filename, "w") as f:
-        json.dump(path_to_geojson(path, geo, name), f)
+        json.dump(path_to_geojson(path, geo, name, surface), f, separators=(",", ":"))
 
 
 def _ratio(a: float, b: float) -> float | None:
@@ -238,16 +245,20 @@ def parse_exports(text: str | None) -> tuple[str, ...]:
 def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
-                  metrics_3d=True) -> list[FilePath]:
+                  metrics_3d=True, max_items: int = 700,
+                  ardusub_frames: str = "terrain") -> list[FilePath]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
     Args:
-        exports: any of "cola2" (mission.xml), "qgc" (mission.plan), "geojson" (path.geojson
+        exports: any of "cola2" (mission.xml), "qgc" (mission.plan, or mission_1.plan, ...
+            past `max_items`; report.json gains exports.qgc), "geojson" (path.geojson
             and lawnmower.geojson, WGS 84); None: "geojson" when the grid is georeferenced
             (a CRS or `origin_lonlat`), else none.
         origin_lonlat: WGS 84 (lon, lat) of the world origin, for grids without a CRS.
         surge_velocity: mission speed, m/s; tolerance_xy: waypoint arrival tolerance, m.
+        max_items, ardusub_frames: the QGC mission's items per file and ArduSub frames
+            ("terrain" or "depth"), see `planning.qgc.write_qgc`.
         metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report: True
             computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
     """
@@ -257,6 +268,10 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     for name in exports:
         if name not in EXPORTS:
             raise ValueError(f"unknown export {name!r}; choose from {', '.join(EXPORTS)}")
+    if "qgc" in exports:
+        from drake_auv.planning.qgc import check_options
+
+        check_options(max_items, ardusub_frames)
     geo = GeoFrame(plan.bathy, origin_lonlat) if exports else None
     outdir = FilePath(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -264,32 +279,36 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     plan.path.to_csv(outdir / "path.csv")
     written.append(outdir / "path.csv")
     if "geojson" in exports:
-        write_geojson(plan.path, geo, outdir / "path.geojson", "coverage path")
+        write_geojson(plan.path, geo, outdir / "path.geojson", "coverage path", plan.surface)
         written.append(outdir / "path.geojson")
         if plan.lawnmower is not None:
-            write_geojson(plan.lawnmower, geo, outdir / "lawnmower.geojson", "lawnmower")
+            write_geojson(plan.lawnmower, geo, outdir / "lawnmower.geojson", "lawnmower",
+                          plan.surface)
             written.append(outdir / "lawnmower.geojson")
-    if "cola2" in exports or "qgc" in exports:
-        from drake_auv.planning.missions import mission_waypoints, write_cola2, write_qgc
+    if "cola2" in exports:
+        from drake_auv.planning.missions import mission_waypoints, write_cola2
 
-        wp = mission_waypoints(plan.path, plan.surface)
-        if "cola2" in exports:
-            write_cola2(wp, geo, outdir / "mission.xml", surge_velocity=surge_velocity,
-                        tolerance_xy=tolerance_xy)
-            written.append(outdir / "mission.xml")
-        if "qgc" in exports:
-            zones = [geo.to_lonlat(ring) for ring in plan.parameters.get("no_go_rings", [])]
-            write_qgc(wp, geo, outdir / "mission.plan", speed=surge_velocity,
-                      acceptance_radius=tolerance_xy, no_go_lonlat=zones)
-            written.append(outdir / "mission.plan")
+        write_cola2(mission_waypoints(plan.path, plan.surface), geo, outdir / "mission.xml",
+                    surge_velocity=surge_velocity, tolerance_xy=tolerance_xy)
+        written.append(outdir / "mission.xml")
+    qgc = None
+    if "qgc" in exports:
+        from drake_auv.planning.qgc import write_qgc
+
+        files, qgc = write_qgc(plan, geo, outdir, max_items=max_items, frames=ardusub_frames,
+                               speed=surge_velocity, acceptance_radius=tolerance_xy)
+        written += files
     m3d = metrics_3d if isinstance(metrics_3d, dict) else None
     if metrics_3d is True:
         from drake_auv.planning.metrics3d import evaluate_plan_3d
 
         m3d = evaluate_plan_3d(plan)
     (outdir / "report.md").write_text(report_markdown(plan, m3d))
+    rep = report_dict(plan, m3d)
+    if qgc is not None:
+        rep["exports"] = {"qgc": qgc}
     with open(outdir / "report.json", "w") as f:
-        json.dump(report_dict(plan, m3d), f, indent=2)
+        json.dump(rep, f, indent=2)
     written += [outdir / "report.md", outdir / "report.json"]
     if figures:
         from drake_auv.planning.figures import write_figures

@@ -1,5 +1,5 @@
-"""Missions a vehicle runs, from a `Path`: COLA2 mission XML (GIRONA 500) and QGroundControl
-`.plan` JSON (ArduSub), both in WGS 84.
+"""Missions a vehicle runs, from a `Path`: COLA2 mission XML (GIRONA 500) here, QGroundControl
+`.plan` JSON (ArduSub) in `planning.qgc`, both in WGS 84.
 
 Waypoints: the path's samples thinned per labelled run by Douglas-Peucker in 3D (x, y and the
 coordinate the vehicle holds: altitude above the seabed on terrain-following lanes, elevation
@@ -15,17 +15,10 @@ docs/planning.md): `<mission><version>2.0</version>` then `<mission_step>`s with
 (initial_latitude/longitude/depth to final_latitude/longitude/depth/altitude), a park at the
 end. heave_mode 0 = depth, 1 = altitude; depths positive down, m; yaw radians clockwise from
 north (NED).
-
-QGroundControl plan: `fileType: "Plan"`, `mission.items` of `SimpleItem`s with command 16
-(MAV_CMD_NAV_WAYPOINT), params [hold s, acceptance radius m, pass radius, yaw deg, lat, lon,
-alt]; ArduSub's two altitude frames: 10 (MAV_FRAME_GLOBAL_TERRAIN_ALT, positive altitude above
-the seabed) on lanes, 3 (MAV_FRAME_GLOBAL_RELATIVE_ALT, home at the surface, negative altitude =
-depth) on contours and transits. No-go zones go to the geofence as exclusion polygons.
 """
 
 from __future__ import annotations
 
-import json
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
@@ -36,11 +29,6 @@ from drake_auv.planning.path import Path
 from drake_auv.planning.surface import TerrainSurface
 
 ALTITUDE_LABELS = ("planar", "lawnmower")
-MAV_CMD_NAV_WAYPOINT = 16
-MAV_FRAME_GLOBAL_RELATIVE_ALT = 3
-MAV_FRAME_GLOBAL_TERRAIN_ALT = 10
-MAV_AUTOPILOT_ARDUPILOTMEGA = 3
-MAV_TYPE_SUBMARINE = 12
 
 
 def douglas_peucker(points: np.ndarray, tolerance: float) -> np.ndarray:
@@ -92,14 +80,16 @@ class Waypoints:
         return len(self.index)
 
 
-def mission_waypoints(path: Path, surface: TerrainSurface, tolerance: float = 0.05) -> Waypoints:
-    """Waypoints of `path` (see the module docstring); `tolerance` in m, > 0."""
+def mission_waypoints(path: Path, surface: TerrainSurface, tolerance: float = 0.05,
+                      altitude_labels: tuple[str, ...] = ALTITUDE_LABELS) -> Waypoints:
+    """Waypoints of `path` (see the module docstring); `tolerance` in m, > 0; the vehicle holds
+    altitude on the runs labelled one of `altitude_labels` (() : depth everywhere)."""
     if not (np.isfinite(tolerance) and tolerance > 0):
         raise ValueError(f"waypoint tolerance must be > 0 m, got {tolerance}")
     pts = path.points
     altitude = pts[:, 2] - surface.elevation(pts[:, 0], pts[:, 1])
     labels = path.labels
-    use_alt = np.isin(labels.astype(str), ALTITUDE_LABELS)
+    use_alt = np.isin(labels.astype(str), list(altitude_labels))
     breaks = np.flatnonzero(labels[1:] != labels[:-1]) + 1
     starts = np.concatenate([[0], breaks])
     ends = np.concatenate([breaks, [len(path)]])
@@ -182,51 +172,3 @@ def cola2_mission(wp: Waypoints, geo: GeoFrame, surge_velocity: float = 0.5,
 def write_cola2(wp: Waypoints, geo: GeoFrame, filename, **kwargs) -> None:
     """Writes `cola2_mission` to `filename` (UTF-8 XML with a declaration)."""
     cola2_mission(wp, geo, **kwargs).write(filename, encoding="utf-8", xml_declaration=True)
-
-
-def qgc_plan(wp: Waypoints, geo: GeoFrame, speed: float = 0.5, acceptance_radius: float = 1.0,
-             no_go_lonlat: list[np.ndarray] | None = None) -> dict:
-    """The QGroundControl plan of the waypoints for ArduSub (see the module docstring).
-
-    Args:
-        speed: cruise and hover speed, m/s.
-        acceptance_radius: waypoint acceptance radius, m.
-        no_go_lonlat: exterior rings (K, 2) of no-go zones in WGS 84 (lon, lat), for the
-            geofence's exclusion polygons.
-    """
-    lonlat = geo.to_lonlat(wp.points[:, :2])
-    yaw_deg = np.degrees(_compass_yaw(geo, wp))
-    items = []
-    for k in range(len(wp)):
-        alt = wp.use_altitude[k]
-        # Lanes keep the heading along the motion (yaw left to the autopilot); contours face
-        # the wall, so their yaw is commanded.
-        yaw = None if alt else round(float(yaw_deg[k]), 3)
-        items.append({
-            "type": "SimpleItem", "command": MAV_CMD_NAV_WAYPOINT,
-            "frame": MAV_FRAME_GLOBAL_TERRAIN_ALT if alt else MAV_FRAME_GLOBAL_RELATIVE_ALT,
-            "params": [0, float(acceptance_radius), 0, yaw, round(float(lonlat[k, 1]), 9),
-                       round(float(lonlat[k, 0]), 9),
-                       round(float(wp.altitude[k] if alt else wp.points[k, 2]), 3)],
-            "autoContinue": True, "doJumpId": k + 1,
-        })
-    fence = [{"inclusion": False, "version": 1,
-              "polygon": [[round(float(lat), 9), round(float(lon), 9)] for lon, lat in ring]}
-             for ring in (no_go_lonlat or [])]
-    return {
-        "fileType": "Plan", "version": 1, "groundStation": "drake_auv",
-        "mission": {"version": 2, "firmwareType": MAV_AUTOPILOT_ARDUPILOTMEGA,
-                    "vehicleType": MAV_TYPE_SUBMARINE, "cruiseSpeed": float(speed),
-                    "hoverSpeed": float(speed), "globalPlanAltitudeMode": 1,
-                    "plannedHomePosition": [round(float(lonlat[0, 1]), 9),
-                                            round(float(lonlat[0, 0]), 9), 0.0],
-                    "items": items},
-        "geoFence": {"version": 2, "circles": [], "polygons": fence},
-        "rallyPoints": {"version": 2, "points": []},
-    }
-
-
-def write_qgc(wp: Waypoints, geo: GeoFrame, filename, **kwargs) -> None:
-    """Writes `qgc_plan` to `filename` as JSON."""
-    with open(filename, "w") as f:
-        json.dump(qgc_plan(wp, geo, **kwargs), f, indent=1)
