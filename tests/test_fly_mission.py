@@ -56,7 +56,11 @@ def test_the_exported_file_flies_like_the_plan(flown, autopilot):
     internal, fly = summaries["internal"], summaries[autopilot]
     assert results[autopilot].outcomes == ["goal"] and results[autopilot].completed
     assert not fly["contact"] and fly["min_clearance_m"] > 5.0  # Omega 10 m
-    assert abs(fly["coverage"]["multibeam"] - internal["coverage"]["multibeam"]) <= 0.05
+    # ArduSub holds the plan's yaw (the slices face the wall) as the internal path does;
+    # COLA2's sections can only head along their track, which turns the down-looking fan
+    # across the contours and sees more of this wall: never less than the plan's
+    gap = fly["coverage"]["multibeam"] - internal["coverage"]["multibeam"]
+    assert (abs(gap) if autopilot == "ardusub" else -gap) <= 0.05, gap
     assert fly["coverage"]["multibeam"] > 0.8
     # the pilot flew the file's items, not the internal path: the tracker's reference
     # differs from the plan's samples while the vehicle covers the same ground
