@@ -18,9 +18,9 @@ from drake_auv.reconstruction.pointcloud import (PointCloud, from_scan_log, read
 from drake_auv.reconstruction.scoring import (completeness_of_mesh, completeness_of_points,
                                               score, surface_samples)
 from drake_auv.reconstruction.surface import (check_parameters, estimate_normals,
-                                              open3d_available, reconstruct)
+                                              open3d_available, open3d_error, reconstruct)
 
-needs_open3d = pytest.mark.skipif(not open3d_available(), reason="Open3D not installed")
+needs_open3d = pytest.mark.skipif(not open3d_available(), reason=str(open3d_error()))
 RADIUS = 2.0
 CENTRE = np.array([10.0, -5.0, -20.0])
 

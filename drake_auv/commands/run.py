@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path as FilePath
 
 from drake_auv.commands import add_recording_options
+from drake_auv.commands.outputs import MiB, output_folder
 
 
 def add_parser(subparsers) -> None:
@@ -67,7 +68,12 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     return summary
 
 
+RUN_NEEDS_BYTES = 200 * MiB  # a dive's outputs: the returns (points.ply), recording, figures
+
+
 def run(args) -> int:
+    output_folder(args.out, "-o", RUN_NEEDS_BYTES)
+    _note_missing_reconstruction()
     summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
                   args.playback_speed, not args.quiet)
     c = summary["coverage"]
@@ -77,3 +83,15 @@ def run(args) -> int:
           + (" (contact)" if summary["contact"] else "")
           + f"; report in {FilePath(args.out) / 'report.md'}")
     return 0
+
+
+def _note_missing_reconstruction() -> None:
+    """One line on stderr, before the dive, when Open3D is unusable (the report will say that
+    no surface was built, with the same reason)."""
+    import sys
+
+    from drake_auv.reconstruction.surface import open3d_error
+
+    reason = open3d_error()
+    if reason is not None:
+        print(f"drake-auv: note: no reconstruction.ply will be built: {reason}", file=sys.stderr)
