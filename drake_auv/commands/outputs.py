@@ -43,11 +43,11 @@ def output_file(path, option: str, suffixes: tuple[str, ...], need_bytes: int) -
     not a folder nor a special file, and its folder (created when missing) writable with
     `need_bytes` free; returns the path. An existing file is left as it is."""
     file = FilePath(path)
+    if file.is_dir():
+        raise ValueError(f"{option} {file} is a folder; give a file name")
     if file.suffix.lower() not in suffixes:
         raise ValueError(f"{option} {file}: unknown extension {file.suffix!r} "
                          f"(use {', '.join(suffixes)})")
-    if file.is_dir():
-        raise ValueError(f"{option} {file} is a folder; give a file name")
     if file.exists() and not file.is_file():
         raise ValueError(f"{option} {file} exists and is not a regular file")
     output_folder(file.parent, option, need_bytes)

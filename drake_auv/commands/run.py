@@ -41,17 +41,21 @@ def add_mission_options(parser) -> None:
 
 def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         playback_speed: float = 20.0, progress: bool = True) -> dict:
-    """Loads, flies and reports `mission` into `out`; returns the report's summary."""
+    """Loads, flies and reports `mission` into `out`; returns the report's summary. The
+    mission and its site are checked before the simulation's modules (Drake, matplotlib) are
+    imported, so a bad file is reported at once."""
     from drake_auv.mission.config import load_mission
-    from drake_auv.mission.plan import plan_mission
-    from drake_auv.mission.recording import finish_recording, prepare_scene
-    from drake_auv.mission.report import write_outputs
-    from drake_auv.mission.runner import run_mission
     from drake_auv.mission.site import check_against_site, load_site
 
     spec = load_mission(mission, seed=seed, overrides=overrides)
     site = load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
+    _note_missing_reconstruction()
+    from drake_auv.mission.plan import plan_mission
+    from drake_auv.mission.recording import finish_recording, prepare_scene
+    from drake_auv.mission.report import write_outputs
+    from drake_auv.mission.runner import run_mission
+
     plan = plan_mission(spec, site)
     scene = None
     if html:
@@ -73,7 +77,6 @@ RUN_NEEDS_BYTES = 200 * MiB  # a dive's outputs: the returns (points.ply), recor
 
 def run(args) -> int:
     output_folder(args.out, "-o", RUN_NEEDS_BYTES)
-    _note_missing_reconstruction()
     summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
                   args.playback_speed, not args.quiet)
     c = summary["coverage"]

@@ -168,6 +168,7 @@ def _ascii_rows(f, path, n: int, width: int, first_line: int) -> np.ndarray:
     except ValueError:
         pass  # find the offending row for the message
     for k, line in enumerate(lines):
+        line = line.decode("ascii", errors="replace")
         words = line.split()
         try:
             values = [float(w) for w in words]
