@@ -237,22 +237,6 @@ def test_run_refuses_a_geographic_prior_before_the_dive(tmp_path, capsys, monkey
 
 # -- an optional dependency that does not load -------------------------------------------
 
-@pytest.fixture()
-def broken_open3d(tmp_path, monkeypatch):
-    """An `open3d` that is installed but whose import fails as a missing system library does."""
-    package = tmp_path / "site" / "open3d"
-    package.mkdir(parents=True)
-    (package / "__init__.py").write_text(
-        "raise ImportError('libusb-1.0.so.0: cannot open shared object file: No such file or "
-        "directory')\n")
-    for name in [m for m in sys.modules if m == "open3d" or m.startswith("open3d.")]:
-        monkeypatch.delitem(sys.modules, name)
-    monkeypatch.syspath_prepend(str(tmp_path / "site"))
-    surface._open3d_or_reason.cache_clear()
-    yield
-    surface._open3d_or_reason.cache_clear()
-
-
 def test_open3d_that_does_not_load_says_why(tmp_path, capsys, broken_open3d):
     points = _sphere_ply(tmp_path / "points.ply")
     line = fault(capsys, ["reconstruct", str(points), "-o", str(tmp_path / "m.ply"),

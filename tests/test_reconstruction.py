@@ -247,6 +247,20 @@ def test_mission_writes_its_points(tmp_path):
     assert not section["built"] and "fewer than 1000 returns" in section["reason"]
 
 
+def test_products_when_open3d_does_not_load_give_its_error(tmp_path, sphere_scan,
+                                                           broken_open3d):
+    from drake_auv.reconstruction.products import write_products
+
+    sphere, log = sphere_scan
+    site = SimpleNamespace(target_mesh=sphere, to_site=lambda p: p, to_local=lambda p: p)
+    section = write_products(SimpleNamespace(scan_log=log, site=site), tmp_path)
+    assert section == dict(built=False, reason="surface reconstruction: open3d is installed but "
+                           "does not import: ImportError: libusb-1.0.so.0: cannot open shared "
+                           "object file: No such file or directory")
+    assert len(read_ply(tmp_path / "points.ply")) > 15000
+    assert not (tmp_path / "reconstruction.ply").exists()
+
+
 @needs_open3d
 def test_products_of_a_dive_with_enough_returns(tmp_path, sphere_scan):
     from drake_auv.reconstruction.products import (draw_products, products_markdown,

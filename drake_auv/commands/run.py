@@ -89,12 +89,12 @@ def run(args) -> int:
 
 
 def _note_missing_reconstruction() -> None:
-    """One line on stderr, before the dive, when Open3D is unusable (the report will say that
+    """A one-line warning before the dive when Open3D is unusable (the report will say that
     no surface was built, with the same reason)."""
-    import sys
+    import warnings
 
     from drake_auv.reconstruction.surface import open3d_error
 
     reason = open3d_error()
     if reason is not None:
-        print(f"drake-auv: note: no reconstruction.ply will be built: {reason}", file=sys.stderr)
+        warnings.warn(f"no reconstruction.ply will be built: {reason}", stacklevel=2)
