@@ -59,7 +59,7 @@ def run(args) -> int:
     from drake_auv.reconstruction.scoring import score
     from drake_auv.reconstruction.surface import check_parameters, load_open3d, reconstruct
 
-    output_file(args.out, "-o", MESH_SUFFIXES, 50 * MiB)  # a depth-9 mesh is ~10^6 vertices
+    output_file(args.out, "-o", MESH_SUFFIXES, 100 * MiB)  # the demo's depth-9 mesh: 52 MB
     if args.figure:
         output_file(args.figure, "--figure", FIGURE_SUFFIXES, 5 * MiB)
     if (args.figure or args.crop is not None) and not args.target:
