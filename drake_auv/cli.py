@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "reconstruct",
             "campaign")
@@ -22,12 +23,34 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Runs one subcommand. Bad input (ValueError) and every OSError end it with one line on
+    stderr and exit 2; warnings (e.g. a repaired ROI) are one line each."""
     args = build_parser().parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except (ValueError, FileNotFoundError) as err:
-        print(f"drake-auv {args.command}: error: {err}", file=sys.stderr)
-        return 2
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warning(args.command)
+        try:
+            return int(args.func(args) or 0)
+        except ValueError as err:
+            print(f"drake-auv {args.command}: error: {err}", file=sys.stderr)
+        except OSError as err:
+            print(f"drake-auv {args.command}: error: {os_error_line(err)}", file=sys.stderr)
+    return 2
+
+
+def os_error_line(err: OSError) -> str:
+    """An OSError as one line naming its path(s): 'PATH: No space left on device'; the
+    message alone for the project's own FileNotFoundErrors (they name their file)."""
+    if err.filename is None:
+        return " ".join(str(err).split())
+    paths = f"{err.filename}" + (f" -> {err.filename2}" if err.filename2 is not None else "")
+    return f"{paths}: {err.strerror or type(err).__name__}"
+
+
+def _one_line_warning(command: str):
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = " ".join(str(message).split())
+        print(f"drake-auv {command}: warning: {text}", file=sys.stderr if file is None else file)
+    return show
 
 
 if __name__ == "__main__":

@@ -18,9 +18,9 @@ from drake_auv.reconstruction.pointcloud import (PointCloud, from_scan_log, read
 from drake_auv.reconstruction.scoring import (completeness_of_mesh, completeness_of_points,
                                               score, surface_samples)
 from drake_auv.reconstruction.surface import (check_parameters, estimate_normals,
-                                              open3d_available, reconstruct)
+                                              open3d_available, open3d_error, reconstruct)
 
-needs_open3d = pytest.mark.skipif(not open3d_available(), reason="Open3D not installed")
+needs_open3d = pytest.mark.skipif(not open3d_available(), reason=str(open3d_error()))
 RADIUS = 2.0
 CENTRE = np.array([10.0, -5.0, -20.0])
 
@@ -245,6 +245,20 @@ def test_mission_writes_its_points(tmp_path):
     assert "## Reconstruction" in (tmp_path / "report.md").read_text()
     # The survey has only begun: too few returns on the target for a surface.
     assert not section["built"] and "fewer than 1000 returns" in section["reason"]
+
+
+def test_products_when_open3d_does_not_load_give_its_error(tmp_path, sphere_scan,
+                                                           broken_open3d):
+    from drake_auv.reconstruction.products import write_products
+
+    sphere, log = sphere_scan
+    site = SimpleNamespace(target_mesh=sphere, to_site=lambda p: p, to_local=lambda p: p)
+    section = write_products(SimpleNamespace(scan_log=log, site=site), tmp_path)
+    assert section == dict(built=False, reason="surface reconstruction: open3d is installed but "
+                           "does not import: ImportError: libusb-1.0.so.0: cannot open shared "
+                           "object file: No such file or directory")
+    assert len(read_ply(tmp_path / "points.ply")) > 15000
+    assert not (tmp_path / "reconstruction.ply").exists()
 
 
 @needs_open3d

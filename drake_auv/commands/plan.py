@@ -89,6 +89,9 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    from drake_auv.commands.outputs import MiB, output_folder
+
+    output_folder(args.outdir, "-o", 20 * MiB)  # path.csv, reports, figures, exports
     from drake_auv.planning.coverage_plan import plan_coverage
     from drake_auv.planning.export import parse_exports, table3_markdown, write_outputs
     from drake_auv.terrain.roi import parse_roi
@@ -105,6 +108,9 @@ def run(args) -> int:
         from drake_auv.terrain.readers import read_bathymetry
 
         bathy = read_bathymetry(args.bathymetry)
+        if origin is not None and bathy.crs is not None:
+            raise ValueError(f"--origin-lonlat: {args.bathymetry} is georeferenced ({bathy.crs}"
+                             "), which places it; the option is for grids without a CRS")
     if args.roi and args.roi_file:
         raise ValueError("give --roi or --roi-file, not both")
     roi = parse_roi(args.roi) if args.roi else None

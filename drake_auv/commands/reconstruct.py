@@ -5,7 +5,8 @@ laspy): normals from `--k` nearest neighbours, oriented towards each point's rec
 origin (by neighbour propagation when the file has none), screened Poisson at `--depth`, the
 lowest `--trim` share of density removed. With `--target MESH` (same frame) the surface and the
 cloud are scored (accuracy, completeness) and the mesh is coloured by its error; `--crop M`
-keeps only the points in the target's box grown by M m; `--figure` draws it. Needs Open3D (`pip install 'drake_auv[reconstruct]'`).
+keeps only the points in the target's box grown by M m; `--figure` draws it. Needs Open3D
+(`pip install 'drake_auv[reconstruct]'`). The output locations and Open3D are checked first.
 """
 
 from __future__ import annotations
@@ -43,16 +44,24 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+MESH_SUFFIXES = (".ply", ".obj", ".stl")
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
 def run(args) -> int:
     import numpy as np
     import trimesh
 
+    from drake_auv.commands.outputs import MiB, output_file
     from drake_auv.mission.site import load_mesh
     from drake_auv.reconstruction.pointcloud import read_point_cloud
     from drake_auv.reconstruction.products import ERROR_VMAX, error_colours
     from drake_auv.reconstruction.scoring import score
-    from drake_auv.reconstruction.surface import check_parameters, reconstruct
+    from drake_auv.reconstruction.surface import check_parameters, load_open3d, reconstruct
 
+    output_file(args.out, "-o", MESH_SUFFIXES, 100 * MiB)  # the demo's depth-9 mesh: 52 MB
+    if args.figure:
+        output_file(args.figure, "--figure", FIGURE_SUFFIXES, 5 * MiB)
     if (args.figure or args.crop is not None) and not args.target:
         raise ValueError("--figure and --crop need --target")
     if args.crop is not None and not args.crop >= 0:
@@ -63,6 +72,8 @@ def run(args) -> int:
         else None
     if args.crop is not None:
         cloud = cloud.crop(*target.bounds, args.crop)
+    check_parameters(len(cloud), args.depth, args.k, args.trim)
+    load_open3d()  # its real import error, before any work
     surface = reconstruct(cloud, depth=args.depth, trim=args.trim, k=args.k,
                           progress=not args.quiet)
     mesh = surface.mesh
@@ -82,7 +93,6 @@ def run(args) -> int:
             fig_reconstruction([(FilePath(args.points).name, surface.mesh, errors)],
                                vmax=ERROR_VMAX).savefig(args.figure, dpi=110,
                                                         bbox_inches="tight")
-    FilePath(args.out).parent.mkdir(parents=True, exist_ok=True)
     mesh.export(args.out)
     print(line)
     return 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path as FilePath
 
 from drake_auv.commands import add_recording_options
+from drake_auv.commands.outputs import MiB, output_folder
 
 
 def add_parser(subparsers) -> None:
@@ -40,17 +41,21 @@ def add_mission_options(parser) -> None:
 
 def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         playback_speed: float = 20.0, progress: bool = True) -> dict:
-    """Loads, flies and reports `mission` into `out`; returns the report's summary."""
+    """Loads, flies and reports `mission` into `out`; returns the report's summary. The
+    mission and its site are checked before the simulation's modules (Drake, matplotlib) are
+    imported, so a bad file is reported at once."""
     from drake_auv.mission.config import load_mission
-    from drake_auv.mission.plan import plan_mission
-    from drake_auv.mission.recording import finish_recording, prepare_scene
-    from drake_auv.mission.report import write_outputs
-    from drake_auv.mission.runner import run_mission
     from drake_auv.mission.site import check_against_site, load_site
 
     spec = load_mission(mission, seed=seed, overrides=overrides)
     site = load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
+    _note_missing_reconstruction()
+    from drake_auv.mission.plan import plan_mission
+    from drake_auv.mission.recording import finish_recording, prepare_scene
+    from drake_auv.mission.report import write_outputs
+    from drake_auv.mission.runner import run_mission
+
     plan = plan_mission(spec, site)
     scene = None
     if html:
@@ -67,7 +72,11 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     return summary
 
 
+RUN_NEEDS_BYTES = 300 * MiB  # a dive's outputs: the boulder demo writes 135 MB (points.ply 76)
+
+
 def run(args) -> int:
+    output_folder(args.out, "-o", RUN_NEEDS_BYTES)
     summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
                   args.playback_speed, not args.quiet)
     c = summary["coverage"]
@@ -77,3 +86,15 @@ def run(args) -> int:
           + (" (contact)" if summary["contact"] else "")
           + f"; report in {FilePath(args.out) / 'report.md'}")
     return 0
+
+
+def _note_missing_reconstruction() -> None:
+    """A one-line warning before the dive when Open3D is unusable (the report will say that
+    no surface was built, with the same reason)."""
+    import warnings
+
+    from drake_auv.reconstruction.surface import open3d_error
+
+    reason = open3d_error()
+    if reason is not None:
+        warnings.warn(f"no reconstruction.ply will be built: {reason}", stacklevel=2)

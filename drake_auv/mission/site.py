@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -109,7 +110,16 @@ def load_mesh(path, where: str, label: str) -> trimesh.Trimesh:
 
 
 def _local_prior(path, origin: np.ndarray, label: str) -> Bathymetry:
-    """The prior raster in the local frame (its world frame must be the site's, translated)."""
+    """The prior raster in the local frame. The site's coordinates are the raster's CRS (the
+    world mesh lies in them), so its cells are placed there by its georeferencing (`to_crs`)
+    and translated by -origin; their spacing is in map units. This takes every raster
+    `drake-auv plan` takes whose rows and columns run along its CRS's axes and whose CRS is
+    not geographic, also one whose ground-metre frame is not its CRS: a Mercator raster
+    (EPSG:3857) keeps its map units, which are ground metres / cos(latitude), as the mesh's
+    coordinates are (a one-line warning says so). Refused: geographic CRSs (a mesh in degrees)
+    and rotated or sheared rasters (not a grid along the site's axes)."""
+    from pyproj import CRS
+
     from drake_auv.terrain.readers import read_bathymetry
 
     if not path.is_file():
@@ -120,15 +130,28 @@ def _local_prior(path, origin: np.ndarray, label: str) -> Bathymetry:
     except ValueError as err:
         raise MissionFileError(label, "site.prior", " ".join(str(err).split()),
                                "a bathymetry raster GDAL reads") from None
+    if bathy.crs is not None and CRS.from_user_input(bathy.crs).is_geographic:
+        raise MissionFileError(label, "site.prior", f"{path.name} is in the geographic CRS "
+                               f"{bathy.crs} (degrees), which cannot hold a world mesh",
+                               "a raster in a projected CRS (the world mesh's coordinates), "
+                               "e.g. UTM")
     to_crs = np.eye(3) if bathy.to_crs is None else np.asarray(bathy.to_crs, dtype=float)
-    if not np.allclose(to_crs[:2, :2], np.eye(2), atol=1e-9):
-        raise MissionFileError(label, "site.prior",
-                               f"{path.name} is not north-up in metres (CRS {bathy.crs})",
-                               "a north-up raster in a projected CRS in metres, e.g. UTM")
+    scale = np.diag(to_crs[:2, :2])  # map units per ground metre along x and y
+    if not (np.all(scale > 0.0) and np.allclose(to_crs[:2, :2], np.diag(scale),
+                                                atol=1e-9 * scale.max())):
+        raise MissionFileError(label, "site.prior", f"{path.name}'s rows and columns do not "
+                               f"run along the x and y axes of its CRS ({bathy.crs})",
+                               "a north-up raster (rotation and shear terms 0)")
+    if not np.allclose(scale, 1.0, atol=1e-6):
+        warnings.warn(f"{label}: site.prior: {path.name} is in {bathy.crs}, where a ground "
+                      f"metre is {scale[0]:.4f} map units; the dive is simulated in map units "
+                      "(the world mesh's coordinates), its distances that much longer than on "
+                      "the ground", stacklevel=2)
     cell0 = to_crs[:2, :2] @ bathy.origin + to_crs[:2, 2]  # site coordinates of cell (0, 0)
     local_to_crs = np.eye(3)
     local_to_crs[:2, 2] = origin
-    return Bathymetry(bathy.z, bathy.spacing, tuple(cell0 - origin), bathy.crs, local_to_crs)
+    return Bathymetry(bathy.z, tuple(scale * bathy.spacing), tuple(cell0 - origin), bathy.crs,
+                      local_to_crs)
 
 
 def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:

@@ -18,8 +18,9 @@ def decimated(mesh: trimesh.Trimesh, errors: np.ndarray, max_faces: int = MAX_FA
     Open3D; each kept vertex takes the error of the nearest original vertex)."""
     if len(mesh.faces) <= max_faces:
         return mesh, errors
-    import open3d as o3d
+    from drake_auv.reconstruction.surface import load_open3d
 
+    o3d = load_open3d()
     centre = mesh.bounds.mean(axis=0)
     o3d_mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(mesh.vertices - centre),
                                          o3d.utility.Vector3iVector(mesh.faces))

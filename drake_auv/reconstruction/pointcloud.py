@@ -10,6 +10,8 @@ returns were, drift included), metres, seconds. Files: binary little-endian PLY 
 
 from __future__ import annotations
 
+import importlib
+import itertools
 from dataclasses import dataclass
 from pathlib import Path as FilePath
 
@@ -122,12 +124,14 @@ def write_ply(cloud: PointCloud, filename) -> None:
 
 
 def _ply_header(f, filename):
-    """(format, [(element, count, [(type, name)])]) of a PLY header; `f` left after it."""
+    """(format, [(element, count, [(type, name)])], lines) of a PLY header, `lines` the number
+    of header lines; `f` left after it."""
     if f.readline().strip() != b"ply":
         raise ValueError(f"{filename}: not a PLY file (no 'ply' magic line)")
-    fmt, elements = None, []
+    fmt, elements, lines = None, [], 1
     while True:
         line = f.readline()
+        lines += 1
         if not line:
             raise ValueError(f"{filename}: corrupt PLY, the header has no end_header")
         words = line.decode("ascii", errors="replace").split()
@@ -145,22 +149,48 @@ def _ply_header(f, filename):
         elif words[0] == "property" and elements and words[1] == "list":
             elements[-1][2].append(("list", words[-1]))
         else:
-            raise ValueError(f"{filename}: corrupt PLY header line "
+            raise ValueError(f"{filename}: line {lines}: corrupt PLY header line "
                              f"{line.decode('ascii', errors='replace').strip()!r}")
     if fmt is None:
         raise ValueError(f"{filename}: the PLY header has no (known) format line")
-    return fmt, elements
+    return fmt, elements, lines
+
+
+def _ascii_rows(f, path, n: int, width: int, first_line: int) -> np.ndarray:
+    """(n, width) values of the next n lines of an ASCII PLY body (file line `first_line` on);
+    ValueError naming the file and line of the first short, long or non-numeric row."""
+    lines = list(itertools.islice(f, n))
+    if len(lines) < n:
+        raise ValueError(f"{path}: corrupt or truncated PLY, {len(lines)} vertex rows where the "
+                         f"header says {n}")
+    try:
+        return np.loadtxt(lines, ndmin=2).reshape(n, width)
+    except ValueError:
+        pass  # find the offending row for the message
+    for k, line in enumerate(lines):
+        line = line.decode("ascii", errors="replace")
+        words = line.split()
+        try:
+            values = [float(w) for w in words]
+        except ValueError:
+            raise ValueError(f"{path}: line {first_line + k}: vertex row {k} holds a value that "
+                             f"is not a number: {line.strip()[:80]!r}") from None
+        if len(values) != width:
+            raise ValueError(f"{path}: line {first_line + k}: vertex row {k} has {len(values)} "
+                             f"values, the header's properties are {width}")
+    raise ValueError(f"{path}: the ASCII vertex rows do not parse")
 
 
 def read_ply(filename) -> PointCloud:
     """Reads the `vertex` element of a PLY file (binary either endianness or ASCII): positions
     `x y z` are required; `origin_*`, `time` and `source` are read when present (NaN origins
-    and times, source 0 otherwise)."""
+    and times, source 0 otherwise). The header's vertex count is checked against the file's
+    size before anything is allocated."""
     path = FilePath(filename)
     if not path.is_file():
         raise FileNotFoundError(f"point cloud {path} does not exist")
     with open(path, "rb") as f:
-        fmt, elements = _ply_header(f, path)
+        fmt, elements, header_lines = _ply_header(f, path)
         if not elements or elements[0][0] != "vertex":
             raise ValueError(f"{path}: the PLY's first element must be 'vertex', got "
                              f"{[e[0] for e in elements]}")
@@ -172,20 +202,21 @@ def read_ply(filename) -> PointCloud:
                              f"{', '.join(missing)} (properties: {', '.join(names) or 'none'})")
         if any(t == "list" for t, _ in props):
             raise ValueError(f"{path}: list properties in the vertex element are not supported")
+        body = path.stat().st_size - f.tell()
+        # An ASCII value takes at least 2 bytes (a digit and a separator).
+        row_bytes = 2 * len(props) if fmt == "ascii" else \
+            np.dtype([(name, t) for t, name in props]).itemsize
+        if n * row_bytes > body:
+            raise ValueError(f"{path}: corrupt or truncated PLY, the header says {n} vertices "
+                             f"({n * row_bytes} bytes at least) but the file has {body} bytes "
+                             "after it")
         if fmt == "ascii":
-            rows = np.loadtxt(f, max_rows=n, ndmin=2) if n else np.zeros((0, len(props)))
-            if rows.shape != (n, len(props)):
-                raise ValueError(f"{path}: corrupt PLY, {len(rows)} vertex rows of "
-                                 f"{rows.shape[1] if rows.ndim == 2 else 0} values, header "
-                                 f"says {n} of {len(props)}")
+            rows = _ascii_rows(f, path, n, len(props), header_lines + 1) if n \
+                else np.zeros((0, len(props)))
             column = {name: rows[:, k] for k, name in enumerate(names)}
         else:
             dtype = np.dtype([(name, _PLY_FORMATS[fmt] + t) for t, name in props])
-            raw = f.read(n * dtype.itemsize)
-            if len(raw) < n * dtype.itemsize:
-                raise ValueError(f"{path}: corrupt or truncated PLY, {len(raw)} bytes of vertex "
-                                 f"data where the header says {n * dtype.itemsize}")
-            data = np.frombuffer(raw, dtype)
+            data = np.frombuffer(f.read(n * dtype.itemsize), dtype)
             column = {name: data[name].astype(float) for name in names}
 
     def stack(keys):
@@ -200,13 +231,25 @@ def read_ply(filename) -> PointCloud:
                       column.get("source", np.zeros(n)).astype(np.uint8))
 
 
-def _laspy():
+def optional_module(name: str, needed_for: str, package: str):
+    """`import name`, a package of the reconstruct extra. ValueError, one line: to install it
+    when it is missing; its own import error (e.g. a system library it links) when it is
+    installed but does not load, since reinstalling would change nothing then."""
     try:
-        import laspy
-    except ImportError as err:
-        raise ValueError("LAS/LAZ files need the optional laspy package: "
-                         "pip install 'drake_auv[reconstruct]'") from err
-    return laspy
+        return importlib.import_module(name)
+    except ModuleNotFoundError as err:
+        if err.name == name:
+            raise ValueError(f"{needed_for} needs the optional {package} package, which is not "
+                             "installed: pip install 'drake_auv[reconstruct]'") from None
+        error = err
+    except Exception as err:  # anything its import raises makes it unusable: say what
+        error = err
+    raise ValueError(f"{needed_for}: {name} is installed but does not import: "
+                     f"{type(error).__name__}: {' '.join(str(error).split())}")
+
+
+def _laspy():
+    return optional_module("laspy", "LAS/LAZ files", "laspy")
 
 
 def write_las(cloud: PointCloud, filename, scale: float = 1e-3) -> None:

@@ -22,7 +22,8 @@ import trimesh
 
 from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply
 from drake_auv.reconstruction.scoring import score
-from drake_auv.reconstruction.surface import Reconstruction, open3d_available, reconstruct
+from drake_auv.reconstruction.surface import (Reconstruction, open3d_available, open3d_error,
+                                              reconstruct)
 
 CROP_MARGIN = 1.0  # m around the target's bounding box
 THIN_VOXEL = 0.1  # m, one return per cube before the normals and Poisson
@@ -52,7 +53,7 @@ def target_cloud(result, margin: float = CROP_MARGIN, voxel: float = THIN_VOXEL)
 
 def mission_surface(result, depth: int = 9, trim: float = 0.05, k: int = 200,
                     progress: bool = False) -> MissionSurface | None:
-    """Reconstructs and scores the target from the dive's returns; None when Open3D is missing
+    """Reconstructs and scores the target from the dive's returns; None when Open3D is unusable
     or the target's box holds fewer than `MIN_POINTS` returns."""
     cloud = target_cloud(result)
     if not open3d_available() or len(cloud) < max(MIN_POINTS, k + 1):
@@ -79,10 +80,10 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
 
     out = FilePath(outdir)
     write_ply(from_scan_log(result.scan_log).shifted(result.site.to_site), out / "points.ply")
-    if not open3d_available():
-        return dict(built=False, reason="Open3D is not installed (the reconstruct extra)")
     surface = mission_surface(result)
-    if surface is None:
+    if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
+        if open3d_error() is not None and len(target_cloud(result)) >= MIN_POINTS:
+            return dict(built=False, reason=open3d_error())
         return dict(built=False, reason=f"fewer than {MIN_POINTS} returns in the target's box "
                                         f"(+{CROP_MARGIN:g} m)")
     mesh = surface.reconstruction.mesh

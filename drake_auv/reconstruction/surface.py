@@ -14,13 +14,15 @@ with eastings of 1e5-1e6 m keep their precision), metres.
 
 from __future__ import annotations
 
+import ctypes
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 from tqdm import tqdm
 
-from drake_auv.reconstruction.pointcloud import PointCloud
+from drake_auv.reconstruction.pointcloud import PointCloud, optional_module
 
 DEPTH_RANGE = (5, 12)  # Poisson octree depth: 2^depth cells across the cloud's cube
 K_RANGE = (3, 1000)  # neighbours of the normal estimation
@@ -29,22 +31,46 @@ MIN_POINTS = 10
 
 
 def open3d_available() -> bool:
-    """Whether the optional Open3D package is importable."""
+    """Whether Open3D imports and loads."""
+    return _open3d_or_reason()[0] is not None
+
+
+def open3d_error() -> str | None:
+    """None when Open3D is usable, else why not (one line: the import's own error)."""
+    return _open3d_or_reason()[1]
+
+
+def load_open3d():
+    """The `open3d` module; ValueError with the reason when it is missing or does not load."""
+    module, reason = _open3d_or_reason()
+    if module is None:
+        raise ValueError(reason)
+    return module
+
+
+@functools.cache
+def _open3d_or_reason():
+    """(open3d, None) or (None, reason), tried once per process. Open3D's Linux wheels link
+    libusb-1.0.so.0, which a bare system lacks: the copy shipped by the `libusb-package` wheel
+    (the reconstruct extra) is loaded first, RTLD_GLOBAL, and the dynamic loader then resolves
+    Open3D's dependency to it by its soname."""
     try:
-        import open3d  # noqa: F401
+        import libusb_package
     except ImportError:
-        return False
-    return True
-
-
-def _open3d():
+        pass  # the system's libusb, if any
+    else:
+        path = libusb_package.get_library_path()
+        if path is not None:
+            try:
+                ctypes.CDLL(str(path), mode=ctypes.RTLD_GLOBAL)
+            except OSError as err:
+                return None, f"the libusb shipped by libusb-package does not load: {err}"
     try:
-        import open3d
-    except ImportError as err:
-        raise ValueError("surface reconstruction needs Open3D: pip install "
-                         "'drake_auv[reconstruct]' (the open3d-cpu package)") from err
+        open3d = optional_module("open3d", "surface reconstruction", "open3d-cpu")
+    except ValueError as err:
+        return None, str(err)
     open3d.utility.set_verbosity_level(open3d.utility.VerbosityLevel.Error)
-    return open3d
+    return open3d, None
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,7 +115,7 @@ def estimate_normals(points, origins=None, k: int = 200) -> np.ndarray:
     k nearest neighbours (Hoppe et al. 1992), flipped to face the point's sensor origin
     (origins (n, 3)); without origins, oriented by propagation over the k-neighbour graph
     (Hoppe's minimum spanning tree), up to one global sign."""
-    o3d = _open3d()
+    o3d = load_open3d()
     points = np.asarray(points, dtype=float)
     centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points - centre))
@@ -109,7 +135,7 @@ def poisson(points, normals, depth: int = 9, trim: float = 0.05,
     vertices in the lowest `trim` quantile of density; returns (mesh, per-vertex densities).
     One thread by default: Open3D's threaded solver differs run to run in the last digits (and
     is not faster on 2 cores); -1 uses all cores."""
-    o3d = _open3d()
+    o3d = load_open3d()
     points = np.asarray(points, dtype=float)
     centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points - centre))

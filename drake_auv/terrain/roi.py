@@ -6,6 +6,8 @@ polygon set to no-data, in the same world frame and georeferencing as the input.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from matplotlib.path import Path as PolygonPath
 
@@ -57,6 +59,11 @@ def crop_to_roi(bathy: Bathymetry, roi) -> Bathymetry:
                              f"{hi[0]:.2f}], y [{lo[1]:.2f}, {hi[1]:.2f}] in map units")
         return _crop(bathy, inside)
     poly_map = roi_polygon(roi)
+    import shapely
+
+    polygon = shapely.Polygon(poly_map)
+    if not polygon.is_valid:  # a self-intersecting ring: the repaired shape, said so
+        return crop_to_roi(bathy, repaired(polygon, "ROI polygon"))
     # Cell centres on the boundary count as inside (matplotlib's test is orientation-dependent
     # on the boundary, so take both signs of a tiny tolerance).
     tol = 1e-6 * float(np.ptp(poly_map, axis=0).max())
@@ -68,6 +75,26 @@ def crop_to_roi(bathy: Bathymetry, roi) -> Bathymetry:
         raise ValueError(f"ROI {poly_map.tolist()} lies outside the grid: its cell centres span "
                          f"x [{lo[0]:.2f}, {hi[0]:.2f}], y [{lo[1]:.2f}, {hi[1]:.2f}] in map units")
     return _crop(bathy, inside)
+
+
+def repaired(geom, what: str):
+    """`geom` (a shapely polygonal geometry) made valid by `shapely.make_valid`, its polygonal
+    part kept, with a one-line warning naming `what`, GEOS's reason and the areas (map
+    units^2, the original's by the shoelace sum, which counts a loop the other way round
+    negative); `geom` itself when it is valid."""
+    import shapely
+
+    if shapely.is_valid(geom):
+        return geom
+    reason = shapely.is_valid_reason(geom)
+    fixed = shapely.make_valid(geom)
+    if fixed.geom_type == "GeometryCollection":
+        fixed = shapely.union_all([g for g in fixed.geoms
+                                   if g.geom_type in ("Polygon", "MultiPolygon")])
+    parts = len(getattr(fixed, "geoms", [fixed]))
+    warnings.warn(f"{what}: {reason}; repaired into {parts} polygon(s) of area {fixed.area:.6g} "
+                  f"(was {geom.area:.6g}) map units^2, the region used", stacklevel=2)
+    return fixed
 
 
 def _crop(bathy: Bathymetry, inside: np.ndarray) -> Bathymetry:

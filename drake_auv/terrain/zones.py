@@ -13,6 +13,7 @@ from pathlib import Path as FilePath
 import numpy as np
 
 from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.roi import repaired
 
 
 def read_zones(filename, bathy: Bathymetry, what: str = "no-go zone"):
@@ -41,7 +42,8 @@ def read_zones(filename, bathy: Bathymetry, what: str = "no-go zone"):
     if not polys:
         kinds = sorted({g.geom_type for g in geoms}) or ["nothing"]
         raise ValueError(f"{filename}: a {what} file needs polygons, it holds {', '.join(kinds)}")
-    geom = shapely.union_all(shapely.make_valid(np.array(polys, dtype=object)))
+    geom = shapely.union_all([repaired(g, f"{filename}: {what} {k}")
+                              for k, g in enumerate(polys)])
     file_crs = meta.get("crs")
     if file_crs and bathy.crs is None:
         raise ValueError(f"{filename} is in {file_crs} but the grid has no CRS: give a "
