@@ -39,7 +39,14 @@ from drake_auv.terrain.site_files import write_site_files  # noqa: E402
 TILE = (Path(__file__).resolve().parents[1].parent / "shared" / "data" / "monterey"
         / "MontereyBay.R_-121.815_-121.805_36.790_36.800.epsg3857.tif")
 CORNER = (150.0, 840.0)  # south-west corner of the region, the tile's world frame (m): the wall
-MISSIONS = {"internal": None, "cola2": "mission.xml", "ardusub": "mission.plan"}
+
+
+def plan_files(folder: Path) -> list[str]:
+    """The ArduSub export: mission.plan, or mission_1.plan, mission_2.plan, ... in order."""
+    if (folder / "mission.plan").exists():
+        return ["mission.plan"]
+    return sorted((p.name for p in folder.glob("mission_*.plan")),
+                  key=lambda name: int(name[8:-5]))
 
 
 def mission_file(folder: Path, name: str, seed: int, steps) -> Path:
@@ -71,13 +78,14 @@ def main() -> None:
     plan = plan_mission(internal, site)
     write_outputs(plan.coverage, out, figures=False, exports=("cola2", "qgc"),
                   surge_velocity=args.speed, metrics_3d=False)
+    missions = {"internal": None, "cola2": ["mission.xml"], "ardusub": plan_files(out)}
     results, rows = {}, {}
-    for name, file in MISSIONS.items():
-        if file is None:
+    for name, files in missions.items():
+        if files is None:
             result = run_mission(internal, site=site, plan=plan)
-        else:
-            result = run_mission(load_mission(mission_file(
-                out, name, args.seed, [{"fly": {"file": file, "speed": args.speed}}])))
+        else:  # a split ArduSub mission flies its files one after the other, in one dive
+            result = run_mission(load_mission(mission_file(out, name, args.seed, [
+                {"fly": {"file": file, "speed": args.speed}} for file in files])))
         write_report(result, out / name)
         summary = summarise(result)
         results[name] = result
@@ -85,6 +93,7 @@ def main() -> None:
                           contact=summary["contact"],
                           multibeam_coverage=summary["coverage"]["multibeam"],
                           duration_s=result.duration_s, outcomes=result.outcomes,
+                          files=files or [],
                           distance_mean_m=summary["distance_to_target"]["mean_m"])
     (out / "comparison.json").write_text(json.dumps(rows, indent=2))
     lines = [f"# Export and fly: {args.size:g} m x {args.size:g} m of {TILE.name}, Omega "

@@ -126,3 +126,17 @@ def test_heave_in_3d_only_for_cola2(tmp_path):
         {"fly": {"file": "mission.plan", "heave_in_3d": True}}]}))
     with pytest.raises(MissionFileError, match="only for COLA2"):
         load_mission(mission)
+
+
+def test_a_campaign_flies_the_exported_file(flown, tmp_path):
+    """`drake-auv campaign` over a mission whose step flies an exported file: one row per
+    seed, each a dive that flew the file (the seeds move the prior and the drift)."""
+    folder, _, _ = flown
+    out = tmp_path / "campaign"
+    code = run_cli(["campaign", folder / "ardusub.yaml", "--seeds", "0:2", "--set",
+                    "limits.max_time_s=40", "--workers", "1", "--quiet", "-o", out])
+    assert code == 0
+    import csv
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert sorted(r["seed"] for r in rows) == ["0", "1"]
+    assert all(r["status"] == "ok" for r in rows), rows
