@@ -33,10 +33,11 @@ import numpy as np
 from drake_auv.autopilot.cola2 import DEFAULT_SURGE, HEAVE_SPEED, held_band
 from drake_auv.autopilot.items import MissionItem, VehicleMission
 from drake_auv.planning.geo import GeoFrame
+from drake_auv.planning.missions import ALTITUDE_LABELS
 from drake_auv.planning.path import Path
 from drake_auv.planning.surface import TerrainSurface
 
-LANE_LABELS = ("planar", "lawnmower")
+
 _EPS = 1e-9
 
 
@@ -80,7 +81,7 @@ class _Splitter:
         self.xy = self.p[:, :2]
         self.alt = self.p[:, 2] - surface.elevation(self.p[:, 0], self.p[:, 1])
         held = self.p[:, 2] >= self.ceiling - 1e-6
-        depth = held | ~np.isin(path.labels.astype(str), LANE_LABELS)
+        depth = held | ~np.isin(path.labels.astype(str), ALTITUDE_LABELS)
         self.depth_count = np.concatenate([[0], np.cumsum(depth)])
         self.deviation, self.tol = float(deviation), float(tolerance_xy)
         self.band_kw = dict(heave_in_3d=heave_in_3d, spacing=spacing, speed=speed,
@@ -91,7 +92,7 @@ class _Splitter:
         """Lowest safe elevation on a square lattice of spacing h over the path's extent,
         for a radius grown by h / sqrt(2): a point is at least that far from its nearest node,
         so the node's value bounds the point's from above (conservative)."""
-        h = min(1.0, omega / 8.0)
+        h = omega / 8.0
         lo = self.xy.min(axis=0) - 2 * h
         n = np.ceil((self.xy.max(axis=0) + 2 * h - lo) / h).astype(int) + 1
         gx, gy = np.meshgrid(lo[0] + h * np.arange(n[0]), lo[1] + h * np.arange(n[1]))
@@ -118,13 +119,10 @@ class _Splitter:
                 return None
             width *= 4
 
-    def evaluate(self, a, b, z0, altitude, target):
+    def evaluate(self, a, b, z0, altitude, target, limit=np.inf):
         """(safe, deviation, end z) of the section a->b holding `target` (altitude above the
-        seabed, or elevation) with the vehicle starting at elevation z0."""
-        xy, z_f, z_c = held_band(self.xy[a], self.xy[b], altitude, target, z0,
-                                 self.surface.elevation, start_z=z0, **self.band_kw)
-        lo, hi = np.minimum(z_f, z_c), np.maximum(z_f, z_c)
-        safe = bool(np.all(lo >= self.need(xy) - _EPS) and np.all(hi <= self.ceiling + _EPS))
+        seabed, or elevation) with the vehicle starting at elevation z0; a deviation over
+        `limit` returns at once (unsafe)."""
         seg = self.xy[b] - self.xy[a]
         v = self.xy[a:b + 1] - self.xy[a]
         t = np.clip(v @ seg / max(float(seg @ seg), 1e-18), 0.0, 1.0)
@@ -135,15 +133,21 @@ class _Splitter:
             z_held = z0 + t * (target - z0)
         else:
             z_held = np.full(len(t), target)
-        dev = float(np.max(np.hypot(np.hypot(*(self.xy[a:b + 1] - proj).T),
+        dev = float(np.max(np.hypot(np.hypot(*(v - t[:, None] * seg).T),
                                     z_held - self.p[a:b + 1, 2])))
+        if dev > limit:
+            return False, dev, np.nan
+        xy, z_f, z_c = held_band(self.xy[a], self.xy[b], altitude, target, z0,
+                                 self.surface.elevation, start_z=z0, **self.band_kw)
+        safe = bool(np.all(np.minimum(z_f, z_c) >= self.need(xy) - _EPS)
+                    and np.all(np.maximum(z_f, z_c) <= self.ceiling + _EPS))
         return safe, dev, float(z_c[-1])
 
     def natural(self, a, b, z0):
         """The section a->b at the path's own target: (ok, altitude_mode, deviation, end z)."""
         altitude = self.depth_count[b + 1] == self.depth_count[a + 1]
         target = self.alt[b] if altitude else self.p[b, 2]
-        safe, dev, z_end = self.evaluate(a, b, z0, altitude, target)
+        safe, dev, z_end = self.evaluate(a, b, z0, altitude, target, self.deviation)
         return safe and dev <= self.deviation, altitude, dev, z_end
 
     def lifted(self, a, b, z0):
@@ -155,10 +159,11 @@ class _Splitter:
         safe, dev, z_end = self.evaluate(a, b, z0, False, target)
         return safe, dev, z_end
 
-    def section_from(self, a, z0):
+    def section_from(self, a, z0, guess=1):
         """The longest acceptable section from sample a (galloping, then bisection):
         (b, altitude_mode, deviation, end z, resolved) or None when the path ends within
-        tolerance_xy of sample a."""
+        tolerance_xy of sample a. The gallop's first step is `guess` samples (the previous
+        section's length: lanes repeat)."""
         b_min = self.first_reach(a)
         if b_min is None:
             return None
@@ -167,7 +172,7 @@ class _Splitter:
         if not ok:
             safe, dev, z_end = self.lifted(a, b_min, z0)
             return b_min, False, dev, z_end, safe
-        good, bad, step = (b_min, altitude, dev, z_end), None, 1
+        good, bad, step = (b_min, altitude, dev, z_end), None, max(int(guess), 1)
         while good[0] < n - 1:
             cand = min(b_min + step, n - 1)
             res = self.natural(a, cand, z0)
@@ -226,7 +231,7 @@ def cola2_sections(path: Path, surface: TerrainSurface, omega: float, min_depth:
     index, modes, devs, ends, resolved = [0], [], [], [float(path.points[0, 2])], []
     a = 0
     while a < len(path) - 1:
-        res = sp.section_from(a, ends[-1])
+        res = sp.section_from(a, ends[-1], index[-1] - index[-2] if len(index) > 1 else 1)
         if res is None:
             if not modes:
                 raise ValueError(f"the path lies within tolerance_xy = {tolerance_xy} m of its "
@@ -417,3 +422,29 @@ def read_cola2(path) -> VehicleMission:
     if not items:
         raise ValueError(f"{name}: COLA2 mission has no <mission_step>")
     return VehicleMission("cola2", tuple(items), source=name)
+
+
+def export_cola2(path: Path, surface: TerrainSurface, omega: float, min_depth: float,
+                 geo: GeoFrame, filename, surge_velocity: float = DEFAULT_SURGE,
+                 tolerance_xy: float = 1.0, heave_in_3d: bool = False) -> dict:
+    """Writes the COLA2 mission of `path` to `filename`, reads it back (`read_cola2`), replays
+    it as COLA2 flies it from its first point (`autopilot.cola2`) and returns the figures for
+    the report: sections, altitude-mode sections, the largest deviation from the path, the
+    sections over the deviation tolerance (depth changing faster than it holds without
+    heave_in_3d) or unresolved, and the replay's `clearance_report`."""
+    from drake_auv.autopilot.cola2 import clearance_report, replay_cola2
+    from drake_auv.autopilot.items import localise
+
+    sections = cola2_sections(path, surface, omega, min_depth, tolerance_xy=tolerance_xy,
+                              surge_velocity=surge_velocity, heave_in_3d=heave_in_3d)
+    write_cola2(sections, geo, filename, surge_velocity=surge_velocity,
+                tolerance_xy=tolerance_xy)
+    legs = localise(read_cola2(filename), geo.from_lonlat, geo.grid_north_azimuth)
+    positions, _ = replay_cola2(legs, surface.elevation, sections.points[0],
+                                heave_in_3d=heave_in_3d)
+    return {"sections": len(sections), "altitude_sections": int(sections.altitude_mode.sum()),
+            "heave_in_3d": bool(heave_in_3d), "deviation_tolerance_m": 0.1 * omega,
+            "max_deviation_m": float(sections.deviation.max()),
+            "sections_over_deviation": int((sections.deviation > 0.1 * omega + 1e-9).sum()),
+            "unresolved_sections": sections.unresolved,
+            "replay": clearance_report(positions, surface, omega, min_depth)}

@@ -238,7 +238,7 @@ def parse_exports(text: str | None) -> tuple[str, ...]:
 def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
-                  metrics_3d=True) -> list[FilePath]:
+                  metrics_3d=True, heave_in_3d: bool = False) -> list[FilePath]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
@@ -250,6 +250,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
         surge_velocity: mission speed, m/s; tolerance_xy: waypoint arrival tolerance, m.
         metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report: True
             computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
+        heave_in_3d: the COLA2 vehicle interpolates depth along sections (its heave_in_3D);
+            the report's `exports.cola2` gives the sections and their replay's figures.
     """
     georeferenced = plan.bathy.crs is not None or origin_lonlat is not None
     if exports is None:
@@ -260,7 +262,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     geo = GeoFrame(plan.bathy, origin_lonlat) if exports else None
     outdir = FilePath(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    written = []
+    written, extras = [], {}
     plan.path.to_csv(outdir / "path.csv")
     written.append(outdir / "path.csv")
     if "geojson" in exports:
@@ -270,12 +272,16 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
             write_geojson(plan.lawnmower, geo, outdir / "lawnmower.geojson", "lawnmower")
             written.append(outdir / "lawnmower.geojson")
     if "cola2" in exports or "qgc" in exports:
-        from drake_auv.planning.missions import mission_waypoints, write_cola2, write_qgc
+        from drake_auv.planning.missions import mission_waypoints, write_qgc
 
         wp = mission_waypoints(plan.path, plan.surface)
         if "cola2" in exports:
-            write_cola2(wp, geo, outdir / "mission.xml", surge_velocity=surge_velocity,
-                        tolerance_xy=tolerance_xy)
+            from drake_auv.planning.cola2 import export_cola2
+
+            extras["cola2"] = export_cola2(plan.path, plan.surface, plan.parameters["omega"],
+                                           plan.parameters["min_depth"], geo,
+                                           outdir / "mission.xml", surge_velocity,
+                                           tolerance_xy, heave_in_3d)
             written.append(outdir / "mission.xml")
         if "qgc" in exports:
             zones = [geo.to_lonlat(ring) for ring in plan.parameters.get("no_go_rings", [])]
@@ -289,7 +295,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
         m3d = evaluate_plan_3d(plan)
     (outdir / "report.md").write_text(report_markdown(plan, m3d))
     with open(outdir / "report.json", "w") as f:
-        json.dump(report_dict(plan, m3d), f, indent=2)
+        json.dump({**report_dict(plan, m3d), **({"exports": extras} if extras else {})}, f,
+                  indent=2)
     written += [outdir / "report.md", outdir / "report.json"]
     if figures:
         from drake_auv.planning.figures import write_figures
