@@ -144,7 +144,10 @@ class _Splitter:
         return safe, dev, float(z_c[-1])
 
     def natural(self, a, b, z0):
-        """The section a->b at the path's own target: (ok, altitude_mode, deviation, end z)."""
+        """The section a->b at the path's own target: (ok, altitude_mode, deviation, end z);
+        not ok when shorter than tolerance_xy (a path that doubles back)."""
+        if np.hypot(*(self.xy[b] - self.xy[a])) < self.tol:
+            return False, False, np.inf, np.nan
         altitude = self.depth_count[b + 1] == self.depth_count[a + 1]
         target = self.alt[b] if altitude else self.p[b, 2]
         safe, dev, z_end = self.evaluate(a, b, z0, altitude, target, self.deviation)
