@@ -39,6 +39,7 @@ from drake_auv.planning.surface import TerrainSurface
 
 
 _EPS = 1e-9
+DEVIATION_SHARE = 0.1  # default deviation tolerance, a share of Omega
 
 
 @dataclass(frozen=True)
@@ -221,7 +222,7 @@ def cola2_sections(path: Path, surface: TerrainSurface, omega: float, min_depth:
         heave_in_3d: the vehicle interpolates depth along depth-mode sections.
         spacing: largest distance between checked samples along a section, m.
     """
-    deviation = 0.1 * omega if deviation is None else deviation
+    deviation = DEVIATION_SHARE * omega if deviation is None else deviation
     for name, value in (("omega", omega), ("deviation", deviation),
                         ("tolerance_xy", tolerance_xy), ("surge_velocity", surge_velocity),
                         ("heave_speed", heave_speed), ("spacing", spacing)):
@@ -446,8 +447,8 @@ def export_cola2(path: Path, surface: TerrainSurface, omega: float, min_depth: f
     positions, _ = replay_cola2(legs, surface.elevation, sections.points[0],
                                 heave_in_3d=heave_in_3d)
     return {"sections": len(sections), "altitude_sections": int(sections.altitude_mode.sum()),
-            "heave_in_3d": bool(heave_in_3d), "deviation_tolerance_m": 0.1 * omega,
+            "heave_in_3d": bool(heave_in_3d), "deviation_tolerance_m": DEVIATION_SHARE * omega,
             "max_deviation_m": float(sections.deviation.max()),
-            "sections_over_deviation": int((sections.deviation > 0.1 * omega + 1e-9).sum()),
+            "sections_over_deviation": int((sections.deviation > DEVIATION_SHARE * omega + 1e-9).sum()),
             "unresolved_sections": sections.unresolved,
             "replay": clearance_report(positions, surface, omega, min_depth)}
