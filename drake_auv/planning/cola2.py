@@ -446,9 +446,10 @@ def export_cola2(path: Path, surface: TerrainSurface, omega: float, min_depth: f
     legs = localise(read_cola2(filename), geo.from_lonlat, geo.grid_north_azimuth)
     positions, _ = replay_cola2(legs, surface.elevation, sections.points[0],
                                 heave_in_3d=heave_in_3d)
+    over = int((sections.deviation > DEVIATION_SHARE * omega + 1e-9).sum())
     return {"sections": len(sections), "altitude_sections": int(sections.altitude_mode.sum()),
             "heave_in_3d": bool(heave_in_3d), "deviation_tolerance_m": DEVIATION_SHARE * omega,
             "max_deviation_m": float(sections.deviation.max()),
-            "sections_over_deviation": int((sections.deviation > DEVIATION_SHARE * omega + 1e-9).sum()),
+            "sections_over_deviation": over,
             "unresolved_sections": sections.unresolved,
             "replay": clearance_report(positions, surface, omega, min_depth)}
