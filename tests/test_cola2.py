@@ -209,8 +209,8 @@ def test_the_former_waypoint_export_fails_the_replay(monterey_plans, tmp_path):
     assert rep["closer_than_half_omega"] > 0
 
 
-@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow,
-                                                                HealthCheck.function_scoped_fixture])
+@settings(max_examples=6, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(seed=st.integers(0, 10_000), top=st.floats(-3.0, -0.2), omega=st.floats(1.5, 3.0),
        heave_in_3d=st.booleans())
 def test_random_seabeds_replay_safe(tmp_path, seed, top, omega, heave_in_3d):
