@@ -1,5 +1,6 @@
 """Exports a vehicle runs (COLA2 mission XML, QGroundControl .plan) and the WGS 84 GeoJSON:
-each written, read back (XML parsed, JSON loaded) and compared with the path."""
+each written, read back (XML parsed, JSON loaded) and compared with the path (the COLA2
+sections' semantics and replay: tests/test_cola2.py)."""
 
 import json
 import re
@@ -69,8 +70,10 @@ def check_exports(plan, outdir, origin=None):
     pts = plan.path.points
     ll, mans = read_cola2(outdir / "mission.xml")
     assert [m.get("type") for m in mans[:2]] == ["goto", "section"] and mans[-1].get("type") == "park"
-    back = np.column_stack([geo.from_lonlat(ll[:, :2]), -ll[:, 2]])
-    assert nearest_distance(back, pts).max() < 0.1
+    # Section ends are path samples in xy; their z is what COLA2 holds (tests/test_cola2.py).
+    assert nearest_distance(geo.from_lonlat(ll[:, :2]), pts[:, :2]).max() < 0.1
+    cola2 = json.loads((outdir / "report.json").read_text())["exports"]["cola2"]
+    assert cola2["sections"] == len(mans) - 2 and cola2["replay"]["closer_than_reachable"] == 0
     heave = np.array([int(m.find("heave_mode").text) for m in mans[:-1]])
     assert set(heave.tolist()) <= {0, 1}
     if "slice" in set(plan.path.labels):
@@ -143,11 +146,13 @@ def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
     back = np.column_stack([geo.from_lonlat(coords[:, :2]), coords[:, 2]])
     assert nearest_distance(back, path.points).max() < 0.1
     ll, _ = read_cola2(tmp_path / "mission.xml")
-    back = np.column_stack([geo.from_lonlat(ll[:, :2]), -ll[:, 2]])
-    assert nearest_distance(back, path.points).max() < 0.1
+    assert nearest_distance(geo.from_lonlat(ll[:, :2]), path.points[:, :2]).max() < 0.1
     _, items = read_qgc(tmp_path)
     p = np.array([i["params"][4:6] for i in items])
     assert nearest_distance(geo.from_lonlat(p[:, ::-1]), path.points[:, :2]).max() < 0.1
+    cola2 = json.loads((tmp_path / "report.json").read_text())["exports"]["cola2"]
+    assert cola2["sections"] == len(ll) - 2
+    assert cola2["replay"]["closer_than_half_omega"] == 0
     # The tile name's extent; the raster itself overhangs it by 0.00051 deg on every side
     # (its transform: 5.5 cells), and the path covers the raster's cell centres.
     lon0, lon1, lat0, lat1 = (float(v) for v in re.findall(r"-?\d+\.\d+", tile.stem))

@@ -70,6 +70,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--origin-lonlat", default=None,
                         help="WGS 84 'LON,LAT' of the world origin, for grids without a CRS "
                              "(the caldera site defaults to the Santorini caldera)")
+    parser.add_argument("--heave-in-3d", action="store_true",
+                        help="COLA2 vehicle configured with heave_in_3D (depth interpolated "
+                             "along each section): write the sections it flies that way")
     parser.add_argument("--speed", type=float, default=0.5,
                         help="mission surge speed, m/s, > 0 (default 0.5)")
     parser.add_argument("--max-items", type=int, default=700,
@@ -134,7 +137,7 @@ def run(args) -> int:
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
                           exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
                           metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
-                          ardusub_frames=args.ardusub_frames)
+                          ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d)
     print(table3_markdown(plan.metrics))
     print(f"wrote {len(files)} files to {args.outdir}")
     return 0

@@ -245,8 +245,8 @@ def parse_exports(text: str | None) -> tuple[str, ...]:
 def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
-                  metrics_3d=True, max_items: int = 700,
-                  ardusub_frames: str = "terrain") -> list[FilePath]:
+                  metrics_3d=True, max_items: int = 700, ardusub_frames: str = "terrain",
+                  heave_in_3d: bool = False) -> list[FilePath]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
@@ -261,6 +261,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
             ("terrain" or "depth"), see `planning.qgc.write_qgc`.
         metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report: True
             computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
+        heave_in_3d: the COLA2 vehicle interpolates depth along sections (its heave_in_3D);
+            the report's `exports.cola2` gives the sections and their replay's figures.
     """
     georeferenced = plan.bathy.crs is not None or origin_lonlat is not None
     if exports is None:
@@ -275,7 +277,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     geo = GeoFrame(plan.bathy, origin_lonlat) if exports else None
     outdir = FilePath(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    written = []
+    written, extras = [], {}
     plan.path.to_csv(outdir / "path.csv")
     written.append(outdir / "path.csv")
     if "geojson" in exports:
@@ -286,17 +288,18 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                           plan.surface)
             written.append(outdir / "lawnmower.geojson")
     if "cola2" in exports:
-        from drake_auv.planning.missions import mission_waypoints, write_cola2
+        from drake_auv.planning.cola2 import export_cola2
 
-        write_cola2(mission_waypoints(plan.path, plan.surface), geo, outdir / "mission.xml",
-                    surge_velocity=surge_velocity, tolerance_xy=tolerance_xy)
+        extras["cola2"] = export_cola2(plan.path, plan.surface, plan.parameters["omega"],
+                                       plan.parameters["min_depth"], geo, outdir / "mission.xml",
+                                       surge_velocity, tolerance_xy, heave_in_3d)
         written.append(outdir / "mission.xml")
-    qgc = None
     if "qgc" in exports:
         from drake_auv.planning.qgc import write_qgc
 
-        files, qgc = write_qgc(plan, geo, outdir, max_items=max_items, frames=ardusub_frames,
-                               speed=surge_velocity, acceptance_radius=tolerance_xy)
+        files, extras["qgc"] = write_qgc(plan, geo, outdir, max_items=max_items,
+                                         frames=ardusub_frames, speed=surge_velocity,
+                                         acceptance_radius=tolerance_xy)
         written += files
     m3d = metrics_3d if isinstance(metrics_3d, dict) else None
     if metrics_3d is True:
@@ -305,8 +308,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
         m3d = evaluate_plan_3d(plan)
     (outdir / "report.md").write_text(report_markdown(plan, m3d))
     rep = report_dict(plan, m3d)
-    if qgc is not None:
-        rep["exports"] = {"qgc": qgc}
+    if extras:
+        rep["exports"] = extras
     with open(outdir / "report.json", "w") as f:
         json.dump(rep, f, indent=2)
     written += [outdir / "report.md", outdir / "report.json"]

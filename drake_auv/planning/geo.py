@@ -87,3 +87,9 @@ class GeoFrame:
         dlat = np.radians(b[:, 1] - a[:, 1])
         dlon = np.radians(b[:, 0] - a[:, 0]) * np.cos(np.radians(a[:, 1]))
         return np.arctan2(dlon, dlat)
+
+    def compass_yaw(self, xy, heading) -> np.ndarray:
+        """(N,) world headings `heading` (rad, from world +x counter-clockwise) at world points
+        `xy` (N, 2) as NED yaws: radians clockwise from true north, in [0, 2 pi)."""
+        return np.mod(np.pi / 2 - np.asarray(heading, float) + self.grid_north_azimuth(xy),
+                      2 * np.pi)

@@ -1,5 +1,6 @@
-"""Missions a vehicle runs, from a `Path`: COLA2 mission XML (GIRONA 500) here, QGroundControl
-`.plan` JSON (ArduSub) in `planning.qgc`, both in WGS 84.
+"""Waypoints of a `Path`, the start of the vehicle missions: the COLA2 mission XML
+(`planning.cola2`, sections chosen under COLA2's semantics) and the QGroundControl `.plan`
+(`planning.qgc`, ArduSub), both in WGS 84.
 
 Waypoints: the path's samples thinned per labelled run by Douglas-Peucker in 3D (x, y and the
 coordinate the vehicle holds: altitude above the seabed on terrain-following lanes, elevation
@@ -8,23 +9,14 @@ every waypoint is a path sample. A waypoint takes the label of the segment that 
 Vertical reference per waypoint: altitude above the seabed on "planar" and "lawnmower" lanes
 (the DVL holds the offset over planar terrain), depth on slicing contours and transits (planned
 3D lines whose altitude varies).
-
-COLA2 mission format 2.0 (field names as cola2_lib's `Mission::loadMission` reads them, see
-docs/planning.md): `<mission><version>2.0</version>` then `<mission_step>`s with one
-`<maneuver type="goto|section|park">`: a goto to the first waypoint, one section per leg
-(initial_latitude/longitude/depth to final_latitude/longitude/depth/altitude), a park at the
-end. heave_mode 0 = depth, 1 = altitude; depths positive down, m; yaw radians clockwise from
-north (NED).
 """
 
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import numpy as np
 
-from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.path import Path
 from drake_auv.planning.surface import TerrainSurface
 
@@ -103,72 +95,3 @@ def mission_waypoints(path: Path, surface: TerrainSurface, tolerance: float = 0.
     return Waypoints(idx, pts[idx], altitude[idx], path.heading[idx], labels[idx], use_alt[idx])
 
 
-def _compass_yaw(geo: GeoFrame, wp: Waypoints) -> np.ndarray:
-    """(K,) headings as NED yaw: radians clockwise from true north, in [0, 2 pi)."""
-    grid = np.pi / 2 - wp.heading  # clockwise from world +y
-    return np.mod(grid + geo.grid_north_azimuth(wp.points[:, :2]), 2 * np.pi)
-
-
-def _text(parent, tag: str, value) -> None:
-    el = ET.SubElement(parent, tag)
-    if isinstance(value, bool):
-        el.text = "true" if value else "false"
-    elif isinstance(value, (int, np.integer)):
-        el.text = str(int(value))
-    else:
-        el.text = f"{float(value):.9f}"  # 1e-9 deg of latitude is 0.1 mm
-
-
-def cola2_mission(wp: Waypoints, geo: GeoFrame, surge_velocity: float = 0.5,
-                  tolerance_xy: float = 1.0, park_time: float = 10.0) -> ET.ElementTree:
-    """The COLA2 mission (version 2.0) of the waypoints: goto, sections, park.
-
-    Args:
-        surge_velocity: commanded forward speed, m/s (> 0).
-        tolerance_xy: horizontal arrival tolerance, m (> 0).
-        park_time: time holding the last waypoint, s (>= 0).
-    """
-    for name, value, ok in (("surge_velocity", surge_velocity, surge_velocity > 0),
-                            ("tolerance_xy", tolerance_xy, tolerance_xy > 0),
-                            ("park_time", park_time, park_time >= 0)):
-        if not (np.isfinite(value) and ok):
-            raise ValueError(f"{name} must be {'>= 0' if name == 'park_time' else '> 0'}, "
-                             f"got {value}")
-    lonlat = geo.to_lonlat(wp.points[:, :2])
-    depth = -wp.points[:, 2]
-    yaw = _compass_yaw(geo, wp)
-    root = ET.Element("mission")
-    ET.SubElement(root, "version").text = "2.0"
-
-    def final(man, k):
-        _text(man, "final_latitude", lonlat[k, 1])
-        _text(man, "final_longitude", lonlat[k, 0])
-        _text(man, "final_depth", depth[k])
-        _text(man, "final_altitude", wp.altitude[k])
-        _text(man, "heave_mode", 1 if wp.use_altitude[k] else 0)
-        _text(man, "surge_velocity", surge_velocity)
-
-    for k in range(len(wp)):
-        step = ET.SubElement(root, "mission_step")
-        man = ET.SubElement(step, "maneuver", type="goto" if k == 0 else "section")
-        if k:
-            _text(man, "initial_latitude", lonlat[k - 1, 1])
-            _text(man, "initial_longitude", lonlat[k - 1, 0])
-            _text(man, "initial_depth", depth[k - 1])
-        final(man, k)
-        _text(man, "tolerance_xy", tolerance_xy)
-        _text(man, "no_altitude_goes_up", True)
-    step = ET.SubElement(root, "mission_step")
-    man = ET.SubElement(step, "maneuver", type="park")
-    final(man, len(wp) - 1)
-    _text(man, "final_yaw", yaw[-1])
-    _text(man, "use_yaw", False)
-    _text(man, "time", park_time)
-    _text(man, "no_altitude_goes_up", True)
-    ET.indent(root)
-    return ET.ElementTree(root)
-
-
-def write_cola2(wp: Waypoints, geo: GeoFrame, filename, **kwargs) -> None:
-    """Writes `cola2_mission` to `filename` (UTF-8 XML with a declaration)."""
-    cola2_mission(wp, geo, **kwargs).write(filename, encoding="utf-8", xml_declaration=True)

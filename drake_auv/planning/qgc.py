@@ -227,12 +227,6 @@ def budget_mission(plan, max_items: int = DEFAULT_MAX_ITEMS,
     return QGCMission(_subset(full, idx), parts, tol, float(admitted), len(idx) - base, frames)
 
 
-def _compass_yaw_deg(geo: GeoFrame, wp: Waypoints) -> np.ndarray:
-    """(K,) headings in degrees clockwise from true north, [0, 360)."""
-    grid = np.pi / 2 - wp.heading  # clockwise from world +y
-    return np.degrees(np.mod(grid + geo.grid_north_azimuth(wp.points[:, :2]), 2 * np.pi))
-
-
 def _open_ring(ring: np.ndarray) -> np.ndarray:
     ring = np.asarray(ring, float)
     return ring[:-1] if len(ring) > 1 and np.allclose(ring[0], ring[-1]) else ring
@@ -252,7 +246,7 @@ def qgc_plan(wp: Waypoints, geo: GeoFrame, speed: float = 0.5, acceptance_radius
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be > 0, got {value}")
     lonlat = geo.to_lonlat(wp.points[:, :2])
-    yaw_deg = _compass_yaw_deg(geo, wp)
+    yaw_deg = np.degrees(geo.compass_yaw(wp.points[:, :2], wp.heading))
     items = [{"type": "SimpleItem", "command": MAV_CMD_DO_CHANGE_SPEED, "frame": MAV_FRAME_MISSION,
               "params": [1, float(speed), -1, 0, 0, 0, 0], "autoContinue": True, "doJumpId": 1}]
     for k in range(len(wp)):
