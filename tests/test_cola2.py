@@ -11,7 +11,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from drake_auv.autopilot.cola2 import clearance_report, held_band, replay_cola2
+from drake_auv.autopilot.cola2 import held_band, replay_cola2
+from drake_auv.autopilot.replay import clearance_report
 from drake_auv.autopilot.items import localise
 from drake_auv.planning.cola2 import (Cola2Sections, cola2_sections, export_cola2, read_cola2,
                                       write_cola2)

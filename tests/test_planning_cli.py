@@ -36,7 +36,7 @@ def test_plan_writes_every_output(tmp_path, small_tif, capsys):
     assert report["metrics"]["total"]["coverage"] >= 0.95
     gj = json.loads((out / "path.geojson").read_text())
     coords = np.vstack([f["geometry"]["coordinates"] for f in gj["features"]])
-    assert coords.shape[1] == 3 and "crs" not in gj
+    assert coords.shape[1] == 2 and "crs" not in gj  # RFC 7946 positions: lon, lat
     # WGS 84 longitude/latitude of the file's map coordinates (EPSG:32631).
     from pyproj import Transformer
 

@@ -13,7 +13,8 @@ import shapely
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from drake_auv.autopilot.ardusub import clearance_report, replay_ardusub
+from drake_auv.autopilot.ardusub import replay_ardusub
+from drake_auv.autopilot.replay import clearance_report
 from drake_auv.autopilot.items import LocalLeg, localise
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
@@ -196,7 +197,7 @@ def test_monterey_missions_fit_and_fly_safe(tmp_path, monterey_plans, frames, ma
         if frames == "depth":
             assert s["tolerance_m"] <= 0.05 * omega + 1e-9  # overlap 0.1 x Omega sin 30 deg
         rep, items = check_safe(files, geo, TerrainSurface(read_bathymetry(tile)), omega)
-        assert rep["worst_clearance_over_omega"] >= 0.5
+        assert rep["min_clearance_over_omega"] >= 0.5
         assert s["coverage_after"] >= s["coverage_before"] - 0.005
         assert {it.z_mode for it in items} == ({"depth"} if frames == "depth"
                                                  else {"depth", "altitude"})
@@ -226,7 +227,7 @@ def test_random_seabeds_export_and_fly_safe(tmp_path_factory, seed, relief, top,
     flown = clearance_report(pos, prior, omega, 0.5)
     planned = clearance_report(plan.path.points, prior, omega, 0.5)
     assert flown["shallower_than_min_depth"] == 0
-    assert flown["worst_clearance_m"] >= min(0.5 * omega, planned["worst_clearance_m"]) - 0.05
+    assert flown["min_clearance_m"] >= min(0.5 * omega, planned["min_clearance_m"]) - 0.05
     if planned["closer_than_half_omega"] == 0:
         assert flown["closer_than_half_omega"] == 0
 
@@ -258,8 +259,8 @@ def test_clearance_report_counts_violations():
     pos = np.array([[5.0, 5.0, -2.0], [5.0, 6.0, -8.5], [5.0, 7.0, -0.2]])
     rep = clearance_report(pos, surface, 4.0, 0.5)
     assert rep["closer_than_half_omega"] == 1 and rep["shallower_than_min_depth"] == 1
-    assert rep["worst_clearance_m"] == pytest.approx(1.5)
-    assert rep["worst_clearance_over_omega"] == pytest.approx(1.5 / 4.0)
+    assert rep["min_clearance_m"] == pytest.approx(1.5)
+    assert rep["min_clearance_over_omega"] == pytest.approx(1.5 / 4.0)
     assert rep["shallowest_depth_m"] == pytest.approx(0.2)
 
 

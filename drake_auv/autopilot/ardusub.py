@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_auv.planning.surface import TerrainSurface
 
 
 def replay_ardusub(legs, seabed, start, spacing: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -71,26 +70,3 @@ def replay_ardusub(legs, seabed, start, spacing: float = 1.0) -> tuple[np.ndarra
     positions = np.vstack([start, np.column_stack([xy, z])])
     return positions, np.concatenate([[0], item])
 
-
-def clearance_report(positions, surface: TerrainSurface, omega: float, min_depth: float) -> dict:
-    """How close a replayed mission comes to the prior seabed and to the surface.
-
-    Args:
-        positions: (N, 3) world frame, m.
-        surface: the prior map.
-        omega: the planned offset, m; a sample nearer than omega / 2 is a violation.
-        min_depth: minimum operating depth, m (positive down); a sample shallower by more than
-            a micrometre (rounding) is one.
-
-    Returns a dict: samples, worst_clearance_m (3D distance to the surface),
-    worst_clearance_over_omega, shallowest_depth_m, closer_than_half_omega and
-    shallower_than_min_depth (sample counts).
-    """
-    p = np.asarray(positions, float)
-    d, _ = surface.distance(p)
-    depth = -p[:, 2]
-    return {"samples": len(p), "worst_clearance_m": float(d.min()),
-            "worst_clearance_over_omega": float(d.min() / omega),
-            "shallowest_depth_m": float(depth.min()),
-            "closer_than_half_omega": int(np.count_nonzero(d < 0.5 * omega)),
-            "shallower_than_min_depth": int(np.count_nonzero(depth < min_depth - 1e-6))}

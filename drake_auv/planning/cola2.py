@@ -431,7 +431,8 @@ def export_cola2(path: Path, surface: TerrainSurface, omega: float, min_depth: f
     the report: sections, altitude-mode sections, the largest deviation from the path, the
     sections over the deviation tolerance (depth changing faster than it holds without
     heave_in_3d) or unresolved, and the replay's `clearance_report`."""
-    from drake_auv.autopilot.cola2 import clearance_report, replay_cola2
+    from drake_auv.autopilot.cola2 import replay_cola2
+    from drake_auv.autopilot.replay import clearance_report
     from drake_auv.autopilot.items import localise
 
     sections = cola2_sections(path, surface, omega, min_depth, tolerance_xy=tolerance_xy,

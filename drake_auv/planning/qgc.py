@@ -37,7 +37,8 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
-from drake_auv.autopilot.ardusub import clearance_report, replay_ardusub
+from drake_auv.autopilot.ardusub import replay_ardusub
+from drake_auv.autopilot.replay import clearance_report
 from drake_auv.autopilot.items import LocalLeg, MissionItem, VehicleMission
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.metrics import evaluate_path, surface_area_weights

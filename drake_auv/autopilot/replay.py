@@ -1,0 +1,42 @@
+"""The safety figures of a replayed vehicle mission against the prior map. Pure numpy.
+
+Both replays (`autopilot.cola2.replay_cola2`, `autopilot.ardusub.replay_ardusub`) give the
+positions the vehicle passes; `clearance_report` says how close they come to the seabed and to
+the sea surface, the exports' acceptance (at least 0.5 Omega from the prior seabed, no shallower
+than the minimum depth).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def clearance_report(positions: np.ndarray, surface, omega: float, min_depth: float) -> dict:
+    """The replay's safety figures against the prior map.
+
+    Args:
+        positions: (N, 3) replayed samples (world frame, m).
+        surface: a `planning.surface.TerrainSurface` (3D distance queries).
+        omega: the plan's offset, m; a sample closer than 0.5 omega is a violation.
+        min_depth: the minimum operating depth, m; a sample shallower is a violation.
+    Returns:
+        min_clearance_m and min_clearance_over_omega (3D distance to the surface; None when
+        every sample is farther than `checked_to_m` = 2 omega), shallowest_depth_m, samples,
+        closer_than_half_omega, shallower_than_min_depth, and closer_than_reachable: samples
+        closer than the least of 0.5 omega and what the minimum depth leaves (the distance
+        from the point at that depth above them).
+    """
+    p = np.asarray(positions, float)
+    bound = 2.0 * omega
+    d, _ = surface.distance(p, upper_bound=bound)
+    tol = 1e-6
+    close = np.flatnonzero(d < 0.5 * omega - tol)
+    ceiling = np.column_stack([p[close, :2], np.full(len(close), -float(min_depth))])
+    reach = np.minimum(0.5 * omega, surface.distance(ceiling, upper_bound=omega)[0])
+    worst = float(d.min()) if np.isfinite(d.min()) else None
+    return {"samples": int(len(p)), "checked_to_m": bound, "min_clearance_m": worst,
+            "min_clearance_over_omega": None if worst is None else worst / omega,
+            "shallowest_depth_m": float(-p[:, 2].max()),
+            "closer_than_half_omega": int(len(close)),
+            "shallower_than_min_depth": int((-p[:, 2] < min_depth - tol).sum()),
+            "closer_than_reachable": int((d[close] < reach - tol).sum())}
