@@ -59,7 +59,8 @@ def probe_scheduler(address: str) -> dict:
         reply = asyncio.run(asyncio.wait_for(_identity(address), CONNECT_TIMEOUT_S))
     except (TimeoutError, asyncio.TimeoutError):
         raise CampaignError(f"cannot reach the Dask scheduler at {address} (no Dask answer "
-                            f"within {CONNECT_TIMEOUT_S:g} s); {allowed}") from None
+                            f"within {CONNECT_TIMEOUT_S:g} s: nothing listening there, or not "
+                            f"Dask); {allowed}") from None
     except MemoryError:  # a banner's bytes read as a frame's length
         raise CampaignError(f"cannot reach the Dask scheduler at {address} (it answered, but "
                             f"not in Dask's protocol); {allowed}") from None
