@@ -134,7 +134,7 @@ def products_markdown(section: dict) -> str:
               f"{s['accuracy_p95_m']:.3f} | {100 * s['completeness']:.1f} % | "
               f"{100 * s['completeness_seen']:.1f} % | {s['vertices']} vertices |",
               f"| point cloud | {p['accuracy_median_m']:.3f} | {p['accuracy_mean_m']:.3f} | "
-              f"{p['accuracy_p95_m']:.3f} | {100 * p['completeness']:.1f} % | 100 % | "
+              f"{p['accuracy_p95_m']:.3f} | {100 * p['completeness']:.1f} % | | "
               f"{p['points']} points |", "",
               "Files: `points.ply` (every return, site coordinates), `reconstruction.ply` "
               "(coloured by distance to the true world), `reconstruction.png` (coloured by "

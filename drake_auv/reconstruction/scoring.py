@@ -6,7 +6,8 @@ Poisson invented is not), its mean, median and 95th percentile, m. Completeness:
 the target's AREA lying within `tolerance` (0.5 m) of the reconstructed surface (or of a
 point), estimated on points sampled uniformly by area on the target's faces (seeded, about one
 per `spacing`^2); `completeness_seen`: the same share of the target's area the points saw
-(within `tolerance` of a point), which a surface can reach whatever the path missed. All in
+(within `tolerance` of at least `SEEN_POINTS` points: one stray return, clutter or a ghost,
+does not make an area seen), which a surface can reach whatever the path missed. All in
 one frame, the caller's (the missions use the local frame of the true world). Pure numpy/scipy.
 """
 
@@ -19,6 +20,7 @@ from scipy.spatial import cKDTree
 from drake_auv.geometry.distance import mesh_distance
 
 TOLERANCE = 0.5  # m, completeness: a target point counts as reconstructed within this distance
+SEEN_POINTS = 3  # points within TOLERANCE that make a target point seen
 
 
 def surface_samples(mesh: trimesh.Trimesh, spacing: float = 0.1, seed: int = 0,
@@ -45,13 +47,14 @@ def accuracy(errors: np.ndarray) -> dict:
                 p95_m=float(np.percentile(errors, 95)), n=int(len(errors)))
 
 
-def covered(points, samples, tolerance: float = TOLERANCE) -> np.ndarray:
-    """(m,) bool: which of `samples` lie within `tolerance` m of some point of `points`."""
-    if len(points) == 0:
+def covered(points, samples, tolerance: float = TOLERANCE, at_least: int = 1) -> np.ndarray:
+    """(m,) bool: which of `samples` lie within `tolerance` m of `at_least` points of
+    `points`."""
+    if len(points) < at_least:
         return np.zeros(len(samples), bool)
-    d, _ = cKDTree(np.asarray(points, dtype=float)).query(samples,
-                                                          distance_upper_bound=tolerance)
-    return d <= tolerance
+    d, _ = cKDTree(np.asarray(points, dtype=float)).query(
+        samples, k=at_least, distance_upper_bound=tolerance)
+    return np.reshape(d, (len(samples), -1))[:, -1] <= tolerance
 
 
 def completeness_of_points(points, samples, tolerance: float = TOLERANCE) -> float:
@@ -81,7 +84,7 @@ def score(target: trimesh.Trimesh, mesh: trimesh.Trimesh | None, points,
     truth = target if world is None else world
     samples = surface_samples(target, spacing, seed)
     points = np.asarray(points, dtype=float).reshape(-1, 3)
-    seen = covered(points, samples, tolerance)
+    seen = covered(points, samples, tolerance, SEEN_POINTS)
     raw = accuracy(mesh_distance(truth, points) if len(points) else np.zeros(0))
     summary = dict(tolerance_m=tolerance, target_area_m2=float(target.area),
                    seen_area_m2=float(target.area * seen.mean()),
@@ -89,8 +92,8 @@ def score(target: trimesh.Trimesh, mesh: trimesh.Trimesh | None, points,
                    point_cloud=dict(accuracy_mean_m=raw["mean_m"],
                                     accuracy_median_m=raw["median_m"],
                                     accuracy_p95_m=raw["p95_m"],
-                                    completeness=float(seen.mean()),
-                                    completeness_seen=1.0 if seen.any() else 0.0,
+                                    completeness=completeness_of_points(points, samples,
+                                                                        tolerance),
                                     points=raw["n"]))
     if mesh is None:
         return summary, None
