@@ -88,7 +88,8 @@ def _m(q: dict | None, key: str) -> str:
 
 
 def summary_markdown(summary: dict) -> str:
-    """summary.md: one table row per variant and one over all runs."""
+    """summary.md: one table row per variant (when there are varied keys) and one over all
+    runs."""
     keys = summary["vary_keys"]
     head = ["variant" if not keys else " | ".join(f"`{k}`" for k in keys)]
     lines = [f"# Campaign: {summary['mission']}", "",
@@ -101,11 +102,12 @@ def summary_markdown(summary: dict) -> str:
                                        "min clearance m", "responses", "real-time factor"])
              + " |",
              "| " + " | ".join(["---"] * (len(keys or [1]) + 9)) + " |"]
-    entries = [(s["values"], s) for s in summary["variants"]]
+    # Without --vary the one variant is every run: its row is the "all" row.
+    entries = [(s["values"], s) for s in summary["variants"]] if keys else []
     entries.append(({k: "**all**" for k in keys} if keys else {"": "**all**"},
                     summary["overall"]))
     for values, s in entries:
-        cells = list(values.values()) or ["all"]
+        cells = list(values.values())
         rate = ("n/a" if s["contact_rate"] is None else
                 f"{100 * s['contact_rate']:.0f} % ({100 * s['contact_rate_95'][0]:.0f}-"
                 f"{100 * s['contact_rate_95'][1]:.0f} %)")

@@ -3,8 +3,10 @@ Carlo runs of a mission on Dask.
 
 Every (seed, variant) is one task: the worker builds and flies the mission and returns a
 metrics row, which this process appends to OUT/results.csv at once. A rerun with the same OUT
-runs only the rows missing. At the end OUT/summary.md, summary.json and the plots are written
-from every row of results.csv. `--workers N` starts a local cluster of N processes (default:
+runs only the rows missing (`--retry-failed`: also those that failed). At the end
+OUT/summary.md, summary.json and the plots are written from every row of results.csv. The
+arguments, the scheduler and OUT are checked before anything is written; OUT is locked for
+the whole campaign, so a second campaign into it is refused. `--workers N` starts a local cluster of N processes (default:
 the machine's cores); `--scheduler tcp://HOST:8786` uses a running Dask cluster instead (see
 docs/campaigns.md).
 """
@@ -39,33 +41,47 @@ def add_parser(subparsers) -> None:
     where.add_argument("--scheduler", default=None,
                        help="address of a running Dask scheduler, e.g. tcp://HOST:8786")
     parser.add_argument("-o", "--out", required=True, help="output folder")
+    parser.add_argument("--retry-failed", action="store_true",
+                        help="run again the runs whose row in OUT/results.csv failed (their "
+                             "rows are replaced)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
 
-def _check_same_campaign(out: Path, meta: dict) -> None:
-    """Writes OUT/campaign.json, or checks that a rerun is of the same campaign (the same base
-    mission, fixed overrides and varied keys; seeds and values may be added)."""
+def _check_same_campaign(out: Path, meta: dict, write: bool = True) -> None:
+    """Checks that OUT holds no campaign or this one (the same base mission, fixed overrides
+    and varied keys; seeds and values may be added) and, when `write`, writes
+    OUT/campaign.json."""
     path = out / CAMPAIGN_FILE
     fixed = {k: meta[k] for k in ("base_mission", "overrides", "vary_keys")}
-    if path.exists():
-        old = json.loads(path.read_text())
+    if path.is_file():
+        try:
+            old = json.loads(path.read_text())
+        except (OSError, ValueError) as err:
+            raise ValueError(f"{path}: unreadable ({err}); allowed: a campaign.json written "
+                             "by drake-auv campaign, or another -o folder") from None
         for key, value in fixed.items():
             if old.get(key) != value:
                 raise ValueError(f"{out}: holds another campaign ({key} differs from this "
                                  f"command's); allowed: the same mission, --set and --vary "
                                  "keys, or another -o folder")
-    out.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(meta, indent=2) + "\n")
+    if write:
+        path.write_text(json.dumps(meta, indent=2) + "\n")
 
 
 def run(args) -> int:
-    from drake_auv.campaign import (ResultsFile, connect, expand_runs, parse_seeds, parse_vary,
-                                    run_campaign, write_summary)
+    from drake_auv.campaign import (CampaignError, ResultsFile, connect, expand_runs,
+                                    parse_seeds, parse_vary, run_campaign, write_summary)
+    from drake_auv.campaign.engine import check_workers, probe_scheduler
+    from drake_auv.campaign.folder import check_output, locked
+    from drake_auv.campaign.task import one_line
     from drake_auv.mission.config import load_mission, mission_to_dict
 
+    # Everything that can refuse the command, before anything is written.
     seeds = parse_seeds(args.seeds)
     vary = parse_vary(args.vary)
+    if args.scheduler is None:
+        check_workers(args.workers)
     base = mission_to_dict(load_mission(args.mission, overrides=args.overrides))
     base.pop("seed")
     runs = expand_runs(args.mission, seeds, vary, args.overrides)
@@ -73,22 +89,39 @@ def run(args) -> int:
     keys = [k for k, _ in vary]
     meta = dict(mission=base["name"], seeds=args.seeds, vary=dict(vary),
                 vary_keys=keys, overrides=list(args.overrides), base_mission=base)
-    _check_same_campaign(out, meta)
-    results = ResultsFile(out / "results.csv", keys)
-    client, cluster = connect(args.workers, args.scheduler)
-    try:
-        counts = run_campaign(runs, results, client, progress=not args.quiet)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    rows = results.rows()  # this command's and earlier ones' (more seeds, more values)
-    seeds_done = sorted({int(r["seed"]) for r in rows})
-    meta.pop("base_mission")
-    meta["seeds"] = f"{seeds_done[0]}..{seeds_done[-1]} ({len(seeds_done)} seeds)"
-    summary = write_summary(rows, keys, out, meta)
+    check_output(out)
+    _check_same_campaign(out, meta, write=False)
+    if args.scheduler is not None:
+        probe_scheduler(args.scheduler)
+    with locked(out):
+        try:
+            _check_same_campaign(out, meta)  # again, now that no other campaign can write
+            results = ResultsFile(out / "results.csv", keys)
+            retried = results.drop(results.failed() & {run.key for run in runs}) \
+                if args.retry_failed else 0
+        except OSError as err:
+            raise CampaignError(f"-o {out}: cannot write there ({one_line(err)}); allowed: a "
+                                "writable folder") from None
+        client, cluster = connect(args.workers, args.scheduler)
+        try:
+            counts = run_campaign(runs, results, client, progress=not args.quiet)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        rows = results.rows()  # this command's and earlier ones' (more seeds, more values)
+        seeds_done = sorted({int(r["seed"]) for r in rows})
+        meta.pop("base_mission")
+        meta["seeds"] = f"{seeds_done[0]}..{seeds_done[-1]} ({len(seeds_done)} seeds)"
+        try:
+            summary = write_summary(rows, keys, out, meta)
+        except OSError as err:
+            raise CampaignError(f"-o {out}: cannot write the summary ({one_line(err)}); the "
+                                f"rows are in {results.path}; allowed: a writable folder"
+                                ) from None
     overall = summary["overall"]
     print(f"campaign {base['name']}: {counts['total']} runs ({counts['skipped']} already in "
-          f"results.csv, {counts['ok']} ok, {counts['failed']} failed now); contacts "
-          f"{overall['contacts']}/{overall['ok']}; summary in {out / 'summary.md'}")
+          f"results.csv, {retried} failed ones run again, {counts['ok']} ok, "
+          f"{counts['failed']} failed now); contacts {overall['contacts']}/{overall['ok']}; "
+          f"summary in {out / 'summary.md'}")
     return 0

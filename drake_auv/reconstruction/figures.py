@@ -1,6 +1,7 @@
 """Figures of reconstructions, like the reference's Figure 89: top and slanted views of the
-surface, here coloured by each vertex's distance to the true structure (m), lightly shaded by
-the faces' orientation so the shape reads."""
+surface, here coloured by each vertex's distance to the true structure (m) or to the nearest
+return (the support the surface has in the data, m), lightly shaded by the faces' orientation
+so the shape reads."""
 
 from __future__ import annotations
 
@@ -30,12 +31,16 @@ def decimated(mesh: trimesh.Trimesh, errors: np.ndarray, max_faces: int = MAX_FA
     return trimesh.Trimesh(vertices, np.asarray(small.triangles), process=False), errors[nearest]
 
 
+TRUTH_LABEL = "distance of the surface to the true structure (m)"
+
+
 def fig_reconstruction(panels, vmax: float = 1.0, title: str = "") -> Figure:
     """Top and slanted views of each reconstruction, one row per panel.
 
     Args:
-        panels: [(label, mesh, errors)]: a mesh (any frame, m) and its per-vertex distance to
-            the truth (m), colour 0 (dark) to `vmax` m (yellow) and above.
+        panels: [(label, mesh, distances[, colour label])]: a mesh (any frame, m) and a
+            per-vertex distance (m; by default to the truth, `TRUTH_LABEL`), colour 0 (dark)
+            to `vmax` m (yellow) and above; one colour bar per distinct colour label.
     """
     from matplotlib import colormaps
     from matplotlib.cm import ScalarMappable
@@ -44,7 +49,9 @@ def fig_reconstruction(panels, vmax: float = 1.0, title: str = "") -> Figure:
 
     norm, cmap = Normalize(0.0, vmax), colormaps["inferno"]
     fig = Figure(figsize=(11, 4.8 * len(panels)))
-    for row, (label, mesh, errors) in enumerate(panels):
+    rows: dict[str, list] = {}
+    for row, (label, mesh, errors, *measure) in enumerate(panels):
+        rows.setdefault(measure[0] if measure else TRUTH_LABEL, [])
         small, err = decimated(mesh, np.asarray(errors, dtype=float))
         triangles = np.asarray(small.triangles)
         colours = cmap(norm(err[small.faces].mean(axis=1)))
@@ -62,8 +69,9 @@ def fig_reconstruction(panels, vmax: float = 1.0, title: str = "") -> Figure:
             ax.view_init(elev=elev, azim=azim)
             if elev == 90:
                 ax.set_zticks([])
-    fig.colorbar(ScalarMappable(norm, cmap), ax=fig.axes, shrink=0.6,
-                 label="distance of the surface to the true structure (m)")
+            rows[measure[0] if measure else TRUTH_LABEL].append(ax)
+    for colour_label, axes in rows.items():
+        fig.colorbar(ScalarMappable(norm, cmap), ax=axes, shrink=0.6, label=colour_label)
     if title:
         fig.suptitle(title)
     return fig

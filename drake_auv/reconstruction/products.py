@@ -2,14 +2,16 @@
 
 `write_products(result, outdir)` writes `points.ply` (every return of the dive as the vehicle
 believed it: navigation frame, site coordinates, with sensor origin, time and source per point)
-and, when Open3D is installed and the target's box holds enough returns, `reconstruction.ply`
-(site coordinates, vertices coloured by their distance to the true target) and
-`reconstruction.png`; it returns the report's `reconstruction` section. The scoring is done in
-the local frame against the true target (`site.target_mesh`), on the returns inside the
-target's bounding box grown by `CROP_MARGIN` (the navigation error moves them, and the box also
-keeps a ring of seabed and, at the breakwater, the neighbouring block's face across the 0.5 m
-gap, which count as error), thinned to one return per `THIN_VOXEL` cube. Needs only the
-result's `scan_log` and `site`: no Drake.
+and, when Open3D is installed and the target's box (grown by `CROP_MARGIN`) holds enough
+returns, `reconstruction.ply` (site coordinates, vertices coloured by their distance to the
+true world) and `reconstruction.png`; it returns the report's `reconstruction` section. The
+surface is built from EVERY return of the dive, thinned to one per `THIN_VOXEL` cube, with
+the support trim on (no face farther than a few local spacings from a return), and scored
+over the whole mesh in the local frame: every vertex's distance to the true world
+(`site.world`: a vertex on the seabed is right, one on a surface no return supports is
+not), and the share of the target's area (`site.target_mesh`), all of it and the part the
+returns saw, within 0.5 m of the surface. Needs only the result's `scan_log` and `site`: no
+Drake.
 """
 
 from __future__ import annotations
@@ -22,20 +24,21 @@ import trimesh
 
 from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply
 from drake_auv.reconstruction.scoring import score
-from drake_auv.reconstruction.surface import (Reconstruction, open3d_available, open3d_error,
-                                              reconstruct)
+from drake_auv.reconstruction.surface import (SUPPORT, Reconstruction, open3d_available,
+                                              open3d_error, reconstruct)
 
-CROP_MARGIN = 1.0  # m around the target's bounding box
+CROP_MARGIN = 1.0  # m around the target's bounding box: its returns decide whether to build
 THIN_VOXEL = 0.1  # m, one return per cube before the normals and Poisson
 MIN_POINTS = 1000  # returns in the target's box below which no surface is built
 ERROR_VMAX = 1.0  # m, the top of the error colour scale
+SUPPORT_LABEL = "distance of the surface to the nearest return (m)"
 
 
 @dataclass(frozen=True, eq=False)
 class MissionSurface:
-    """A dive's target surface: `cloud` (thinned returns in the target's box, local frame),
-    `reconstruction` (local frame), `errors` (per vertex distance to the true target, m) and
-    `summary` (the report's `reconstruction` section)."""
+    """A dive's surface: `cloud` (every return, thinned, local frame), `reconstruction` (local
+    frame), `errors` (per vertex distance to the true world, m) and `summary` (the report's
+    `reconstruction` section)."""
 
     cloud: PointCloud
     reconstruction: Reconstruction
@@ -43,25 +46,33 @@ class MissionSurface:
     summary: dict
 
 
-def target_cloud(result, margin: float = CROP_MARGIN, voxel: float = THIN_VOXEL) -> PointCloud:
-    """The dive's returns inside the target's bounding box grown by `margin` m, one per `voxel`
-    m cube; local frame (navigation)."""
-    lo, hi = result.site.target_mesh.bounds
-    cloud = from_scan_log(result.scan_log).crop(lo, hi, margin)
+def dive_cloud(result, voxel: float = THIN_VOXEL) -> PointCloud:
+    """Every return of the dive, one per `voxel` m cube; local frame (navigation)."""
+    cloud = from_scan_log(result.scan_log)
     return cloud.thin(voxel) if len(cloud) else cloud
 
 
+def target_returns(result, cloud: PointCloud) -> int:
+    """The returns of `cloud` in the target's box grown by `CROP_MARGIN`: whether to build."""
+    lo, hi = result.site.target_mesh.bounds
+    return len(cloud.crop(lo, hi, CROP_MARGIN))
+
+
 def mission_surface(result, depth: int = 9, trim: float = 0.05, k: int = 200,
-                    progress: bool = False) -> MissionSurface | None:
-    """Reconstructs and scores the target from the dive's returns; None when Open3D is unusable
-    or the target's box holds fewer than `MIN_POINTS` returns."""
-    cloud = target_cloud(result)
-    if not open3d_available() or len(cloud) < max(MIN_POINTS, k + 1):
+                    support: float = SUPPORT, progress: bool = False) -> MissionSurface | None:
+    """Reconstructs the dive's returns and scores the whole surface; None when Open3D is
+    unusable or the target's box (grown by `CROP_MARGIN`) holds fewer than `MIN_POINTS`
+    returns."""
+    cloud = dive_cloud(result)
+    if not open3d_available() or target_returns(result, cloud) < max(MIN_POINTS, k + 1):
         return None
-    surface = reconstruct(cloud, depth=depth, trim=trim, k=k, progress=progress)
-    summary, errors = score(result.site.target_mesh, surface.mesh, cloud.points)
-    summary.update(depth=depth, trim=trim, k=k, crop_margin_m=CROP_MARGIN,
-                   thin_voxel_m=THIN_VOXEL, frame="local, navigation (as the vehicle believed)")
+    surface = reconstruct(cloud, depth=depth, trim=trim, k=k, support=support,
+                          progress=progress)
+    summary, errors = score(result.site.target_mesh, surface.mesh, cloud.points,
+                            world=result.site.world)
+    summary.update(depth=depth, trim=trim, k=k, support=support, thin_voxel_m=THIN_VOXEL,
+                   support_median_m=float(np.median(surface.support_m)),
+                   frame="local, navigation (as the vehicle believed)")
     return MissionSurface(cloud, surface, errors, summary)
 
 
@@ -82,7 +93,8 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
     write_ply(from_scan_log(result.scan_log).shifted(result.site.to_site), out / "points.ply")
     surface = mission_surface(result)
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
-        if open3d_error() is not None and len(target_cloud(result)) >= MIN_POINTS:
+        if open3d_error() is not None and target_returns(result, dive_cloud(result)) \
+                >= MIN_POINTS:
             return dict(built=False, reason=open3d_error())
         return dict(built=False, reason=f"fewer than {MIN_POINTS} returns in the target's box "
                                         f"(+{CROP_MARGIN:g} m)")
@@ -92,10 +104,12 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
                     process=False).export(out / "reconstruction.ply")
     s = surface.summary["surface"]
     fig = fig_reconstruction(
-        [("reconstruction", mesh, surface.errors)], vmax=ERROR_VMAX,
-        title=f"Screened Poisson surface of the target from the dive's returns: accuracy mean "
-              f"{s['accuracy_mean_m']:.2f} m (p95 {s['accuracy_p95_m']:.2f} m), completeness "
-              f"{100 * s['completeness']:.1f} %")
+        [("to the true world", mesh, surface.errors),
+         ("to the returns", mesh, surface.reconstruction.support_m, SUPPORT_LABEL)],
+        vmax=ERROR_VMAX,
+        title=f"Screened Poisson surface of the dive's returns, support-trimmed: accuracy "
+              f"median {s['accuracy_median_m']:.2f} m (p95 {s['accuracy_p95_m']:.2f} m) over "
+              f"the whole mesh; {100 * s['completeness_seen']:.1f} % of the seen target")
     fig.savefig(out / "reconstruction.png", dpi=dpi, bbox_inches="tight")
     return dict(built=True, **surface.summary)
 
@@ -107,22 +121,30 @@ def products_markdown(section: dict) -> str:
         return "\n".join(lines + [f"Not built: {section['reason']}. The returns are in "
                                   "`points.ply`.", ""])
     s, p = section["surface"], section["point_cloud"]
-    lines += [f"The returns as the vehicle believed them (navigation frame, drift included) "
-              f"inside the target's box grown by {section['crop_margin_m']:g} m (a seabed ring "
-              f"and any neighbouring face there count as error), one per "
-              f"{section['thin_voxel_m']:g} m cube: normals from k = {section['k']} "
-              f"neighbours oriented towards the sensor, screened Poisson at depth "
-              f"{section['depth']}, the lowest {100 * section['trim']:g} % of density trimmed. "
-              f"Scored against the true target ({section['target_area_m2']:.0f} m^2); "
-              f"completeness is the share of its area within {section['tolerance_m']:g} m.", "",
-              "| | accuracy mean (m) | accuracy p95 (m) | completeness | size |",
-              "| --- | --- | --- | --- | --- |",
-              f"| surface | {s['accuracy_mean_m']:.3f} | {s['accuracy_p95_m']:.3f} | "
-              f"{100 * s['completeness']:.1f} % | {s['vertices']} vertices |",
-              f"| point cloud | {p['accuracy_mean_m']:.3f} | {p['accuracy_p95_m']:.3f} | "
-              f"{100 * p['completeness']:.1f} % | {p['points']} points |", "",
+    lines += [f"Every return of the dive as the vehicle believed it (navigation frame, drift "
+              f"included), one per {section['thin_voxel_m']:g} m cube: normals from k = "
+              f"{section['k']} neighbours oriented towards the sensor, screened Poisson at "
+              f"depth {section['depth']}, the lowest {100 * section['trim']:g} % of density "
+              f"trimmed, then every face farther than {section['support']:g} local spacings "
+              f"from a return (support trim; median distance of the kept vertices to a "
+              f"return {section['support_median_m']:.3f} m). Accuracy: every vertex's "
+              f"distance to the true world (the whole mesh, not only the target's box). "
+              f"Completeness: the share of the true target's area "
+              f"({section['target_area_m2']:.0f} m^2; {section['seen_area_m2']:.0f} m^2 of it "
+              f"within {section['tolerance_m']:g} m of a return, 'seen') within "
+              f"{section['tolerance_m']:g} m of the surface.", "",
+              "| | accuracy median (m) | mean (m) | p95 (m) | completeness | of the seen "
+              "target | size |",
+              "| --- | --- | --- | --- | --- | --- | --- |",
+              f"| surface | {s['accuracy_median_m']:.3f} | {s['accuracy_mean_m']:.3f} | "
+              f"{s['accuracy_p95_m']:.3f} | {100 * s['completeness']:.1f} % | "
+              f"{100 * s['completeness_seen']:.1f} % | {s['vertices']} vertices |",
+              f"| point cloud | {p['accuracy_median_m']:.3f} | {p['accuracy_mean_m']:.3f} | "
+              f"{p['accuracy_p95_m']:.3f} | {100 * p['completeness']:.1f} % | | "
+              f"{p['points']} points |", "",
               "Files: `points.ply` (every return, site coordinates), `reconstruction.ply` "
-              "(coloured by error), `reconstruction.png`.", ""]
+              "(coloured by distance to the true world), `reconstruction.png` (coloured by "
+              "distance to the true world and to the returns).", ""]
     return "\n".join(lines)
 
 

@@ -1,10 +1,14 @@
 """Scoring a reconstruction (or a raw point cloud) against the true structure.
 
-Accuracy: the distance from each reconstructed vertex (or point) to the true target surface,
-its mean and 95th percentile, m. Completeness: the share of the target's AREA lying within
-`tolerance` (0.5 m) of the reconstructed surface (or of a point), estimated on points sampled
-uniformly by area on the target's faces (seeded, about one per `spacing`^2). Both in one frame,
-the caller's (the missions use the local frame of the true target). Pure numpy/scipy.
+Accuracy: the distance from EVERY reconstructed vertex (or point) to the true world (the
+target, or the whole world when given: a vertex on the seabed is then right, one on a surface
+Poisson invented is not), its mean, median and 95th percentile, m. Completeness: the share of
+the target's AREA lying within `tolerance` (0.5 m) of the reconstructed surface (or of a
+point), estimated on points sampled uniformly by area on the target's faces (seeded, about one
+per `spacing`^2); `completeness_seen`: the same share of the target's area the points saw
+(within `tolerance` of at least `SEEN_POINTS` points: one stray return, clutter or a ghost,
+does not make an area seen), which a surface can reach whatever the path missed. All in
+one frame, the caller's (the missions use the local frame of the true world). Pure numpy/scipy.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from scipy.spatial import cKDTree
 from drake_auv.geometry.distance import mesh_distance
 
 TOLERANCE = 0.5  # m, completeness: a target point counts as reconstructed within this distance
+SEEN_POINTS = 3  # points within TOLERANCE that make a target point seen
 
 
 def surface_samples(mesh: trimesh.Trimesh, spacing: float = 0.1, seed: int = 0,
@@ -35,52 +40,69 @@ def surface_samples(mesh: trimesh.Trimesh, spacing: float = 0.1, seed: int = 0,
 
 
 def accuracy(errors: np.ndarray) -> dict:
-    """`mean_m` and `p95_m` of distances to the truth, m, and their count `n`."""
+    """`mean_m`, `median_m` and `p95_m` of distances to the truth, m, and their count `n`."""
     if len(errors) == 0:
-        return dict(mean_m=None, p95_m=None, n=0)
-    return dict(mean_m=float(errors.mean()), p95_m=float(np.percentile(errors, 95)),
-                n=int(len(errors)))
+        return dict(mean_m=None, median_m=None, p95_m=None, n=0)
+    return dict(mean_m=float(errors.mean()), median_m=float(np.median(errors)),
+                p95_m=float(np.percentile(errors, 95)), n=int(len(errors)))
+
+
+def covered(points, samples, tolerance: float = TOLERANCE, at_least: int = 1) -> np.ndarray:
+    """(m,) bool: which of `samples` lie within `tolerance` m of `at_least` points of
+    `points`."""
+    if len(points) < at_least:
+        return np.zeros(len(samples), bool)
+    d, _ = cKDTree(np.asarray(points, dtype=float)).query(
+        samples, k=at_least, distance_upper_bound=tolerance)
+    return np.reshape(d, (len(samples), -1))[:, -1] <= tolerance
 
 
 def completeness_of_points(points, samples, tolerance: float = TOLERANCE) -> float:
     """Share of `samples` (target area) within `tolerance` m of some point of `points`."""
-    if len(points) == 0:
-        return 0.0
-    d, _ = cKDTree(np.asarray(points, dtype=float)).query(samples,
-                                                          distance_upper_bound=tolerance)
-    return float(np.mean(d <= tolerance))
+    return float(np.mean(covered(points, samples, tolerance)))
 
 
 def completeness_of_mesh(mesh: trimesh.Trimesh, samples, tolerance: float = TOLERANCE) -> float:
     """Share of `samples` (target area) within `tolerance` m of the surface of `mesh`."""
-    if len(mesh.faces) == 0:
+    if len(mesh.faces) == 0 or len(samples) == 0:
         return 0.0
     return float(np.mean(mesh_distance(mesh, samples) <= tolerance))
 
 
 def score(target: trimesh.Trimesh, mesh: trimesh.Trimesh | None, points,
-          tolerance: float = TOLERANCE, spacing: float = 0.1,
-          seed: int = 0) -> tuple[dict, np.ndarray | None]:
-    """Accuracy and completeness of a reconstructed `mesh` (None: not scored) and of the raw
-    `points` (n, 3) it came from, against `target`; returns (summary, per-vertex distance to the
-    target of `mesh`, m, or None).
+          tolerance: float = TOLERANCE, spacing: float = 0.1, seed: int = 0,
+          world: trimesh.Trimesh | None = None) -> tuple[dict, np.ndarray | None]:
+    """Accuracy (every vertex, or point, to `world`, default `target`) and completeness (of
+    `target`'s area, all of it and the part the points saw) of a reconstructed `mesh` (None:
+    not scored) and of the raw `points` (n, 3) it came from; returns (summary, per-vertex
+    distance of `mesh` to the truth, m, or None).
 
-    summary: `surface` and `point_cloud`, each with `accuracy_mean_m`, `accuracy_p95_m`,
-    `completeness` and the count of vertices or points; `tolerance_m`, `target_area_m2`.
+    summary: `surface` and `point_cloud`, each with `accuracy_mean_m`, `accuracy_median_m`,
+    `accuracy_p95_m`, `completeness`, `completeness_seen` and the count of vertices or points;
+    `tolerance_m`, `target_area_m2`, `seen_area_m2`, `accuracy_to` ("world" or "target").
     """
+    truth = target if world is None else world
     samples = surface_samples(target, spacing, seed)
     points = np.asarray(points, dtype=float).reshape(-1, 3)
-    raw = accuracy(mesh_distance(target, points) if len(points) else np.zeros(0))
+    seen = covered(points, samples, tolerance, SEEN_POINTS)
+    raw = accuracy(mesh_distance(truth, points) if len(points) else np.zeros(0))
     summary = dict(tolerance_m=tolerance, target_area_m2=float(target.area),
-                   point_cloud=dict(accuracy_mean_m=raw["mean_m"], accuracy_p95_m=raw["p95_m"],
+                   seen_area_m2=float(target.area * seen.mean()),
+                   accuracy_to="target" if world is None else "world",
+                   point_cloud=dict(accuracy_mean_m=raw["mean_m"],
+                                    accuracy_median_m=raw["median_m"],
+                                    accuracy_p95_m=raw["p95_m"],
                                     completeness=completeness_of_points(points, samples,
                                                                         tolerance),
                                     points=raw["n"]))
     if mesh is None:
         return summary, None
-    errors = mesh_distance(target, np.asarray(mesh.vertices))
+    errors = mesh_distance(truth, np.asarray(mesh.vertices))
     acc = accuracy(errors)
-    summary["surface"] = dict(accuracy_mean_m=acc["mean_m"], accuracy_p95_m=acc["p95_m"],
-                              completeness=completeness_of_mesh(mesh, samples, tolerance),
-                              vertices=acc["n"], faces=int(len(mesh.faces)))
+    near = (mesh_distance(mesh, samples) <= tolerance) if len(mesh.faces) else \
+        np.zeros(len(samples), bool)
+    summary["surface"] = dict(accuracy_mean_m=acc["mean_m"], accuracy_median_m=acc["median_m"],
+                              accuracy_p95_m=acc["p95_m"], completeness=float(near.mean()),
+                              completeness_seen=float(near[seen].mean()) if seen.any() else
+                              0.0, vertices=acc["n"], faces=int(len(mesh.faces)))
     return summary, errors

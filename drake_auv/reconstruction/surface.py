@@ -5,8 +5,13 @@ of the least-squares plane through each point's k = 200 nearest neighbours, then
 Poisson reconstruction (Kazhdan and Hoppe 2013). Both run in Open3D (the optional `open3d-cpu`
 package; Poisson is Kazhdan's own code inside it). Where the reference had to orient normals
 from the points alone, the recorded sensor origin orients each one here: a return's surface
-faces the sensor that saw it. Poisson closes the surface everywhere, also where no data was;
-vertices whose octree sampling density is in the lowest `trim` quantile are removed.
+faces the sensor that saw it. Poisson closes the surface everywhere, also where no data was:
+vertices whose octree sampling density is in the lowest `trim` quantile are removed, then
+(by default) every face that no return supports: a face goes when its centroid or one of its
+vertices lies farther from the nearest return than `support` times the local spacing there
+(the median nearest-neighbour spacing of the 16 returns nearest it, at least the Poisson
+cell). Density alone leaves most of the surface Poisson invents beyond what was seen (a
+cloud seen from one side closes into a balloon); distance to the returns removes it.
 
 Frames: the cloud's own (any; the work is done about the cloud's centre, so site coordinates
 with eastings of 1e5-1e6 m keep their precision), metres.
@@ -20,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import trimesh
+from scipy.spatial import cKDTree
 from tqdm import tqdm
 
 from drake_auv.reconstruction.pointcloud import PointCloud, optional_module
@@ -27,6 +33,11 @@ from drake_auv.reconstruction.pointcloud import PointCloud, optional_module
 DEPTH_RANGE = (5, 12)  # Poisson octree depth: 2^depth cells across the cloud's cube
 K_RANGE = (3, 1000)  # neighbours of the normal estimation
 TRIM_RANGE = (0.0, 0.5)  # share of the lowest-density vertices removed, [lo, hi)
+SUPPORT_RANGE = (0.0, 50.0)  # support distance in local spacings; 0: no support trim
+SUPPORT = 3.0  # default: a face farther than 3 local spacings from every return is removed
+SPACING_NEIGHBOURS = 16  # returns whose nearest-neighbour spacings set the local spacing
+SPACING_CAP = 4.0  # a return's spacing counts up to this many times the cloud's median
+POISSON_SCALE = 1.1  # Open3D's default: the octree's cube is 1.1 x the cloud's extent
 MIN_POINTS = 10
 
 
@@ -80,19 +91,23 @@ class Reconstruction:
     Attributes:
         mesh: the trimmed triangle mesh, m. densities: (v,) Poisson sampling density of each
             vertex (the octree depth of the samples around it). normals: (n, 3) unit normals of
-            the input points, oriented outwards (towards the sensors).
-        depth, k, trim: the parameters used.
+            the input points, oriented outwards (towards the sensors). support_m: (v,)
+            distance of each vertex to the nearest input point, m.
+        depth, k, trim, support: the parameters used (support 0: no support trim).
     """
 
     mesh: trimesh.Trimesh
     densities: np.ndarray
     normals: np.ndarray
+    support_m: np.ndarray
     depth: int
     k: int
     trim: float
+    support: float
 
 
-def check_parameters(n_points: int, depth: int = 9, k: int = 200, trim: float = 0.05) -> None:
+def check_parameters(n_points: int, depth: int = 9, k: int = 200, trim: float = 0.05,
+                     support: float = SUPPORT) -> None:
     """Raises ValueError naming the parameter and its allowed range when one is out of it."""
     if isinstance(depth, bool) or int(depth) != depth or not DEPTH_RANGE[0] <= depth <= \
             DEPTH_RANGE[1]:
@@ -102,6 +117,9 @@ def check_parameters(n_points: int, depth: int = 9, k: int = 200, trim: float = 
         raise ValueError(f"k must be an integer in [{K_RANGE[0]}, {K_RANGE[1]}], got {k}")
     if not TRIM_RANGE[0] <= trim < TRIM_RANGE[1]:
         raise ValueError(f"trim must be in [{TRIM_RANGE[0]}, {TRIM_RANGE[1]}), got {trim}")
+    if not SUPPORT_RANGE[0] <= support <= SUPPORT_RANGE[1]:
+        raise ValueError(f"support must be in [{SUPPORT_RANGE[0]:g}, {SUPPORT_RANGE[1]:g}] "
+                         f"local spacings (0: off), got {support}")
     if n_points < MIN_POINTS:
         raise ValueError(f"the point cloud has {n_points} point(s); a surface needs at least "
                          f"{MIN_POINTS}")
@@ -154,13 +172,52 @@ def poisson(points, normals, depth: int = 9, trim: float = 0.05,
     return trimesh.Trimesh(vertices + centre, faces, process=False), densities
 
 
+def support_distances(points, queries, cell: float = 0.0,
+                      neighbours: int = SPACING_NEIGHBOURS, chunk: int = 200_000):
+    """(distance, spacing), (q,) each, m: the distance of each of `queries` (q, 3) to the
+    nearest of `points` (n, 3), and the local spacing there: the median nearest-neighbour
+    spacing of the `neighbours` points nearest the query, at least `cell` and at most
+    `SPACING_CAP` times the cloud's median spacing (isolated returns, ghosts of the sea
+    surface or clutter, support no more surface than the cloud's own spacing allows)."""
+    points = np.asarray(points, dtype=float)
+    tree = cKDTree(points)
+    spacing = tree.query(points, k=2)[0][:, 1]
+    spacing = np.minimum(spacing, SPACING_CAP * np.median(spacing))
+    queries = np.asarray(queries, dtype=float).reshape(-1, 3)
+    near = min(int(neighbours), len(points))
+    distance, local = np.empty(len(queries)), np.empty(len(queries))
+    for start in range(0, len(queries), chunk):
+        d, index = tree.query(queries[start:start + chunk], k=near)
+        d, index = d.reshape(len(d), -1), index.reshape(len(index), -1)
+        distance[start:start + chunk] = d[:, 0]
+        local[start:start + chunk] = np.median(spacing[index], axis=1)
+    return distance, np.maximum(local, cell)
+
+
+def support_trim(mesh: trimesh.Trimesh, points, support: float = SUPPORT,
+                 cell: float = 0.0) -> tuple[trimesh.Trimesh, np.ndarray, np.ndarray]:
+    """`mesh` without the faces no point supports (a vertex or the centroid farther from the
+    nearest of `points` than `support` local spacings, see `support_distances`) and without
+    the vertices left unused; returns (mesh, kept vertex indices, their distances to the
+    points, m)."""
+    vertex_d, vertex_s = support_distances(points, mesh.vertices, cell)
+    centre_d, centre_s = support_distances(points, mesh.triangles_center, cell)
+    held = vertex_d <= support * vertex_s
+    keep = held[mesh.faces].all(axis=1) & (centre_d <= support * centre_s)
+    used = np.unique(mesh.faces[keep])
+    remap = np.full(len(mesh.vertices), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    trimmed = trimesh.Trimesh(mesh.vertices[used], remap[mesh.faces[keep]], process=False)
+    return trimmed, used, vertex_d[used]
+
+
 def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 200,
-                progress: bool = True) -> Reconstruction:
+                support: float = SUPPORT, progress: bool = True) -> Reconstruction:
     """The trimmed screened-Poisson surface of `cloud` (normals from k neighbours, oriented by
-    the recorded sensor origins when the cloud has them), with a progress bar over the stages.
-    """
-    check_parameters(len(cloud), depth, k, trim)
-    with tqdm(total=2, desc="reconstruct", unit="stage", disable=not progress,
+    the recorded sensor origins when the cloud has them; faces farther than `support` local
+    spacings from every point removed, none when 0), with a progress bar over the stages."""
+    check_parameters(len(cloud), depth, k, trim, support)
+    with tqdm(total=3, desc="reconstruct", unit="stage", disable=not progress,
               leave=False) as bar:
         bar.set_postfix_str(f"normals (k = {k}) of {len(cloud)} points")
         normals = estimate_normals(cloud.points, cloud.origins if cloud.has_origins else None, k)
@@ -168,4 +225,17 @@ def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 
         bar.set_postfix_str(f"screened Poisson, depth {depth}")
         mesh, densities = poisson(cloud.points, normals, depth, trim)
         bar.update()
-    return Reconstruction(mesh, densities, normals, int(depth), int(k), float(trim))
+        bar.set_postfix_str(f"support trim ({support:g} local spacings)")
+        extent = float(np.ptp(cloud.points, axis=0).max())
+        cell = POISSON_SCALE * extent / 2 ** int(depth)
+        if support > 0.0:
+            mesh, kept, support_m = support_trim(mesh, cloud.points, support, cell)
+            densities = densities[kept]
+        else:
+            support_m = support_distances(cloud.points, mesh.vertices)[0]
+        if len(mesh.faces) == 0:
+            raise ValueError(f"no face of the surface lies within {support:g} local spacings "
+                             "of the points; raise support")
+        bar.update()
+    return Reconstruction(mesh, densities, normals, support_m, int(depth), int(k),
+                          float(trim), float(support))
