@@ -232,7 +232,8 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     Args:
         plan: the off-line part (default: `plan_mission(spec, site)`).
         scene: a `drake_auv.visualization.Scene` to draw the vehicle, its trail and the
-            on-line map in while it flies.
+            on-line map in while it flies (a `live` scene: also the leg, the section and the
+            reference).
         caster: a `RayCaster` of `site.world` to share (default: built here).
     Exported outputs: `state` (true), `estimated_state`, `map`, `leg`.
     """
@@ -279,6 +280,12 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
         octree_view = builder.AddNamedSystem("octree_visualizer", OctreeVisualizer(
             scene.meshcat, scene.path_of("octree"), period=10.0))
         builder.Connect(mapper.map_output, octree_view.map_input)
+        if scene.live:  # the leg, the replanner's section and the reference, for a browser
+            from drake_auv.visualization.live import add_mission_view
+
+            add_mission_view(builder, scene, plan.legs, supervisor.leg_output, estimated,
+                             switch.get_output_port(),
+                             replanner.section_output if replanner is not None else None)
     diagram = builder.Build()
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,
