@@ -8,7 +8,7 @@ plan and seed: once with the built-in STOMP `Replanner` on the survey leg, once 
 track at a constant altitude above the prior map (the chart the operator holds) and ignores
 the on-line map. Both are flown to the supervisor's end (or `--max-time`) and compared:
 
-    behaviour | multibeam | camera | min clearance | survey duration | survey outcome
+    behaviour | multibeam | camera | min clearance | survey altitude | duration | outcome
 
 Run:
     MPLBACKEND=Agg .venv/bin/python examples/custom_controller.py [--altitude 10]
@@ -124,7 +124,9 @@ def build(site, spec, plan, caster, follower=None):
 
 
 def fly(site, spec, plan, caster, follower=None, max_time: float | None = None) -> dict:
-    """Flies one Diagram to the supervisor's end (or `max_time` s); the table's row."""
+    """Flies one Diagram to the supervisor's end (or `max_time` s); the table's row
+    (coverage shares, true minimum clearance m, the survey's mean altitude above the prior map
+    m, its duration s and outcome)."""
     diagram, supervisor, multibeam, camera, logs = build(site, spec, plan, caster, follower)
     simulator = Simulator(diagram)
     simulator.set_monitor(supervisor.monitor)
@@ -135,23 +137,33 @@ def fly(site, spec, plan, caster, follower=None, max_time: float | None = None) 
     legs = leg_log.data()
     started = legs[1][legs[0] == survey]
     outcome = supervisor.outcomes(supervisor.GetMyContextFromRoot(context))[survey]
+    times, state = state_log.sample_times(), state_log.data()
+    flying = (times >= started[0]) if len(started) else np.zeros(len(times), bool)
+    terrain = terrain_elevation(site)
+    altitude = state[2, flying] - terrain(state[0, flying], state[1, flying])
     areas = np.asarray(site.world.area_faces)[site.target_faces]
     best = {name: recorder.best_angles(recorder.GetMyContextFromRoot(context))
             for name, recorder in (("multibeam", multibeam), ("camera", camera))}
     return dict(
         multibeam=coverage_share(best["multibeam"], areas),
         camera=coverage_share(best["camera"], areas),
-        clearance=float(mesh_distance(site.world, state_log.data()[:3].T).min()),
+        clearance=float(mesh_distance(site.world, state[:3].T).min()),
+        altitude=float(altitude.mean()) if flying.any() else float("nan"),
         survey_s=float(context.get_time() - started[0]) if len(started) else 0.0,
         outcome=outcome)
 
 
 def table(rows: dict) -> str:
+    """The comparison as a Markdown table: coverage is the union over the whole dive (the
+    transit is the same in both), clearance the true minimum, altitude the survey's mean
+    height above the prior map."""
     lines = ["| survey behaviour | multibeam coverage | camera coverage | min clearance (true) "
-             "| survey duration | survey outcome |", "| --- | --- | --- | --- | --- | --- |"]
+             "| survey altitude (mean, prior map) | survey duration | survey outcome |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
     for name, r in rows.items():
         lines.append(f"| {name} | {100 * r['multibeam']:.1f} % | {100 * r['camera']:.1f} % | "
-                     f"{r['clearance']:.2f} m | {r['survey_s']:.0f} s | {r['outcome']} |")
+                     f"{r['clearance']:.2f} m | {r['altitude']:.1f} m | {r['survey_s']:.0f} s | "
+                     f"{r['outcome']} |")
     return "\n".join(lines)
 
 
