@@ -3,11 +3,14 @@
 Writes `report.md`, `report.json`, the figures, `mission.html`, `trajectory.csv` and
 `diagram.dot` into OUT. `--set KEY=VALUE` overrides the file's values by dotted keys into its
 sections (`--set replanner.optimizer=none`, `--set sonar_noise=clean`,
-`--set steps.2.survey.replanning=false`).
+`--set steps.2.survey.replanning=false`). `--meshcat` serves the scene on localhost while the
+mission flies (the leg, the replanner's section and the reference drawn as they change), paced
+by `--realtime R` (1 = real time, 0 = as fast as possible); the outputs are the same.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path as FilePath
 
 from drake_auv.commands import add_recording_options
@@ -29,7 +32,7 @@ def add_parser(subparsers) -> None:
 
 
 def add_mission_options(parser) -> None:
-    """`--seed` and `--set`, shared with `drake-auv demo`."""
+    """`--seed`, `--set`, `--meshcat` and `--realtime`, shared with `drake-auv demo`."""
     parser.add_argument("--seed", type=int, default=None,
                         help="seed of the prior-map error, navigation drift, sonar noise and "
                              "STOMP (default: the file's)")
@@ -37,13 +40,24 @@ def add_mission_options(parser) -> None:
                         metavar="KEY=VALUE",
                         help="override a value of the mission file by its dotted key "
                              "(repeatable), e.g. replanner.optimizer=none")
+    parser.add_argument("--meshcat", action="store_true",
+                        help="serve the scene on localhost while the mission flies (the URL is "
+                             "printed first): the vehicle, the map, the leg and the replanner's "
+                             "section as they change")
+    parser.add_argument("--realtime", type=float, default=1.0, metavar="R",
+                        help="with --meshcat, fly at R times real time (default 1; 0 = as fast "
+                             "as possible)")
 
 
 def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
-        playback_speed: float = 20.0, progress: bool = True) -> dict:
+        playback_speed: float = 20.0, progress: bool = True, meshcat: bool = False,
+        realtime: float = 1.0) -> dict:
     """Loads, flies and reports `mission` into `out`; returns the report's summary. The
     mission and its site are checked before the simulation's modules (Drake, matplotlib) are
-    imported, so a bad file is reported at once."""
+    imported, so a bad file is reported at once. With `meshcat` the scene is served on
+    localhost during the dive, which flies at `realtime` times real time (0: at full speed)."""
+    if meshcat and not (math.isfinite(realtime) and realtime >= 0):
+        raise ValueError(f"--realtime must be >= 0 (0 = as fast as possible), got {realtime}")
     from drake_auv.mission.config import load_mission
     from drake_auv.mission.site import check_against_site, load_site
 
@@ -58,16 +72,20 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
 
     plan = plan_mission(spec, site)
     scene = None
-    if html:
+    if html or meshcat:
         from drake_auv.visualization import Scene
 
-        scene = Scene()
+        scene = Scene(live=meshcat)
+        if meshcat:
+            print(f"live view: {scene.meshcat.web_url()}", flush=True)
         prepare_scene(scene, site, plan)
-        scene.start_recording(playback_speed=playback_speed, live=False)
-    result = run_mission(spec, site, scene=scene, progress=progress, plan=plan)
+        if html:
+            scene.start_recording(playback_speed=playback_speed, live=meshcat)
+    result = run_mission(spec, site, scene=scene, progress=progress, plan=plan,
+                         realtime_rate=realtime if meshcat else 0.0)
     out = FilePath(out)
     summary = write_outputs(result, out)
-    if scene is not None:
+    if html:
         finish_recording(result, scene, out / "mission.html")
     return summary
 
@@ -78,7 +96,7 @@ RUN_NEEDS_BYTES = 300 * MiB  # a dive's outputs: the boulder demo writes 135 MB 
 def run(args) -> int:
     output_folder(args.out, "-o", RUN_NEEDS_BYTES)
     summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
-                  args.playback_speed, not args.quiet)
+                  args.playback_speed, not args.quiet, args.meshcat, args.realtime)
     c = summary["coverage"]
     print(f"{summary['mission']['name']}: multibeam coverage {100 * c['multibeam']:.1f} %, "
           f"camera {100 * c['camera']:.1f} %, minimum clearance "

@@ -52,8 +52,10 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     """Simulates the vehicle tracking `path` at `speed`, draws it in `scene` if given, and writes
     mission.html (with a scene), tracking_error.png and state.csv into `out_dir`.
 
-    Statistics exclude the time until the reference reaches sample `settle_samples` (the end of
-    the first lane for a lawnmower given by its corner points). A `realtime_rate` > 0 paces the
+    The simulation advances once: a monitor ends it when the vehicle has settled at the end of
+    the path, at most `extra_time` s after the reference got there. Statistics exclude the
+    time until the reference reaches sample `settle_samples` (the end of the first lane for a
+    lawnmower given by its corner points). A `realtime_rate` > 0 paces the
     simulation (e.g. 1.0 to watch it live in the Meshcat tab); 0 runs as fast as possible.
     """
     from pydrake.systems.analysis import Simulator
@@ -84,11 +86,9 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     end = handles.end_time + extra_time
     start = time.perf_counter()
     with tqdm(total=round(end), unit="sim s", disable=not progress, desc="simulate") as bar:
-        t = 0.0
-        while t < end:
-            t = min(t + 10.0, end)
-            simulator.AdvanceTo(t)
-            bar.update(round(t) - bar.n)
+        simulator.set_monitor(_arrival_monitor(diagram, path, handles.end_time, bar))
+        simulator.AdvanceTo(end)
+        bar.update(bar.total - bar.n)
     wall = time.perf_counter() - start
     context = simulator.get_context()
     state_log = handles.state_log.FindLog(context)
@@ -103,6 +103,35 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     np.savetxt(out_dir / "state.csv", np.column_stack([times, state.T]), delimiter=",",
                fmt="%.5f", header="t,x,y,z,roll,pitch,yaw,u,v,w,p,q,r", comments="")
     return result
+
+
+SETTLED = (0.02, 0.01, 0.01)  # m from the path's end, m/s, rad of heading: the flight is over
+
+
+def _arrival_monitor(diagram, path, end_time: float, bar):
+    """A Simulator monitor of the tracking `diagram` that advances `bar` and ends the flight
+    once the reference has reached the end of `path` (at `end_time` s) and the true state (the
+    diagram's `state` output) has settled there
+    (`SETTLED`); `extra_time` after `end_time` caps it when it does not settle."""
+    from pydrake.systems.framework import EventStatus
+
+    goal, heading = path.points[-1], path.unwrapped_heading()[-1]
+    state_port = diagram.GetOutputPort("state")
+
+    def monitor(root_context):
+        t = root_context.get_time()
+        if int(t) > bar.n:
+            bar.update(int(t) - bar.n)
+        if t < end_time:
+            return EventStatus.DidNothing()
+        x = state_port.Eval(root_context)
+        settled = (np.linalg.norm(x[:3] - goal), np.linalg.norm(x[6:9]),
+                   abs(np.angle(np.exp(1j * (x[5] - heading)))))
+        if all(value < limit for value, limit in zip(settled, SETTLED)):
+            return EventStatus.ReachedTermination(diagram, "settled at the end of the path")
+        return EventStatus.DidNothing()
+
+    return monitor
 
 
 def plot_tracking_error(result: FlightResult, filename) -> None:

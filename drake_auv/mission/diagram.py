@@ -149,11 +149,15 @@ def add_autopilot(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSy
 
 def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, mapper,
                    spec: MissionSpec, plan: MissionPlan, site: Site, estimated, returns,
-                   pilot: AutopilotPilot | None = None):
+                   pilot: AutopilotPilot | None = None, replanner=None):
     """The nominal plan's source, the behaviours (with `pilot`, the autopilot flying exported
     files), the reference switch and the supervisor (watching the sonars' `returns`, the
-    reference and the map), wired. Returns (path_reference, controller, replanner,
-    supervisor, switch)."""
+    reference and the map), wired. `replanner`: a LeafSystem of your own (not yet added) to
+    fly the replanning legs instead of the built-in `Replanner`, with its ports: inputs
+    `estimated_state` (12), `leg` (2) and, if it declares them, `map` and `nominal`; outputs
+    `reference` (8) and `status` (3: `[leg, finished, next_index]`, finished > 0 ends the
+    leg); see `examples/custom_controller.py`. Returns (path_reference, controller,
+    replanner, supervisor, switch)."""
     source = None
     if plan.nominal is not None:  # the off-line plan, as a signal
         source = builder.AddNamedSystem("nominal_plan",
@@ -168,29 +172,35 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
     if source is not None:
         builder.Connect(source.get_output_port(), path_reference.nominal_input)
     behaviours = {"path": path_reference}
-    controller = replanner = None
+    controller = None
     if plan.follow_legs:
         controller = builder.AddNamedSystem("profile_following", ProfileFollowingController(
             plan.follow_legs, period=profiler.period, seed=spec.seed))
         builder.Connect(returns["profiler"], controller.returns_input)
         behaviours["follow"] = controller
     if plan.replan_legs:
-        replanner = builder.AddNamedSystem("replanner", Replanner(
-            spec.replanner.to_params(plan.omega, plan.method), speed=plan.survey_speed,
-            period=spec.replanner.period_s,
-            sensor_azimuth=SENSOR_AZIMUTH.get(spec.payload.multibeam_mount),
-            seed=spec.seed, legs=plan.replan_legs, optimizer=spec.replanner.optimizer))
-        builder.Connect(mapper.map_output, replanner.map_input)
-        builder.Connect(source.get_output_port(), replanner.nominal_input)
-        builder.Connect(replanner.status_output, supervisor.replanner_status_input)
+        if replanner is None:
+            replanner = builder.AddNamedSystem("replanner", Replanner(
+                spec.replanner.to_params(plan.omega, plan.method), speed=plan.survey_speed,
+                period=spec.replanner.period_s,
+                sensor_azimuth=SENSOR_AZIMUTH.get(spec.payload.multibeam_mount),
+                seed=spec.seed, legs=plan.replan_legs, optimizer=spec.replanner.optimizer))
+        else:
+            builder.AddSystem(replanner)
+        for name, port in (("map", mapper.map_output), ("nominal", source.get_output_port())):
+            if replanner.HasInputPort(name):
+                builder.Connect(port, replanner.GetInputPort(name))
+        builder.Connect(replanner.GetOutputPort("status"), supervisor.replanner_status_input)
         behaviours["replan"] = replanner
+    else:
+        replanner = None
     if pilot is not None:
         builder.Connect(pilot.status_output, supervisor.autopilot_status_input)
         behaviours["autopilot"] = pilot
     for name, system in behaviours.items():
-        builder.Connect(estimated, system.state_input)
-        builder.Connect(supervisor.leg_output, system.leg_input)
-        builder.Connect(system.reference_output, switch.GetInputPort(name))
+        builder.Connect(estimated, system.GetInputPort("estimated_state"))
+        builder.Connect(supervisor.leg_output, system.GetInputPort("leg"))
+        builder.Connect(system.GetOutputPort("reference"), switch.GetInputPort(name))
     if plan.profiler_planes:
         builder.Connect(supervisor.leg_output, profiler.leg_input)
     builder.Connect(supervisor.response_reference_output, switch.GetInputPort("response"))
@@ -232,7 +242,8 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     Args:
         plan: the off-line part (default: `plan_mission(spec, site)`).
         scene: a `drake_auv.visualization.Scene` to draw the vehicle, its trail and the
-            on-line map in while it flies.
+            on-line map in while it flies (a `live` scene: also the leg, the section and the
+            reference).
         caster: a `RayCaster` of `site.world` to share (default: built here).
     Exported outputs: `state` (true), `estimated_state`, `map`, `leg`.
     """
@@ -279,6 +290,12 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
         octree_view = builder.AddNamedSystem("octree_visualizer", OctreeVisualizer(
             scene.meshcat, scene.path_of("octree"), period=10.0))
         builder.Connect(mapper.map_output, octree_view.map_input)
+        if scene.live:  # the leg, the replanner's section and the reference, for a browser
+            from drake_auv.visualization.live import add_mission_view
+
+            add_mission_view(builder, scene, plan.legs, supervisor.leg_output, estimated,
+                             switch.get_output_port(),
+                             replanner.section_output if replanner is not None else None)
     diagram = builder.Build()
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,

@@ -119,14 +119,17 @@ def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndar
 
 
 def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
-                progress: bool = True, plan: MissionPlan | None = None) -> MissionResult:
+                progress: bool = True, plan: MissionPlan | None = None,
+                realtime_rate: float = 0.0) -> MissionResult:
     """Flies `spec` in one dive, at `site` (default `load_site(spec.site, spec.seed)`) with
-    `plan` (default `plan_mission(spec, site)`)."""
+    `plan` (default `plan_mission(spec, site)`), paced at `realtime_rate` times real time
+    (0: as fast as possible; pacing changes no result)."""
     site = site if site is not None else load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
     plan = plan if plan is not None else plan_mission(spec, site)
     diagram, handles = build_mission_diagram(site, spec, plan, scene=scene)
     simulator = Simulator(diagram)
+    simulator.set_target_realtime_rate(realtime_rate)
     context = simulator.get_context()
     cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
     bar = tqdm(total=int(np.ceil(cap)), unit="s sim", desc=f"mission {spec.name}",

@@ -17,7 +17,9 @@ wall time of the step and of its map query, next waypoint, whether a section was
 
 Ports: inputs `estimated_state` (12), `map` (`OnlineMap`), `nominal` (`Path`), `leg` (2);
 outputs `reference` (8, world: `[x, y, z, yaw, vx, vy, vz, yaw_rate]`), `status` (3:
-`[leg, finished, next_index]`, the leg last flown, -1 before any) and `step` (5).
+`[leg, finished, next_index]`, the leg last flown, -1 before any), `step` (5) and `section`
+((N, 3) the last optimised section's trajectory, navigation frame, m; (0, 3) before any: for
+a viewer).
 """
 
 from __future__ import annotations
@@ -121,6 +123,9 @@ class Replanner(LeafSystem):
             "status", 3, self._calc_status,
             prerequisites_of_calc={self.discrete_state_ticket(self._progress)})
         self.step_output = self.DeclareStateOutputPort("step", self._last_step)
+        self.section_output = self.DeclareAbstractOutputPort(
+            "section", lambda: AbstractValue.Make(np.zeros((0, 3))), self._calc_section,
+            prerequisites_of_calc={self.abstract_state_ticket(self._plan_index)})
 
     def section(self, context) -> SectionPlan | None:
         """The section planned at the last step in this system's `context`."""
@@ -185,6 +190,10 @@ class Replanner(LeafSystem):
         output.SetFromVector(trajectory_reference(
             context.get_abstract_state(self._plan_index).get_value().trajectory,
             context.get_time(), self.state_input, context))
+
+    def _calc_section(self, context, output):
+        plan = self.section(context)
+        output.set_value(np.zeros((0, 3)) if plan is None else plan.trajectory)
 
     def _calc_status(self, context, output):
         progress = context.get_discrete_state(self._progress).get_value()

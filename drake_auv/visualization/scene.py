@@ -41,12 +41,16 @@ def _rgba(value) -> Rgba:
 
 
 class Scene:
-    """One Meshcat scene. Attributes: `meshcat`, `root` (scene-tree prefix), `recording`,
-    `bounds` (box of the meshes and paths drawn), `camera_framed`."""
+    """One Meshcat scene (served on localhost only). Attributes: `meshcat`, `root` (scene-tree
+    prefix), `live` (a browser watches it while the mission flies: the mission Diagram then
+    also draws the leg, the replanner's section and the reference, `visualization.live`),
+    `recording`, `bounds` (box of the meshes and paths drawn), `camera_framed`."""
 
-    def __init__(self, meshcat: Meshcat | None = None, root: str = "drake_auv"):
+    def __init__(self, meshcat: Meshcat | None = None, root: str = "drake_auv",
+                 live: bool = False):
         self.meshcat = meshcat if meshcat is not None else Meshcat(MeshcatParams(host="localhost"))
         self.root = "/" + root.strip("/")
+        self.live = live
         self.recording = False
         self.playback_speed = 1.0
         self.time_offset = 0.0  # s of mission time before this diagram's t = 0 (multi-phase)

@@ -1,0 +1,166 @@
+"""`drake-auv run MISSION --meshcat`: the scene served on localhost while the mission flies, the
+leg and the replanner's section drawn as they change, and the same report as without it."""
+
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+import threading
+import time
+import urllib.request
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+from pydrake.geometry import Meshcat, MeshcatParams
+
+import drake_auv.visualization as visualization
+from drake_auv.cli import main
+from drake_auv.mission.legs import Leg
+from drake_auv.visualization.live import MissionView
+
+CHROMIUM = shutil.which("chromium")
+SHORT = ["--set", "limits.max_time_s=30", "--quiet"]
+
+
+def screenshot(url: str, png) -> np.ndarray:
+    """(h, w, 3) floats in [0, 1]: the live page at `url` in headless Chromium, once the scene
+    has arrived: the scene comes over a websocket, which Chromium's virtual time does not wait
+    for, so an attempt that still shows Meshcat's empty page (no seabed) is retried longer."""
+    for budget_ms in (12000, 30000, 60000):
+        with tempfile.TemporaryDirectory() as profile:
+            subprocess.run(
+                [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update",
+                 "--disable-sync", f"--user-data-dir={profile}", "--use-angle=swiftshader",
+                 "--enable-unsafe-swiftshader", "--hide-scrollbars", "--window-size=640,480",
+                 f"--timeout={budget_ms // 2}", f"--virtual-time-budget={budget_ms}",
+                 f"--screenshot={png}", url],
+                check=True, capture_output=True, timeout=180)
+        view = imread(png)[..., :3]
+        if seabed_fraction(view) > 0.3:
+            break
+    return view
+
+
+def seabed_fraction(view: np.ndarray) -> float:
+    """Share of the central pixels that are dark (the lit seabed and the boulder are; Meshcat's
+    empty page, a light background and a grid, is not)."""
+    h, w = view.shape[:2]
+    return float((view[h // 5: 4 * h // 5, w // 5: 4 * w // 5].mean(axis=-1) < 0.5).mean())
+
+
+LEGS = (Leg("transit", 0, "path", "arrive", 100.0, target=(10.0, 0.0, -20.0), tolerance=1.5),
+        Leg("follow", 0, "follow", "loops", 300.0, centre=(0.0, 5.0)))
+
+
+def view_context(meshcat, leg, section=None):
+    view = MissionView(meshcat, "/test", LEGS)
+    context = view.CreateDefaultContext()
+    view.leg_input.FixValue(context, leg)
+    view.state_input.FixValue(context, np.r_[1.0, 2.0, -20.0, np.zeros(9)])
+    view.reference_input.FixValue(context, np.r_[3.0, 2.0, -20.0, np.zeros(5)])
+    if section is not None:
+        view.section_input.FixValue(context, section)
+    return view, context
+
+
+def test_mission_view_draws_the_leg_and_the_section():
+    meshcat = Meshcat(MeshcatParams(host="localhost"))
+    section = np.column_stack([np.linspace(0, 5, 6), np.zeros(6), np.full(6, -20.0)])
+    view, context = view_context(meshcat, [0.0, 0.0], section)
+    view.ForcedPublish(context)
+    assert meshcat.GetButtonNames() == ["leg 1 of 2: transit, path until arrive (since 0 s)"]
+    assert meshcat.HasPath("/test/leg/target") and meshcat.HasPath("/test/leg/line")
+    assert meshcat.HasPath("/test/section") and meshcat.HasPath("/test/reference")
+    # the next leg replaces the label and the goal geometry
+    view.leg_input.FixValue(context, [1.0, 42.0])
+    view.ForcedPublish(context)
+    assert meshcat.GetButtonNames() == ["leg 2 of 2: follow, follow until loops (since 42 s)"]
+    assert meshcat.HasPath("/test/leg/centre") and not meshcat.HasPath("/test/leg/target")
+
+
+def test_mission_view_without_a_replanner_draws_no_section():
+    meshcat = Meshcat(MeshcatParams(host="localhost"))
+    view, context = view_context(meshcat, [0.0, 0.0])
+    view.ForcedPublish(context)
+    assert not meshcat.HasPath("/test/section")
+    with pytest.raises(ValueError, match="period"):
+        MissionView(meshcat, "/test", LEGS, period=0.0)
+
+
+@pytest.fixture(scope="module")
+def live_run(tmp_path_factory):
+    """`run boulder --meshcat --realtime 0` on a short cap, with a thread that fetches the
+    served page over HTTP on 127.0.0.1 as soon as the scene exists; after the run, a headless
+    Chromium screenshot of that live server (a browser connected during a 2 s dive at full
+    speed would race it)."""
+    out = tmp_path_factory.mktemp("live")
+    scenes, seen = [], {}
+
+    class WatchedScene(visualization.Scene):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            # Meshcat answers only on its own thread: its URL is read here. Holding the scene
+            # also keeps the server up after the run, for the screenshot.
+            scenes.append((self, self.meshcat.web_url()))
+
+    def watch():
+        while not scenes:
+            time.sleep(0.05)
+        url = scenes[0][1].replace("localhost", "127.0.0.1")
+        with urllib.request.urlopen(url, timeout=30) as page:
+            seen.update(url=url, status=page.status, html=page.read().decode(),
+                        fetched=time.monotonic())
+
+    original = visualization.Scene
+    visualization.Scene = WatchedScene
+    try:
+        watcher = threading.Thread(target=watch, daemon=True)
+        watcher.start()
+        assert main(["run", "boulder", "--meshcat", "--realtime", "0", "-o", str(out / "run"),
+                     *SHORT]) == 0
+        ended = time.monotonic()
+        watcher.join(timeout=60)
+    finally:
+        visualization.Scene = original
+    if CHROMIUM is not None:  # the server the run drew in, still up: what a browser shows
+        seen["view"] = screenshot(seen["url"], out / "live.png")
+    return out, seen, ended, scenes
+
+
+def test_the_page_is_served_during_the_run(live_run):
+    out, seen, ended, scenes = live_run
+    assert seen["status"] == 200 and "meshcat" in seen["html"].lower()
+    assert seen["fetched"] < ended  # while the mission was still being planned or flown
+    scene = scenes[0][0]
+    assert scene.live and seen["url"].startswith("http://127.0.0.1:")
+    for layer in ("live/reference", "live/leg/centre", "vehicle", "world"):
+        assert scene.meshcat.HasPath(scene.path_of(layer)), layer
+    # the transit arrived after 26 s: the follow leg's label replaced it
+    assert [name.split(" (")[0] for name in scene.meshcat.GetButtonNames()] == [
+        "leg 2 of 4: follow, follow until loops"]
+    assert (out / "run" / "mission.html").is_file()  # the recording is still written
+
+
+@pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"),
+                    reason="no chromium (Debian package `chromium`)")
+def test_chromium_renders_the_live_scene(live_run):
+    fraction = seabed_fraction(live_run[1]["view"])
+    assert fraction > 0.3, f"the live view shows no seabed ({fraction:.1%} of the centre)"
+
+
+def test_the_report_is_the_same_without_meshcat(live_run):
+    out, _, _, _ = live_run
+    assert main(["run", "boulder", "-o", str(out / "plain"), *SHORT]) == 0
+    live, plain = (json.loads((out / name / "report.json").read_text())
+                   for name in ("run", "plain"))
+    for report in (live, plain):
+        assert report.pop("timing")["sim_s"] == 30.0
+    assert live == plain
+
+
+def test_a_negative_realtime_rate_is_one_line(tmp_path, capsys):
+    assert main(["run", "boulder", "--meshcat", "--realtime", "-1", "-o", str(tmp_path)]) != 0
+    assert "--realtime must be >= 0" in capsys.readouterr().err
