@@ -8,6 +8,7 @@ sections (`--set replanner.optimizer=none`, `--set sonar_noise=clean`,
 
 from __future__ import annotations
 
+import time
 from pathlib import Path as FilePath
 
 from drake_auv.commands import add_recording_options
@@ -43,7 +44,9 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         playback_speed: float = 20.0, progress: bool = True) -> dict:
     """Loads, flies and reports `mission` into `out`; returns the report's summary. The
     mission and its site are checked before the simulation's modules (Drake, matplotlib) are
-    imported, so a bad file is reported at once."""
+    imported, so a bad file is reported at once. The report's `timing` has the end-to-end
+    figures: `setup_s` is everything of this call before the outputs but the simulation."""
+    start = time.perf_counter()
     from drake_auv.mission.config import load_mission
     from drake_auv.mission.site import check_against_site, load_site
 
@@ -65,11 +68,13 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         prepare_scene(scene, site, plan)
         scene.start_recording(playback_speed=playback_speed, live=False)
     result = run_mission(spec, site, scene=scene, progress=progress, plan=plan)
-    out = FilePath(out)
-    summary = write_outputs(result, out)
-    if scene is not None:
+    setup_s = time.perf_counter() - start - result.wall_s
+
+    def finish(out):
         finish_recording(result, scene, out / "mission.html")
-    return summary
+
+    return write_outputs(result, out, setup_s=setup_s,
+                         finish=finish if scene is not None else None)
 
 
 RUN_NEEDS_BYTES = 300 * MiB  # a dive's outputs: the boulder demo writes 135 MB (points.ply 76)
@@ -85,6 +90,10 @@ def run(args) -> int:
           f"{summary['min_clearance_m']:.2f} m"
           + (" (contact)" if summary["contact"] else "")
           + f"; report in {FilePath(args.out) / 'report.md'}")
+    t = summary["timing"]
+    print(f"end to end {t['total_s']:.1f} s: setup {t['setup_s']:.1f} s, simulation "
+          f"{t['simulation_s']:.1f} s ({t['real_time_factor']:.0f}x real time), outputs "
+          f"{t['outputs_s']:.1f} s; peak memory {t['peak_rss_mb']:.0f} MiB")
     return 0
 
 
