@@ -15,6 +15,7 @@ along its axis, the nearest echo above the detection threshold (`SonarNoise`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -191,10 +192,10 @@ def beam_geometry(model: SonarModel, angles) -> BeamGeometry:
 
 def pose(state) -> tuple[np.ndarray, np.ndarray]:
     """(position (3,), R_WB (3, 3)) of a 12-vector state."""
-    state = np.asarray(state, dtype=float)
-    if state.shape[0] < 6 or not np.isfinite(state[:6]).all():
+    values = np.asarray(state, dtype=float)[:6].tolist()  # Python floats: cheap scalar maths
+    if len(values) < 6 or not all(map(math.isfinite, values)):
         raise ValueError("state must start with a finite [x, y, z, roll, pitch, yaw]")
-    return state[:3].copy(), rotation_world_body(*state[3:6])
+    return np.array(values[:3]), rotation_world_body(*values[3:])
 
 
 def _surface_multipath(caster: RayCaster, origin: np.ndarray, rays: np.ndarray,
@@ -303,20 +304,15 @@ def scan_with_hits(caster: RayCaster, model: SonarModel, angles, true_state, est
     if noise.enabled:
         ranges = apply_noise(ranges, model.max_range, noise, rng)
     points_b = mount.position + ranges[:, None] * d_b
-    returns = SonarReturns(
-        time=float(time),
-        origin_nav=_read_only(p_nb + r_nb @ mount.position),
-        angles=g.angles,
-        ranges=_read_only(ranges),
-        directions_nav=_read_only(d_b @ r_nb.T),
-        points_nav=_read_only(p_nb + points_b @ r_nb.T),
-        points_body=_read_only(points_b),
-        max_range=float(model.max_range),
-        sequence=int(sequence))
+    returns = SonarReturns.of_fresh_arrays(
+        float(time), _read_only(p_nb + r_nb @ mount.position), g.angles,
+        _read_only(ranges.astype(float, copy=False)),  # Embree's float32 when clean
+        _read_only(d_b @ r_nb.T), _read_only(p_nb + points_b @ r_nb.T), _read_only(points_b),
+        float(model.max_range), int(sequence))
     return returns, hits
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:
-    """`array` (a fresh array or view the caller owns) made read-only in place."""
+    """`array` (a fresh float array or view the caller owns) made read-only in place."""
     array.setflags(write=False)
     return array
