@@ -191,6 +191,11 @@ def test_demo_writes_every_output(tmp_path):
                   b"set_animation"):
         assert layer in commands, layer
     assert b"/Cameras/default" in commands and b"set_target" in commands  # framed
+    t = json.loads((out / "report.json").read_text())["timing"]  # end to end, the HTML too
+    assert 0 < t["reconstruction_s"] < t["outputs_s"] and t["setup_s"] > 0
+    assert t["total_s"] == pytest.approx(t["setup_s"] + t["simulation_s"] + t["outputs_s"],
+                                         abs=2e-4)
+    assert t["simulation_s"] == t["wall_s"] and 100 < t["peak_rss_mb"] < 24 * 1024
 
 
 def test_a_dive_stopped_before_its_survey_still_reports(tmp_path):

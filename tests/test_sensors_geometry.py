@@ -268,3 +268,27 @@ def test_bad_input_raises():
         SonarMount(rotation=2 * np.eye(3))
     with pytest.raises(ValueError, match="state"):
         scan(RayCaster(_wall(4.0)), SonarModel(), [0.0], np.full(12, np.nan), _state())
+
+
+def test_scan_with_hits_gives_the_axis_faces_of_the_same_cast():
+    from drake_auv.sonar.beams import beam_geometry, scan_with_hits
+
+    world = trimesh.creation.box(extents=(20.0, 20.0, 2.0))
+    world.apply_translation((0.0, 0.0, -12.0))
+    caster = RayCaster(world)
+    noise = SonarNoise(side_lobe_deg=20.0, side_lobe_gain=0.08, echo_threshold=0.05,
+                       range_sigma=0.1)
+    model = SonarModel(SonarMount.named("down"), noise=noise)
+    angles = fan_angles(90, np.radians(150))
+    state = np.zeros(12)
+    state[3:6] = 0.05, -0.03, 0.4
+    returns, hits = scan_with_hits(caster, model, angles, state, state,
+                                   rng=np.random.default_rng(3), time=2.5)
+    g = beam_geometry(model, angles)
+    assert g.rays_per_beam == 3 and len(hits.faces) == len(angles)
+    expected = caster.cast(hits.origin, hits.directions, model.max_range)
+    np.testing.assert_array_equal(hits.faces, expected.faces)
+    assert 0 < (hits.faces >= 0).sum() < len(angles) and hits.time == 2.5
+    again = scan(caster, model, angles, state, state, rng=np.random.default_rng(3), time=2.5)
+    np.testing.assert_array_equal(again.ranges, returns.ranges)
+    assert not returns.ranges.flags.writeable and not hits.faces.flags.writeable

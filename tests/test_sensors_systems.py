@@ -185,3 +185,54 @@ def test_profiler_cached_beams_match_the_schedule(sector):
     for n in list(range(0, 1500, 7)) * 2:  # second pass served from the cache
         g = profiler.update_geometry(n)
         np.testing.assert_allclose(g.angles, profiler.update_angles(n), atol=1e-9)
+
+
+def _fan_over_relief(recorder_rate=10.0, sonar_rate=10.0):
+    """A multibeam (side lobe and surface multipath: 3 rays a beam) crossing a bumpy seabed,
+    a recorder scoring its `axis_hits` and one casting the same fan itself."""
+    x = np.arange(0.0, 30.0, 0.5)
+    gx, gy = np.meshgrid(x, x)
+    world = bathymetry_to_mesh(Bathymetry(-12.0 + np.sin(gx / 3.0) * np.cos(gy / 2.0),
+                                          (0.5, 0.5), (0.0, 0.0)))
+    caster = RayCaster(world)
+    noise = SonarNoise(surface_prob=0.5, side_lobe_deg=20.0, side_lobe_gain=0.08,
+                       echo_threshold=0.05, range_sigma=0.1)
+    traj = PiecewisePolynomial.FirstOrderHold(
+        [0.0, 20.0], np.column_stack([_state(5.0, 15.0, -4.0, yaw=0.1),
+                                      _state(25.0, 12.0, -3.0, roll=0.05, yaw=-0.2)]))
+    builder = DiagramBuilder()
+    source = builder.AddNamedSystem("poses", TrajectorySource(traj))
+    sonar = builder.AddNamedSystem("multibeam", MultibeamSonar(
+        caster, num_beams=120, rate=sonar_rate, mount="port", noise=noise,
+        axis_hits_output=True))
+    options = dict(sensor="multibeam", num_beams=120, max_range=20.0, mount="port",
+                   rate=recorder_rate)
+    shared = builder.AddNamedSystem("shared", CoverageRecorder(caster, hits_input=True,
+                                                               **options))
+    own = builder.AddNamedSystem("own", CoverageRecorder(caster, **options))
+    for system in (sonar, shared, own):
+        builder.Connect(source.get_output_port(), system.GetInputPort("true_state"))
+    builder.Connect(source.get_output_port(), sonar.estimated_state_input)
+    builder.Connect(sonar.axis_hits_output, shared.hits_input)
+    diagram = builder.Build()
+    return diagram, shared, own
+
+
+def test_recorder_on_the_multibeam_axis_hits_scores_what_its_own_casts_score():
+    diagram, shared, own = _fan_over_relief()
+    simulator = Simulator(diagram)
+    simulator.AdvanceTo(20.0)
+    root = simulator.get_context()
+    a = shared.best_angles(shared.GetMyContextFromRoot(root))
+    b = own.best_angles(own.GetMyContextFromRoot(root))
+    assert 0.2 < np.isfinite(a).mean() < 1.0  # a swath, not all and not nothing
+    np.testing.assert_array_equal(a, b)  # the same faces at the same angles, bit for bit
+
+
+def test_recorder_rejects_axis_hits_of_another_rate():
+    diagram, _, _ = _fan_over_relief(recorder_rate=10.0, sonar_rate=5.0)
+    simulator = Simulator(diagram)
+    with pytest.raises(ValueError, match="axis_hits of t"):
+        simulator.AdvanceTo(1.0)
+    with pytest.raises(ValueError, match="hits_input"):
+        CoverageRecorder(trimesh.creation.box(), sensor="camera", hits_input=True)

@@ -11,6 +11,7 @@ by `--realtime R` (1 = real time, 0 = as fast as possible); the outputs are the 
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path as FilePath
 
 from drake_auv.commands import add_recording_options
@@ -55,7 +56,10 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     """Loads, flies and reports `mission` into `out`; returns the report's summary. The
     mission and its site are checked before the simulation's modules (Drake, matplotlib) are
     imported, so a bad file is reported at once. With `meshcat` the scene is served on
-    localhost during the dive, which flies at `realtime` times real time (0: at full speed)."""
+    localhost during the dive, which flies at `realtime` times real time (0: at full speed).
+    The report's `timing` has the end-to-end figures: `setup_s` is everything of this call
+    before the outputs but the simulation."""
+    start = time.perf_counter()
     if meshcat and not (math.isfinite(realtime) and realtime >= 0):
         raise ValueError(f"--realtime must be >= 0 (0 = as fast as possible), got {realtime}")
     from drake_auv.mission.config import load_mission
@@ -83,11 +87,13 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
             scene.start_recording(playback_speed=playback_speed, live=meshcat)
     result = run_mission(spec, site, scene=scene, progress=progress, plan=plan,
                          realtime_rate=realtime if meshcat else 0.0)
-    out = FilePath(out)
-    summary = write_outputs(result, out)
-    if html:
+    setup_s = time.perf_counter() - start - result.wall_s
+
+    def finish(out):
         finish_recording(result, scene, out / "mission.html")
-    return summary
+
+    return write_outputs(result, FilePath(out), setup_s=setup_s,
+                         finish=finish if html else None)
 
 
 RUN_NEEDS_BYTES = 300 * MiB  # a dive's outputs: the boulder demo writes 135 MB (points.ply 76)
@@ -103,6 +109,10 @@ def run(args) -> int:
           f"{summary['min_clearance_m']:.2f} m"
           + (" (contact)" if summary["contact"] else "")
           + f"; report in {FilePath(args.out) / 'report.md'}")
+    t = summary["timing"]
+    print(f"end to end {t['total_s']:.1f} s: setup {t['setup_s']:.1f} s, simulation "
+          f"{t['simulation_s']:.1f} s ({t['real_time_factor']:.0f}x real time), outputs "
+          f"{t['outputs_s']:.1f} s; peak memory {t['peak_rss_mb']:.0f} MiB")
     return 0
 
 

@@ -6,17 +6,22 @@ Camera mode: a cone of `aperture_deg` about `axis_body` (default straight down),
 per target face (rad, NaN while unseen). Outputs: `coverage`, the seen share of the target
 area, and `face_angles`, that state (for colouring the mesh in Meshcat).
 The pure work is in `drake_auv.geometry.visibility`.
+
+A multibeam recorder built with `hits_input` does not cast: it reads the faces the payload
+multibeam's beam axes hit in the same update (`MultibeamSonar(axis_hits_output=True)`, the
+same fan, range, mount and rate), one ray query serving the sonar and its score.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.geometry.visibility import (FaceVisibility, angle_histogram, coverage_share,
                                            merge_best)
-from drake_auv.sonar.beams import SonarMount, fan_angles
+from drake_auv.sonar.beams import AxisHits, SonarMount, fan_angles
 from drake_auv.sonar.range_sonar import STATE_SIZE, as_caster
 
 
@@ -34,12 +39,14 @@ class CoverageRecorder(LeafSystem):
         position_body: sensor position in the body frame, m.
         rate: frames (or pings) per second, > 0.
         num_beams, fan_deg, mount: the multibeam fan (see `MultibeamSonar`).
+        hits_input: (multibeam) declare the abstract input `axis_hits` and score the
+            `AxisHits` of a multibeam with this fan, range, mount and rate instead of casting.
     """
 
     def __init__(self, world, target_faces=None, sensor: str = "camera",
                  aperture_deg: float = 60.0, max_range: float = 8.0, axis_body=(0.0, 0.0, -1.0),
                  position_body=(0.0, 0.0, 0.0), rate: float = 2.0, num_beams: int = 480,
-                 fan_deg: float = 120.0, mount: str = "down"):
+                 fan_deg: float = 120.0, mount: str = "down", hits_input: bool = False):
         super().__init__()
         if sensor not in ("camera", "multibeam"):
             raise ValueError(f"sensor must be 'camera' or 'multibeam', got {sensor!r}")
@@ -49,6 +56,8 @@ class CoverageRecorder(LeafSystem):
             raise ValueError(f"max_range must be > 0 m, got {max_range}")
         if not (np.isfinite(rate) and rate > 0):
             raise ValueError(f"rate must be > 0 Hz, got {rate}")
+        if hits_input and sensor != "multibeam":
+            raise ValueError("hits_input needs sensor='multibeam' (a camera casts its own rays)")
         axis = np.asarray(axis_body, dtype=float)
         if axis.shape != (3,) or not np.isfinite(axis).all() or np.linalg.norm(axis) < 1e-9:
             raise ValueError(f"axis_body must be a non-zero 3-vector, got {axis_body}")
@@ -65,6 +74,9 @@ class CoverageRecorder(LeafSystem):
             self._beams_body = np.column_stack([np.cos(a), np.sin(a), np.zeros_like(a)]) \
                 @ self.mount.rotation.T
         self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
+        self.hits_input = (self.DeclareAbstractInputPort(
+            "axis_hits", AbstractValue.Make(AxisHits.empty(self.max_range)))
+            if hits_input else None)
         num_target = len(self.visibility.target_index)
         self._best_index = self.DeclareDiscreteState(BasicVector(np.full(num_target, np.nan)))
         self.DeclarePeriodicDiscreteUpdateEvent(1.0 / rate, 0.0, self._update_best)
@@ -76,19 +88,35 @@ class CoverageRecorder(LeafSystem):
             prerequisites_of_calc={self.discrete_state_ticket(self._best_index)})
 
     def _update_best(self, context, discrete_state):
-        state = self.true_state_input.Eval(context)
-        r_wb = rotation_world_body(*state[3:6])
-        origin = state[:3] + r_wb @ self.mount.position
-        if self.sensor == "camera":
-            slots, angles = self.visibility.camera(origin, r_wb @ self.axis_body, self.aperture,
-                                                   self.max_range)
+        if self.hits_input is not None:
+            hits = self._shared_hits(context)
+            slots, angles = self.visibility.beams(hits, hits.directions)
         else:
-            directions = self._beams_body @ r_wb.T
-            hits = self.caster.cast(origin, directions, self.max_range)
-            slots, angles = self.visibility.beams(hits, directions)
+            state = self.true_state_input.Eval(context)
+            r_wb = rotation_world_body(*state[3:6])
+            origin = state[:3] + r_wb @ self.mount.position
+            if self.sensor == "camera":
+                slots, angles = self.visibility.camera(origin, r_wb @ self.axis_body,
+                                                       self.aperture, self.max_range)
+            else:
+                directions = self._beams_body @ r_wb.T
+                hits = self.caster.cast(origin, directions, self.max_range)
+                slots, angles = self.visibility.beams(hits, directions)
         if len(slots):
             best = context.get_discrete_state(self._best_index).get_value()
             discrete_state.set_value(self._best_index, merge_best(best, slots, angles))
+
+    def _shared_hits(self, context) -> AxisHits:
+        """The multibeam's `AxisHits` of this update; a ValueError if they are of another
+        time or fan (the sonar is not this recorder's twin)."""
+        hits = self.hits_input.Eval(context)
+        if hits.time != context.get_time() or len(hits.faces) != len(self._beams_body) \
+                or hits.max_range != self.max_range:
+            raise ValueError(
+                f"{self.get_name()}: axis_hits of t = {hits.time} s, {len(hits.faces)} beams, "
+                f"{hits.max_range} m at t = {context.get_time()} s: connect a multibeam of "
+                f"{len(self._beams_body)} beams, {self.max_range} m and the recorder's rate")
+        return hits
 
     def _calc_coverage(self, context, output):
         output.SetAtIndex(0, self.coverage(context))

@@ -115,13 +115,16 @@ class RayCaster:
             (ranges (n,) with NaN for no hit, faces (n,) with -1 for no hit).
         """
         n = len(unit_directions)
-        origins32 = np.asarray(origins - self._offset, dtype=np.float32)
-        if origins32.ndim == 1:
-            origins32 = np.tile(origins32, (n, 1))
+        shifted = origins - self._offset
+        if shifted.ndim == 1:  # one origin for all rays (Embree reads one per ray)
+            origins32 = np.empty((n, 3), dtype=np.float32)
+            origins32[:] = shifted  # the same float32 rounding as astype
+        else:
+            origins32 = np.asarray(shifted, dtype=np.float32)
         dists = (np.full(n, max_range, dtype=np.float32) if np.ndim(max_range) == 0
                  else np.asarray(max_range, dtype=np.float32))
         out = self._scene.run(origins32, np.asarray(unit_directions, dtype=np.float32),
                               dists=dists, output=1)
-        faces = np.asarray(out["primID"], dtype=np.int64)
+        faces = out["primID"].astype(np.int64)
         ranges = np.where(faces >= 0, out["tfar"], np.nan)
         return ranges, faces

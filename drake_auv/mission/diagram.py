@@ -112,7 +112,7 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
     noise = spec.sonar_noise.to_noise()
     multibeam = builder.AddNamedSystem("multibeam", MultibeamSonar(
         caster, max_range=max_range, mount=spec.payload.multibeam_mount, noise=noise,
-        seed=spec.seed))
+        seed=spec.seed, axis_hits_output=True))
     options = {**FOLLOWING_SETUP, "max_range": max_range}
     profiler = builder.AddNamedSystem("profiler", PencilBeamProfiler(
         caster, scan_plane="horizontal", noise=noise, seed=spec.seed + 1,
@@ -217,22 +217,23 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
 
 def add_coverage_recorders(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
                            spec: MissionSpec, site: Site, max_range: float,
-                           multibeam_rate: float):
-    """What the payload camera (2 frames/s) and multibeam (every ping, at `multibeam_rate`)
-    have seen of the target, on the true world. The multibeam is scored at its own ping rate:
-    at 2 Hz and 0.3 m/s its vertical fan would sweep the face every 0.15 m and miss parts of
-    0.25 m faces it did ping."""
+                           multibeam: MultibeamSonar):
+    """What the payload camera (2 frames/s) and `multibeam` (every ping) have seen of the
+    target, on the true world. The multibeam is scored at its own ping rate, on the faces its
+    beams' axes hit (its `axis_hits`): at 2 Hz and 0.3 m/s its vertical fan would sweep the
+    face every 0.15 m and miss parts of 0.25 m faces it did ping."""
     mount = spec.payload.multibeam_mount
     camera = builder.AddNamedSystem("camera_coverage", CoverageRecorder(
         caster, site.target_faces, sensor="camera",
         aperture_deg=spec.payload.camera_aperture_deg, max_range=spec.payload.camera_range_m,
         axis_body=CAMERA_SIDE[mount], rate=2.0))
-    multibeam = builder.AddNamedSystem("multibeam_coverage", CoverageRecorder(
+    recorder = builder.AddNamedSystem("multibeam_coverage", CoverageRecorder(
         caster, site.target_faces, sensor="multibeam", max_range=max_range, mount=mount,
-        rate=multibeam_rate))
-    for recorder in (camera, multibeam):
-        builder.Connect(vehicle.dynamics.state_output, recorder.true_state_input)
-    return camera, multibeam
+        rate=1.0 / multibeam.period, hits_input=True))
+    builder.Connect(multibeam.axis_hits_output, recorder.hits_input)
+    for system in (camera, recorder):
+        builder.Connect(vehicle.dynamics.state_output, system.true_state_input)
+    return camera, recorder
 
 
 def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | None = None,
@@ -264,7 +265,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     path_reference, controller, replanner, supervisor, switch = add_behaviours(
         builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns, pilot)
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
-                                                        max_range, 1.0 / multibeam.period)
+                                                        max_range, multibeam)
     logs = {
         "state": LogVectorOutput(vehicle.dynamics.state_output, builder, LOG_PERIOD),
         "estimated_state": LogVectorOutput(estimated, builder, LOG_PERIOD),

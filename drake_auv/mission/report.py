@@ -8,7 +8,13 @@ Diagram, written by `write_outputs`.
 target, as the reference reports it), `phases` (`name`, `start_s`, `end_s`, one time axis),
 `faults` (the injected ones, as in the mission file), `responses` (the supervisor's answers:
 `response`, `cause`, `start_s`, `end_s`) and `mission.aborted`.
-Everything but `timing` depends only on the mission file and its seed.
+Everything but `timing` depends only on the mission file and its seed. `timing` (wall clock,
+s): `sim_s` simulated; `wall_s` = `simulation_s`, the simulation's wall time, and
+`real_time_factor` = `sim_s / simulation_s`; from `write_outputs`, the end-to-end figures:
+`setup_s` (when the caller measured it: loading, planning, building the Diagram, reading the
+logs back), `outputs_s` (every file, the Meshcat recording included), `reconstruction_s` (of
+which the point cloud and the surface), `total_s` and `peak_rss_mb` (the process's peak
+resident memory, MiB).
 """
 
 from __future__ import annotations
@@ -16,6 +22,8 @@ from __future__ import annotations
 import csv
 import dataclasses
 import json
+import resource
+import time
 from pathlib import Path as FilePath
 
 import numpy as np
@@ -153,7 +161,7 @@ def summarise(result: MissionResult) -> dict:
         plan=plan_summary(result),
         config=mission_to_dict(result.spec),
     )
-    timing = dict(wall_s=result.wall_s, sim_s=result.duration_s,
+    timing = dict(wall_s=result.wall_s, sim_s=result.duration_s, simulation_s=result.wall_s,
                   real_time_factor=result.duration_s / max(result.wall_s, 1e-9))
     if len(result.replanning):
         wall = result.replanning[:, 1]
@@ -234,6 +242,12 @@ def report_markdown(summary: dict) -> str:
     t = summary["timing"]
     lines.append(f"- {t['sim_s']:.0f} s simulated in {t['wall_s']:.1f} s wall: "
                  f"{t['real_time_factor']:.0f}x real time.")
+    if "outputs_s" in t:
+        setup = "" if t.get("setup_s") is None else f"setup {t['setup_s']:.1f} s, "
+        lines.append(f"- End to end {t['total_s']:.1f} s: {setup}simulation "
+                     f"{t['simulation_s']:.1f} s, outputs {t['outputs_s']:.1f} s (of which the "
+                     f"reconstruction {t['reconstruction_s']:.1f} s); peak memory "
+                     f"{t['peak_rss_mb']:.0f} MiB.")
     if "replan_steps" in t:
         lines.append(f"- {t['replan_steps']} replanning steps: median "
                      f"{t['replan_median_ms']:.1f} ms, 95th percentile {t['replan_p95_ms']:.1f}"
@@ -315,17 +329,27 @@ def write_trajectory(result: MissionResult, filename) -> None:
                              *(f"{v:.3f}" for v in e)])
 
 
-def write_outputs(result: MissionResult, outdir, dpi: int = 110) -> dict:
+def peak_rss_mb() -> float:
+    """Peak resident memory of this process so far, MiB (`getrusage`: KiB on Linux)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float | None = None,
+                  finish=None) -> dict:
     """Writes report.json, report.md, coverage.png, distance.png, plan.png (coverage plans),
     trajectory.csv, diagram.dot and the data products (points.ply; reconstruction.ply and .png
-    with Open3D, `reconstruction.products`) into `outdir`; returns the summary."""
+    with Open3D, `reconstruction.products`) into `outdir`; returns the summary.
+
+    `finish(outdir)` (the Meshcat recording, which reads the products) runs after the other
+    files and before the report, so that `timing.outputs_s` counts it; `setup_s` is the
+    caller's wall time before the simulation (see the module for the `timing` keys)."""
+    start = time.perf_counter()
     out = FilePath(outdir)
     out.mkdir(parents=True, exist_ok=True)
     summary = summarise(result)
+    products = time.perf_counter()
     summary["reconstruction"] = _rounded(write_products(result, out, dpi))
-    (out / "report.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (out / "report.md").write_text(report_markdown(summary)
-                                   + products_markdown(summary["reconstruction"]))
+    reconstruction_s = time.perf_counter() - products
     figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result)}
     if result.plan.coverage is not None:
         from drake_auv.planning.figures import fig_path3d
@@ -335,4 +359,13 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110) -> dict:
         fig.savefig(out / name, dpi=dpi, bbox_inches="tight")
     write_trajectory(result, out / "trajectory.csv")
     (out / "diagram.dot").write_text(result.diagram_dot)
+    if finish is not None:
+        finish(out)
+    outputs_s = time.perf_counter() - start
+    summary["timing"].update(_rounded(dict(
+        setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
+        total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
+    (out / "report.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (out / "report.md").write_text(report_markdown(summary)
+                                   + products_markdown(summary["reconstruction"]))
     return summary

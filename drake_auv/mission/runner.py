@@ -146,6 +146,7 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
     wall = time.perf_counter()
     status = simulator.AdvanceTo(cap)
     wall = time.perf_counter() - wall
+    bar.update(bar.total - bar.n)  # a dive that ends before the cap ends the bar at 100 %
     bar.close()
     completed = status.reason() == SimulatorStatus.ReturnReason.kReachedTerminationCondition
     return _collect(spec, site, plan, diagram, handles, context, completed, wall)

@@ -15,6 +15,7 @@ along its axis, the nearest echo above the detection threshold (`SonarNoise`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -156,7 +157,8 @@ class BeamGeometry:
 
     angles (n,) rad; directions_body (n, 3) beam axes; rays_body (n * m, 3) the rays cast
     (m per beam: the axis, the cone edge when the beam has a width, the side lobe when it has
-    one); ray_gains (m,) their two-way gains.
+    one); ray_gains (m,) their two-way gains; gains_per_ray (n * m,) the same, per ray cast.
+    The arrays are read-only, so the returns share them.
     """
 
     angles: np.ndarray
@@ -164,6 +166,13 @@ class BeamGeometry:
     rays_body: np.ndarray
     rays_per_beam: int
     ray_gains: np.ndarray
+    gains_per_ray: np.ndarray
+
+
+def _frozen(array) -> np.ndarray:
+    out = np.array(array, dtype=float)
+    out.setflags(write=False)
+    return out
 
 
 def beam_geometry(model: SonarModel, angles) -> BeamGeometry:
@@ -176,16 +185,17 @@ def beam_geometry(model: SonarModel, angles) -> BeamGeometry:
     rays = _beam_rays(d_s, 0.5 * model.beam_width, side_lobe)
     gains = np.concatenate([[1.0], np.full(6 if model.beam_width > 0 else 0, EDGE_GAIN),
                             np.full(2 if side_lobe > 0 else 0, noise.side_lobe_gain)])
-    return BeamGeometry(angles, d_s @ rotation.T, rays.reshape(-1, 3) @ rotation.T,
-                        rays.shape[1], gains)
+    return BeamGeometry(_frozen(angles), _frozen(d_s @ rotation.T),
+                        _frozen(rays.reshape(-1, 3) @ rotation.T), rays.shape[1],
+                        _frozen(gains), _frozen(np.tile(gains, len(angles))))
 
 
 def pose(state) -> tuple[np.ndarray, np.ndarray]:
     """(position (3,), R_WB (3, 3)) of a 12-vector state."""
-    state = np.asarray(state, dtype=float)
-    if state.shape[0] < 6 or not np.all(np.isfinite(state[:6])):
+    values = np.asarray(state, dtype=float)[:6].tolist()  # Python floats: cheap scalar maths
+    if len(values) < 6 or not all(map(math.isfinite, values)):
         raise ValueError("state must start with a finite [x, y, z, roll, pitch, yaw]")
-    return state[:3].copy(), rotation_world_body(*state[3:6])
+    return np.array(values[:3]), rotation_world_body(*values[3:])
 
 
 def _surface_multipath(caster: RayCaster, origin: np.ndarray, rays: np.ndarray,
@@ -194,24 +204,46 @@ def _surface_multipath(caster: RayCaster, origin: np.ndarray, rays: np.ndarray,
     """Rays (world frame) that reach the sea surface z = 0 before any echo end there: with
     `probability` they are mirrored and cast on for the rest of the range, their echo coming
     back the same way at the total path length; the others are scattered away (no echo).
-    Returns the ranges (path lengths, m), the faces hit and the directions of the rays as they
-    meet those faces."""
-    ranges, faces, rays = ranges.copy(), faces.copy(), rays.copy()
+    Updates `ranges` (path lengths, m) and `faces` in place; returns the directions of the
+    rays as they meet those faces (`rays` itself when none was mirrored)."""
     if origin[2] >= 0:
-        return ranges, faces, rays
-    t = np.full(len(rays), np.inf)
+        return rays
     up = rays[:, 2] > 1e-9
-    t[up] = -origin[2] / rays[up, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(up, -origin[2] / rays[:, 2], np.inf)
     at_surface = (t < max_range) & ~(ranges <= t)  # NaN (no hit) compares False
     reflected = at_surface & (rng.random(len(rays)) < probability)
     ranges[at_surface], faces[at_surface] = np.nan, -1
     if reflected.any():
+        rays = rays.copy()
         mirrored = rays[reflected] * [1.0, 1.0, -1.0]
         t_r = t[reflected]
         r2, f2 = caster.cast_unit(origin + t_r[:, None] * rays[reflected], mirrored,
                                   max_range - t_r)
         ranges[reflected], faces[reflected], rays[reflected] = t_r + r2, f2, mirrored
-    return ranges, faces, rays
+    return rays
+
+
+@dataclass(frozen=True)
+class AxisHits:
+    """The faces of the true world that the beams' axes hit first, for scoring only (the
+    coverage recorders; never the vehicle): the first cast of an update, before the error
+    model. time (s); origin (3,) and directions (n, 3) world frame, from the true pose;
+    faces (n,) face index, -1 for no hit within max_range (m)."""
+
+    time: float
+    origin: np.ndarray
+    directions: np.ndarray
+    faces: np.ndarray
+    max_range: float
+
+    def __deepcopy__(self, memo):
+        return self  # immutable: Drake's state copies share it
+
+    @classmethod
+    def empty(cls, max_range: float) -> "AxisHits":
+        return cls(-np.inf, np.zeros(3), np.zeros((0, 3)), np.zeros(0, np.int64),
+                   float(max_range))
 
 
 def scan(caster: RayCaster, model: SonarModel, angles, true_state, estimated_state,
@@ -229,43 +261,58 @@ def scan(caster: RayCaster, model: SonarModel, angles, true_state, estimated_sta
         rng: generator for the noise (required if model.noise is enabled).
         geometry: `beam_geometry(model, angles)`, precomputed by callers that repeat angles.
     """
+    return scan_with_hits(caster, model, angles, true_state, estimated_state, rng, time,
+                          sequence, geometry)[0]
+
+
+def scan_with_hits(caster: RayCaster, model: SonarModel, angles, true_state, estimated_state,
+                   rng: np.random.Generator | None = None, time: float = 0.0,
+                   sequence: int = 0, geometry: BeamGeometry | None = None
+                   ) -> tuple[SonarReturns, AxisHits]:
+    """`scan` and the `AxisHits` of its first cast (one ray query serves both). The rays of
+    the whole update go to Embree in one call; every array is made once, read-only."""
     g = geometry if geometry is not None else beam_geometry(model, angles)
     p_wb, r_wb = pose(true_state)
     p_nb, r_nb = pose(estimated_state)
     mount = model.mount
-    origin_w = p_wb + r_wb @ mount.position
-    rays_w = g.rays_body @ r_wb.T
     noise = model.noise
     if noise.enabled and rng is None:
         raise ValueError("scan: a seeded rng is required when noise is enabled")
+    origin_w = p_wb + r_wb @ mount.position
+    rays_w = g.rays_body @ r_wb.T
     ranges, faces = caster.cast_unit(origin_w, rays_w, model.max_range)
+    m = g.rays_per_beam
+    axes_w = rays_w[::m] if m > 1 else rays_w
+    hits = AxisHits(float(time), _read_only(origin_w), _read_only(axes_w),
+                    _read_only(faces[::m].copy() if m > 1 else faces.copy()),
+                    float(model.max_range))
+    rays_echo = rays_w
     if noise.surface_prob > 0:
-        ranges, faces, rays_echo = _surface_multipath(caster, origin_w, rays_w, ranges, faces,
-                                                      model.max_range, noise.surface_prob, rng)
-    else:
-        rays_echo = rays_w
+        rays_echo = _surface_multipath(caster, origin_w, rays_w, ranges, faces,
+                                       model.max_range, noise.surface_prob, rng)
     # Grazing rays scatter away: no echo beyond max_incidence from the normal; weak echoes
     # (gain * cos^2 of the incidence) stay below the detection threshold.
     cos_inc = np.abs(np.einsum("ij,ij->i", caster.face_normals[np.maximum(faces, 0)],
                                rays_echo))
     lost = cos_inc < np.cos(model.max_incidence) - 1e-12
     if noise.echo_threshold > 0:
-        gains = np.tile(g.ray_gains, len(g.angles))
-        lost |= gains * cos_inc ** 2 < noise.echo_threshold
+        lost |= g.gains_per_ray * cos_inc ** 2 < noise.echo_threshold
     ranges[lost] = np.nan
-    if g.rays_per_beam > 1:  # the nearest echo inside the beam (fmin skips NaN)
-        ranges = np.fmin.reduce(ranges.reshape(-1, g.rays_per_beam), axis=1)
+    if m > 1:  # the nearest echo inside the beam (fmin skips NaN)
+        ranges = np.fmin.reduce(ranges.reshape(-1, m), axis=1)
     d_b = g.directions_body
     if noise.enabled:
         ranges = apply_noise(ranges, model.max_range, noise, rng)
     points_b = mount.position + ranges[:, None] * d_b
-    return SonarReturns(
-        time=float(time),
-        origin_nav=p_nb + r_nb @ mount.position,
-        angles=g.angles,
-        ranges=ranges,
-        directions_nav=d_b @ r_nb.T,
-        points_nav=p_nb + points_b @ r_nb.T,
-        points_body=points_b,
-        max_range=float(model.max_range),
-        sequence=int(sequence))
+    returns = SonarReturns.of_fresh_arrays(
+        float(time), _read_only(p_nb + r_nb @ mount.position), g.angles,
+        _read_only(ranges.astype(float, copy=False)),  # Embree's float32 when clean
+        _read_only(d_b @ r_nb.T), _read_only(p_nb + points_b @ r_nb.T), _read_only(points_b),
+        float(model.max_range), int(sequence))
+    return returns, hits
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """`array` (a fresh float array or view the caller owns) made read-only in place."""
+    array.setflags(write=False)
+    return array

@@ -2,7 +2,9 @@
 
 `num_beams` equiangular beams over `fan_deg` in the fan plane of the mount: "down" (across
 track, below the vehicle), "port" / "starboard" (side-looking, centre beam horizontal), or
-"forward" (horizontal fan ahead). `returns` is the point cloud of the last ping.
+"forward" (horizontal fan ahead). `returns` is the point cloud of the last ping; with
+`axis_hits_output`, `axis_hits` is the faces of the true world its beams' axes hit (for the
+multibeam coverage recorder, which scores the same rays).
 """
 
 from __future__ import annotations
@@ -29,12 +31,13 @@ class MultibeamSonar(RangeSonar):
         noise: error options (default: none).
         seed: seed of the noise.
         max_incidence_deg: grazing limit, deg.
+        axis_hits_output: declare the `axis_hits` output (`AxisHits`, true world).
     """
 
     def __init__(self, world, num_beams: int = 480, fan_deg: float = 120.0, rate: float = 10.0,
                  max_range: float = 20.0, mount="down", mount_position=(0.0, 0.0, 0.0),
                  beam_width_deg: float = 0.0, noise: SonarNoise | None = None, seed: int = 0,
-                 max_incidence_deg: float = 85.0):
+                 max_incidence_deg: float = 85.0, axis_hits_output: bool = False):
         if not (np.isfinite(rate) and rate > 0):
             raise ValueError(f"rate must be > 0 pings/s, got {rate}")
         if isinstance(mount, str):
@@ -47,7 +50,7 @@ class MultibeamSonar(RangeSonar):
                            max_incidence=np.radians(max_incidence_deg),
                            noise=noise if noise is not None else SonarNoise())
         self._geometry = beam_geometry(model, self.angles)
-        super().__init__(world, model, 1.0 / rate, seed)
+        super().__init__(world, model, 1.0 / rate, seed, axis_hits=axis_hits_output)
 
     def update_angles(self, n: int) -> np.ndarray:
         return self.angles

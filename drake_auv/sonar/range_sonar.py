@@ -4,7 +4,10 @@ Inputs `true_state` (12, to cast against the true world) and `estimated_state` (
 the returns in the navigation frame); output `returns` (`SonarReturns`, the abstract state
 written by a periodic unrestricted update, so the beams are cast at the sensor's rate and not
 at every integrator step). Update n (n = 0, 1, ...) fires at t = n * period; its noise draws
-come from `default_rng([seed, n])`, so the same seed gives the same returns.
+come from `default_rng([seed, n])`, so the same seed gives the same returns. With
+`axis_hits`, a second output `axis_hits` (`AxisHits`, true world, for scoring only) holds the
+faces the beams' axes hit in the same update, so a coverage recorder of the same beams need
+not cast them again.
 """
 
 from __future__ import annotations
@@ -16,7 +19,8 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.sonar.returns import SonarReturns
-from drake_auv.sonar.beams import BeamGeometry, SonarModel, beam_geometry, scan
+from drake_auv.sonar.beams import (AxisHits, BeamGeometry, SonarModel, beam_geometry,
+                                   scan_with_hits)
 
 STATE_SIZE = 12
 
@@ -33,7 +37,8 @@ def as_caster(world) -> RayCaster:
 class RangeSonar(LeafSystem):
     """Base of the sonar systems; subclasses give the beam angles of each update."""
 
-    def __init__(self, world, model: SonarModel, period: float, seed: int = 0):
+    def __init__(self, world, model: SonarModel, period: float, seed: int = 0,
+                 axis_hits: bool = False):
         super().__init__()
         if not (np.isfinite(period) and period > 0):
             raise ValueError(f"sonar update period must be > 0 s, got {period}")
@@ -47,6 +52,11 @@ class RangeSonar(LeafSystem):
             AbstractValue.Make(SonarReturns.empty(model.max_range)))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_returns)
         self.returns_output = self.DeclareStateOutputPort("returns", self._returns_index)
+        self._hits_index = None
+        if axis_hits:
+            self._hits_index = self.DeclareAbstractState(
+                AbstractValue.Make(AxisHits.empty(model.max_range)))
+            self.axis_hits_output = self.DeclareStateOutputPort("axis_hits", self._hits_index)
 
     def update_angles(self, n: int) -> np.ndarray:
         """Beam angles (rad, scan plane) fired by update n."""
@@ -65,8 +75,11 @@ class RangeSonar(LeafSystem):
         n = context.get_abstract_state(self._returns_index).get_value().sequence
         model = self.scan_model(context)
         rng = np.random.default_rng([self.seed, n]) if model.noise.enabled else None
-        returns = scan(self.caster, model, None, self.true_state_input.Eval(context),
-                       self.estimated_state_input.Eval(context), rng=rng,
-                       time=context.get_time(), sequence=n + 1,
-                       geometry=self.update_geometry(n, model))
+        returns, hits = scan_with_hits(self.caster, model, None,
+                                       self.true_state_input.Eval(context),
+                                       self.estimated_state_input.Eval(context), rng=rng,
+                                       time=context.get_time(), sequence=n + 1,
+                                       geometry=self.update_geometry(n, model))
         state.get_mutable_abstract_state(self._returns_index).set_value(returns)
+        if self._hits_index is not None:
+            state.get_mutable_abstract_state(self._hits_index).set_value(hits)

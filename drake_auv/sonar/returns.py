@@ -49,6 +49,20 @@ class SonarReturns:
         return self
 
     @classmethod
+    def of_fresh_arrays(cls, time: float, origin_nav, angles, ranges, directions_nav,
+                        points_nav, points_body, max_range: float,
+                        sequence: int) -> "SonarReturns":
+        """The returns of float64 arrays that are already read-only and shared with no one
+        who may write them (what `scan` makes): the per-field conversions are skipped."""
+        returns = object.__new__(cls)
+        for name, value in (("time", time), ("origin_nav", origin_nav), ("angles", angles),
+                            ("ranges", ranges), ("directions_nav", directions_nav),
+                            ("points_nav", points_nav), ("points_body", points_body),
+                            ("max_range", max_range), ("sequence", sequence)):
+            object.__setattr__(returns, name, value)
+        return returns
+
+    @classmethod
     def empty(cls, max_range: float) -> "SonarReturns":
         """No beams yet (the value before the first update)."""
         return cls(0.0, np.zeros(3), np.zeros(0), np.zeros(0), np.zeros((0, 3)),
