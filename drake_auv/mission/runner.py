@@ -119,9 +119,11 @@ def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndar
 
 
 def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
-                progress: bool = True, plan: MissionPlan | None = None) -> MissionResult:
+                progress: bool = True, plan: MissionPlan | None = None,
+                probe=None) -> MissionResult:
     """Flies `spec` in one dive, at `site` (default `load_site(spec.site, spec.seed)`) with
-    `plan` (default `plan_mission(spec, site)`)."""
+    `plan` (default `plan_mission(spec, site)`); `probe(root_context)`, when given, is called
+    at every simulator step (a benchmark's sampling of memory and wall time)."""
     site = site if site is not None else load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
     plan = plan if plan is not None else plan_mission(spec, site)
@@ -137,6 +139,8 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
         now = int(root_context.get_time())
         if now > bar.n:
             bar.update(now - bar.n)
+        if probe is not None:
+            probe(root_context)
         return supervisor.monitor(root_context)
 
     simulator.set_monitor(monitor)
