@@ -57,6 +57,14 @@ class OnlineMap:
         self.version = log
 
 
+def map_memory(online: OnlineMap, log: ScanLog) -> dict:
+    """The report's `map` section: the octree's memory (`OctreeMap.memory`), the batches and
+    returns of the log and the size of its file (MB, on disk, not in memory)."""
+    store = log.store
+    return dict(**online.map.memory(), batches=log.count, returns=log.returns,
+                scan_file_mb=(store.nbytes if store is not None else 0) / 2**20)
+
+
 class OctreeMapper(LeafSystem):
     """Records new sonar returns at `period` and serves the octree map of them.
 

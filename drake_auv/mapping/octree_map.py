@@ -91,6 +91,7 @@ class OctreeMap:
         self._centres = np.zeros((0, 3))
         self._label = np.zeros(0, dtype=bool)
         self._checked = np.zeros(0, dtype=np.int64)
+        self._log_odds = np.zeros(0)  # of the occupied ones, read with their label
         self._tiles: dict[int, np.ndarray] = {}
         self._new_codes: list[np.ndarray] = []  # hit, not yet in the arrays
         # The last `_SCAN_WINDOW` scans: revision, origin, plane normal, plane tolerance and
@@ -169,6 +170,7 @@ class OctreeMap:
             self._centres = np.resize(self._centres, (size, 3))
             self._label = np.resize(self._label, size)
             self._checked = np.resize(self._checked, size)
+            self._log_odds = np.resize(self._log_odds, size)
         idx = _decode(codes)
         self._centres[start:stop] = (idx + 0.5) * self.resolution
         self._label[start:stop] = False
@@ -223,6 +225,11 @@ class OctreeMap:
         read = stale[swept]
         if len(read):
             self._label[read] = np.asarray(self.tree.getLabels(self._centres[read])) == 1
+            occupied = read[self._label[read]]
+            search = self.tree.search
+            self._log_odds[occupied] = np.fromiter(
+                (search(p).getLogOdds() for p in self._centres[occupied]), dtype=float,
+                count=len(occupied))
         self._checked[stale] = self.revision
 
     @staticmethod
@@ -261,15 +268,16 @@ class OctreeMap:
         self._kdtree = cKDTree(self._occupied) if len(self._occupied) else None
         self._dirty = False
 
-    def occupied_points(self, lo=None, hi=None) -> np.ndarray:
-        """(m, 3) centres of the occupied voxels (finest resolution), m.
+    def occupied_points(self, lo=None, hi=None, log_odds: bool = False):
+        """(m, 3) centres of the occupied voxels (finest resolution), m; with `log_odds`, also
+        their (m,) log-odds.
 
-        With a box (`lo`, `hi`: (3,) corners, m), only the voxels inside it, and only those
-        are brought up to date (of them, only the ones recent scans swept are read from the
-        octree): a local query (the replanner's) costs what the box holds, not what the
-        whole map holds (a seabed of thousands of voxels, say).
+        With a box (`lo`, `hi`: (3,) corners, m), only the voxels inside it, found through the
+        tiles the box overlaps, and only those are brought up to date (of them, only the ones
+        recent scans swept are read from the octree): a local query (the replanner's) costs
+        what the box holds, not what the whole map holds.
         """
-        if lo is None and hi is None:
+        if lo is None and hi is None and not log_odds:
             self._refresh()
             return self._occupied
         lo = np.full(3, -np.inf) if lo is None else np.asarray(lo, dtype=float)
@@ -277,7 +285,10 @@ class OctreeMap:
         self._materialise()
         inside = self._box_index(lo, hi)
         self._read_labels(inside)
-        return self._centres[inside[self._label[inside]]]
+        occupied = inside[self._label[inside]]
+        if log_odds:
+            return self._centres[occupied], self._log_odds[occupied]
+        return self._centres[occupied]
 
     @property
     def kdtree(self) -> cKDTree | None:
@@ -298,6 +309,17 @@ class OctreeMap:
             return np.full(points.shape[:-1], np.inf)
         d, _ = tree.query(points.reshape(-1, 3), distance_upper_bound=upper_bound)
         return d.reshape(points.shape[:-1])
+
+    def memory(self) -> dict:
+        """The map's memory, MB: the OctoMap tree's own (`memoryUsage`, its leaves counted)
+        and the candidates' index (arrays, tiles and the set of codes, estimated)."""
+        index = (self._centres.nbytes + self._label.nbytes + self._checked.nbytes
+                 + self._log_odds.nbytes
+                 + sum(t.nbytes + 100 for t in self._tiles.values())
+                 + 60 * len(self._candidates))
+        return dict(resolution_m=self.resolution, leaves=int(self.tree.getNumLeafNodes()),
+                    octree_mb=self.tree.memoryUsage() / 2**20, candidates=self._count,
+                    index_mb=index / 2**20)
 
     def labels(self, points) -> np.ndarray:
         """(n,) per point: 1 occupied, 0 free, -1 unknown."""

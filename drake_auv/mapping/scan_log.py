@@ -189,7 +189,7 @@ class ScanLog:
         """Every batch, oldest first (all in memory: for short logs; see `chunks`)."""
         return self.since(None)
 
-    def chunks(self, size: int = 2000) -> Iterator[_Batches]:
+    def chunks(self, size: int = 500) -> Iterator[_Batches]:
         """The batches, oldest first, `size` at a time, each group read from the store only
         when its `batches()` is called: a whole dive in bounded memory."""
         offsets = self._offsets_since(None)

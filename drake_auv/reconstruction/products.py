@@ -9,7 +9,8 @@ the local frame against the true target (`site.target_mesh`), on the returns ins
 target's bounding box grown by `CROP_MARGIN` (the navigation error moves them, and the box also
 keeps a ring of seabed and, at the breakwater, the neighbouring block's face across the 0.5 m
 gap, which count as error), thinned to one return per `THIN_VOXEL` cube. Needs only the
-result's `scan_log` and `site`: no Drake.
+result's `scan_log` and `site`: no Drake. The returns are read from the log's file a chunk at
+a time (`write_points`, `returns_in_box`): memory is bounded whatever the dive's length.
 """
 
 from __future__ import annotations
@@ -20,7 +21,8 @@ from pathlib import Path as FilePath
 import numpy as np
 import trimesh
 
-from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply
+from drake_auv.mapping.scan_log import ScanLog
+from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply_chunks
 from drake_auv.reconstruction.scoring import score
 from drake_auv.reconstruction.surface import (Reconstruction, open3d_available, open3d_error,
                                               reconstruct)
@@ -47,8 +49,27 @@ def target_cloud(result, margin: float = CROP_MARGIN, voxel: float = THIN_VOXEL)
     """The dive's returns inside the target's bounding box grown by `margin` m, one per `voxel`
     m cube; local frame (navigation)."""
     lo, hi = result.site.target_mesh.bounds
-    cloud = from_scan_log(result.scan_log).crop(lo, hi, margin)
+    cloud = returns_in_box(result.scan_log, lo, hi, margin)
     return cloud.thin(voxel) if len(cloud) else cloud
+
+
+def returns_in_box(log, lo, hi, margin: float = 0.0) -> PointCloud:
+    """The returns of `log` (a `ScanLog`) inside the box [lo - margin, hi + margin] (m, the
+    log's frame), read from it a chunk of batches at a time (memory: the box's returns)."""
+    parts = [from_scan_log(chunk).crop(lo, hi, margin) for chunk in log.chunks()]
+    parts = [p for p in parts if len(p)] or [from_scan_log(ScanLog())]
+    return PointCloud(*(np.concatenate([getattr(p, name) for p in parts])
+                        for name in ("points", "origins", "times", "sources")))
+
+
+def write_points(result, filename) -> int:
+    """Writes every return of the dive (`result.scan_log`) to `filename` (PLY, site
+    coordinates, `pointcloud.write_ply`'s format), streamed from the log's file a chunk of
+    batches at a time, so memory does not grow with the dive; returns the number of points."""
+    log = result.scan_log
+    write_ply_chunks((from_scan_log(chunk).shifted(result.site.to_site)
+                      for chunk in log.chunks()), log.returns, filename)
+    return log.returns
 
 
 def mission_surface(result, depth: int = 9, trim: float = 0.05, k: int = 200,
@@ -79,7 +100,7 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
     from drake_auv.reconstruction.figures import fig_reconstruction
 
     out = FilePath(outdir)
-    write_ply(from_scan_log(result.scan_log).shifted(result.site.to_site), out / "points.ply")
+    write_points(result, out / "points.ply")
     surface = mission_surface(result)
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
         if open3d_error() is not None and len(target_cloud(result)) >= MIN_POINTS:
