@@ -64,6 +64,9 @@ class Probe:
         if t >= self.next:
             self.rows.append((t, time.perf_counter() - self.start, rss_mb(), peak_mb()))
             self.next += self.every
+            if len(self.rows) > 1 and t % HOUR < self.every:  # an hour done: progress line
+                print(f"  {t:.0f} s simulated, {self.rows[-1][1]:.0f} s wall, RSS "
+                      f"{self.rows[-1][2]:.0f} MB", flush=True)
 
 
 def per_hour(result, probe: Probe) -> list[dict]:
