@@ -125,6 +125,10 @@ def main() -> None:
           f"coverage {100 * summary['coverage']['multibeam']:.1f} %, true distance mean "
           f"{summary['distance_to_target']['mean_m']:.2f} m (sd "
           f"{summary['distance_to_target']['sd_m']:.2f}), contact {summary['contact']}")
+    m = summary["map"]
+    print(f"map: {m['leaves']} OctoMap leaves, {m['octree_mb']:.0f} MB; {m['candidates']} "
+          f"candidate voxels, index {m['index_mb']:.0f} MB; {m['batches']} batches, "
+          f"{m['returns']} returns, scan file {m['scan_file_mb']:.0f} MB (on disk)")
     print("\n| hour | steps | step median (ms) | step p95 (ms) | real-time factor | RSS at end "
           "(MB) | peak RSS (MB) |\n|---|---|---|---|---|---|---|")
     for r in rows:
@@ -141,7 +145,7 @@ def main() -> None:
         Path(args.json).write_text(json.dumps(dict(
             machine=machine(), duration_s=result.duration_s, wall_s=wall, hours=rows,
             coverage=summary["coverage"], distance=summary["distance_to_target"],
-            contact=summary["contact"]), indent=1))
+            contact=summary["contact"], map=summary["map"]), indent=1))
 
 
 if __name__ == "__main__":
