@@ -1,13 +1,13 @@
 """Survey-scale dive (issue 21): the built-in `monterey_wall` mission (a steep 160 m x 160 m
 window of a Monterey Bay tile, 1 m world, the ~10 m survey as prior, Omega 10 m, plan and
-replanned survey, about 2.5 h of dive), its cost per simulated hour.
+replanned survey, about 3.8 h of dive), its cost per simulated hour.
 
 Per simulated hour: the replanning step's median and p95 (wall, ms), the real-time factor, the
 process's resident memory at the hour's end and its peak so far (MB); the octree's own memory;
 the mission's coverage, true distance and contact. Acceptance (docs/benchmarks.md, "Survey-scale
 dives"): step median <= 10 ms and p95 <= 25 ms in every hour, the last hour's median within
 1.5x of the first's, resident memory growing by less than 100 MB per hour after the first.
-`--surveys N` flies the replanned survey N times in the dive (2: about 5 h, for the 4 h dive);
+`--surveys N` flies the replanned survey N times in the dive (the single one is already 3.8 h);
 `--max-time S` stops it after S simulated seconds.
 
     .venv/bin/python benchmarks/bench_long_mission.py [--surveys 2] [--max-time S] [--json F]

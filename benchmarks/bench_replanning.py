@@ -23,7 +23,7 @@ survey phase), multibeam and camera coverage, replanning step median and p95; pe
 averaged. `--set` adds mission overrides to every dive.
 Runs `--jobs` dives at once (each builds its own Diagram from the mission and seed).
 
-With `--long`, instead: the step's median and p95 per simulated hour on the 2.5 h real-data
+With `--long`, instead: the step's median and p95 per simulated hour on the 3.8 h real-data
 dive (`bench_long_mission.py`, issue 21; its options follow, e.g. `--long --surveys 2`).
 
     .venv/bin/python benchmarks/bench_replanning.py [--error 5] [--seed 0] [--noise realistic]

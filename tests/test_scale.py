@@ -158,7 +158,7 @@ def test_a_missing_tile_names_the_field(tmp_path):
 
 @pytest.mark.slow
 def test_the_long_monterey_mission_flies_at_survey_scale(tmp_path, monkeypatch):
-    """The built-in 2.5 h mission on real data: completes without contact, covers the wall,
+    """The built-in 3.8 h mission on real data: completes without contact, covers the wall,
     keeps only the window of batches in memory and streams its points (figures: the
     benchmark, docs/benchmarks.md)."""
     from drake_auv.mission.config import load_mission
