@@ -23,6 +23,9 @@ survey phase), multibeam and camera coverage, replanning step median and p95; pe
 averaged. `--set` adds mission overrides to every dive.
 Runs `--jobs` dives at once (each builds its own Diagram from the mission and seed).
 
+With `--long`, instead: the step's median and p95 per simulated hour on the 3.8 h real-data
+dive (`bench_long_mission.py`, issue 21; its options follow, e.g. `--long --surveys 2`).
+
     .venv/bin/python benchmarks/bench_replanning.py [--error 5] [--seed 0] [--noise realistic]
     .venv/bin/python benchmarks/bench_replanning.py --ablation 10 [--jobs 2] [--json FILE]
         [--figure docs/replanning_breakwater.png] [--set replanner.iterations=20 ...]
@@ -33,6 +36,7 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing
+import sys
 import time
 
 import numpy as np
@@ -185,6 +189,12 @@ def ablation(seeds: int, jobs: int, noise: str, error: float, extra=(),
 
 
 def main() -> None:
+    if "--long" in sys.argv:
+        import bench_long_mission
+
+        sys.argv.remove("--long")
+        bench_long_mission.main()
+        return
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--error", type=float, default=5.0, help="prior-map error, m")
     parser.add_argument("--seed", type=int, default=0, help="prior-map error seed")

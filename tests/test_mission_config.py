@@ -49,11 +49,14 @@ def _with(**changes):
 
 
 def test_builtin_missions_load():
-    assert builtin_missions() == ["boulder", "breakwater", "c_object", "pool"]
+    assert builtin_missions() == ["boulder", "breakwater", "c_object", "monterey_wall", "pool"]
     for name in builtin_missions():
         spec = load_mission(name)
-        assert spec.name == name and spec.site.scenario == name and spec.steps
-        assert spec.source.name == f"{name}.yaml"
+        assert spec.name == name and spec.steps and spec.source.name == f"{name}.yaml"
+        if name == "monterey_wall":  # cut from a shared tile on first use
+            assert spec.site.tile.is_file() and spec.site.roi == (80.0, 120.0, 240.0, 280.0)
+        else:
+            assert spec.site.scenario == name
     boulder = load_mission("boulder")
     plan, follow, survey = boulder.steps
     assert (plan.omega, plan.slice_count, plan.slice_spacing) == (10.0, 2, 2.0)
@@ -163,7 +166,7 @@ def test_paths_resolve_against_the_file(tmp_path):
     (_with(steps__2__survey__replanning="yes please"), "replanning: 'yes please' is not a boolean"),
     (_with(seed=-1), "seed: -1 is out of range; allowed: an integer >= 0"),
     (_with(site=dict(scenario="boulder", world="w.ply")),
-     "site: needs exactly one of scenario or world"),
+     "site: needs exactly one of scenario, world or tile"),
     (_with(site=dict(world="w.ply", prior_error_m=6)),
      "site.prior_error_m: 6.0 is out of range; allowed: [0, 5] m"),
     (_with(site=dict(scenario="pool", start=[1, 2])), "site.start: [1, 2] is not 4 finite"),

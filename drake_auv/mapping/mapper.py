@@ -2,12 +2,14 @@
 
 All of it lives in the Context. The state is the log of the returns received so far (a
 `ScanLog`, immutable and persistent, so Drake's state copies are free and each Context's
-history is its own), written at `period` by an unrestricted update. The `map` output is the
+history is its own; its beams stream to a temporary file, so memory does not grow with them),
+written at `period` by an unrestricted update. The `map` output is the
 octree of that log: an `OnlineMap` held in the output port's cache, which is per Context.
 Evaluating it brings the octree up to the Context's log by inserting only the batches it has
 not seen (OctoMap insertion is incremental), or rebuilds from the whole log when the log is
 not its future (a state set by hand). Copying a Context rebuilds its octree from the log
-(`OnlineMap.__deepcopy__`). So two Contexts of one diagram never share a map.
+(`OnlineMap.__deepcopy__`, reading the log back from its file). So two Contexts of one
+diagram never share a map. A step's cost is the batches since the last one, never the log.
 
 Ports: inputs `multibeam_returns`, `profiler_returns` (`SonarReturns`; either may be left
 unconnected); outputs `map` (`OnlineMap`) and `scan_log` (`ScanLog`, the recorded returns).
@@ -49,10 +51,18 @@ class OnlineMap:
         new = log.since(self.version)
         if new is None:
             self.map.clear()
-            new = log.batches()
+            new = log.iter_batches()
         for batch in new:
             self.map.insert_scan(batch.origin, batch.directions, batch.ranges, batch.max_range)
         self.version = log
+
+
+def map_memory(online: OnlineMap, log: ScanLog) -> dict:
+    """The report's `map` section: the octree's memory (`OctreeMap.memory`), the batches and
+    returns of the log and the size of its file (MB, on disk, not in memory)."""
+    store = log.store
+    return dict(**online.map.memory(), batches=log.count, returns=log.returns,
+                scan_file_mb=(store.nbytes if store is not None else 0) / 2**20)
 
 
 class OctreeMapper(LeafSystem):

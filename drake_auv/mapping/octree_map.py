@@ -37,6 +37,8 @@ from scipy.spatial import cKDTree
 _OFFSET = 1 << 20  # voxel index offset so indices encode as non-negative 21-bit fields
 _MASK = (1 << 21) - 1
 _SCAN_WINDOW = 40  # scans remembered for the label cache; older labels are read again
+_TILE = 16  # voxels along a tile's edge (the candidates' spatial index)
+_LIMIT = 1e9  # m, where an unbounded box is clipped
 
 
 def _encode(idx: np.ndarray) -> np.ndarray:
@@ -81,13 +83,17 @@ class OctreeMap:
         """Forgets everything: the whole map becomes unknown."""
         self.tree.clear()
         self._candidates: set[int] = set()  # voxels ever hit: a superset of the occupied ones
-        # The candidates as arrays (insertion order), with their cached label and the revision
-        # at which it was read from the octree (-1: never); codes hit but not yet in them.
-        self._codes = np.zeros(0, dtype=np.int64)
+        # The candidates as arrays (insertion order; the first `_count` rows of a buffer that
+        # doubles, so adding costs what is added): centres, cached label and the revision at
+        # which it was read from the octree (-1: never). `_tiles`: per tile of `_TILE` voxels
+        # a side, the indices of its candidates, so a box query visits only the box's tiles.
+        self._count = 0
         self._centres = np.zeros((0, 3))
         self._label = np.zeros(0, dtype=bool)
         self._checked = np.zeros(0, dtype=np.int64)
-        self._new_codes: list[np.ndarray] = []
+        self._log_odds = np.zeros(0)  # of the occupied ones, read with their label
+        self._tiles: dict[int, np.ndarray] = {}
+        self._new_codes: list[np.ndarray] = []  # hit, not yet in the arrays
         # The last `_SCAN_WINDOW` scans: revision, origin, plane normal, plane tolerance and
         # reach (m), as rows.
         self._scans: list[tuple] = []
@@ -153,15 +159,49 @@ class OctreeMap:
         del self._scans[:-_SCAN_WINDOW]
 
     def _materialise(self) -> None:
-        """Moves the newly hit codes into the candidate arrays (labels unread)."""
+        """Moves the newly hit codes into the candidate arrays (labels unread) and tiles."""
         if not self._new_codes:
             return
         codes = np.concatenate(self._new_codes)
         self._new_codes = []
-        self._codes = np.concatenate([self._codes, codes])
-        self._centres = np.vstack([self._centres, (_decode(codes) + 0.5) * self.resolution])
-        self._label = np.concatenate([self._label, np.zeros(len(codes), bool)])
-        self._checked = np.concatenate([self._checked, np.full(len(codes), -1, np.int64)])
+        start, stop = self._count, self._count + len(codes)
+        if stop > len(self._label):
+            size = max(stop, 2 * len(self._label), 1024)
+            self._centres = np.resize(self._centres, (size, 3))
+            self._label = np.resize(self._label, size)
+            self._checked = np.resize(self._checked, size)
+            self._log_odds = np.resize(self._log_odds, size)
+        idx = _decode(codes)
+        self._centres[start:stop] = (idx + 0.5) * self.resolution
+        self._label[start:stop] = False
+        self._checked[start:stop] = -1
+        self._count = stop
+        tiles = _encode(np.floor_divide(idx, _TILE))
+        order = np.argsort(tiles, kind="stable")
+        keys, first = np.unique(tiles[order], return_index=True)
+        for key, part in zip(keys.tolist(), np.split(order + start, first[1:])):
+            old = self._tiles.get(key)
+            self._tiles[key] = part if old is None else np.concatenate([old, part])
+
+    def _box_index(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Indices of the candidates inside the box [lo, hi] (m), found through the tiles the
+        box overlaps (or, for a box of more tiles than the map holds, through every tile)."""
+        edge = _TILE * self.resolution
+        t0 = np.floor(np.maximum(lo, -_LIMIT) / edge).astype(np.int64)
+        t1 = np.floor(np.minimum(hi, _LIMIT) / edge).astype(np.int64)
+        if np.any(t1 < t0) or not self._tiles:
+            return np.zeros(0, dtype=np.int64)
+        if np.prod((t1 - t0 + 1).astype(float)) > len(self._tiles):
+            parts = list(self._tiles.values())
+        else:
+            grid = np.stack(np.meshgrid(*(np.arange(a, b + 1) for a, b in zip(t0, t1)),
+                                        indexing="ij"), axis=-1).reshape(-1, 3)
+            parts = [self._tiles[k] for k in _encode(grid).tolist() if k in self._tiles]
+        if not parts:
+            return np.zeros(0, dtype=np.int64)
+        index = np.concatenate(parts)
+        c = self._centres[index]
+        return index[np.all((c >= lo) & (c <= hi), axis=1)]
 
     def _read_labels(self, index: np.ndarray) -> None:
         """Brings the cached labels of candidates `index` up to the current revision, reading
@@ -185,6 +225,11 @@ class OctreeMap:
         read = stale[swept]
         if len(read):
             self._label[read] = np.asarray(self.tree.getLabels(self._centres[read])) == 1
+            occupied = read[self._label[read]]
+            search = self.tree.search
+            self._log_odds[occupied] = np.fromiter(
+                (search(p).getLogOdds() for p in self._centres[occupied]), dtype=float,
+                count=len(occupied))
         self._checked[stale] = self.revision
 
     @staticmethod
@@ -218,31 +263,32 @@ class OctreeMap:
         if not self._dirty:
             return
         self._materialise()
-        self._read_labels(np.arange(len(self._codes)))
-        self._occupied = self._centres[self._label]
+        self._read_labels(np.arange(self._count))
+        self._occupied = self._centres[:self._count][self._label[:self._count]]
         self._kdtree = cKDTree(self._occupied) if len(self._occupied) else None
         self._dirty = False
 
-    def occupied_points(self, lo=None, hi=None) -> np.ndarray:
-        """(m, 3) centres of the occupied voxels (finest resolution), m.
+    def occupied_points(self, lo=None, hi=None, log_odds: bool = False):
+        """(m, 3) centres of the occupied voxels (finest resolution), m; with `log_odds`, also
+        their (m,) log-odds.
 
-        With a box (`lo`, `hi`: (3,) corners, m), only the voxels inside it, and only those
-        are brought up to date (of them, only the ones recent scans swept are read from the
-        octree): a local query (the replanner's) costs what the box holds, not what the
-        whole map holds (a seabed of thousands of voxels, say).
+        With a box (`lo`, `hi`: (3,) corners, m), only the voxels inside it, found through the
+        tiles the box overlaps, and only those are brought up to date (of them, only the ones
+        recent scans swept are read from the octree): a local query (the replanner's) costs
+        what the box holds, not what the whole map holds.
         """
-        if lo is None and hi is None:
+        if lo is None and hi is None and not log_odds:
             self._refresh()
             return self._occupied
         lo = np.full(3, -np.inf) if lo is None else np.asarray(lo, dtype=float)
         hi = np.full(3, np.inf) if hi is None else np.asarray(hi, dtype=float)
-        if not self._dirty:
-            inside = np.all((self._occupied >= lo) & (self._occupied <= hi), axis=1)
-            return self._occupied[inside]
         self._materialise()
-        inside = np.flatnonzero(np.all((self._centres >= lo) & (self._centres <= hi), axis=1))
+        inside = self._box_index(lo, hi)
         self._read_labels(inside)
-        return self._centres[inside[self._label[inside]]]
+        occupied = inside[self._label[inside]]
+        if log_odds:
+            return self._centres[occupied], self._log_odds[occupied]
+        return self._centres[occupied]
 
     @property
     def kdtree(self) -> cKDTree | None:
@@ -263,6 +309,17 @@ class OctreeMap:
             return np.full(points.shape[:-1], np.inf)
         d, _ = tree.query(points.reshape(-1, 3), distance_upper_bound=upper_bound)
         return d.reshape(points.shape[:-1])
+
+    def memory(self) -> dict:
+        """The map's memory, MB: the OctoMap tree's own (`memoryUsage`, its leaves counted)
+        and the candidates' index (arrays, tiles and the set of codes, estimated)."""
+        index = (self._centres.nbytes + self._label.nbytes + self._checked.nbytes
+                 + self._log_odds.nbytes
+                 + sum(t.nbytes + 100 for t in self._tiles.values())
+                 + 60 * len(self._candidates))
+        return dict(resolution_m=self.resolution, leaves=int(self.tree.getNumLeafNodes()),
+                    octree_mb=self.tree.memoryUsage() / 2**20, candidates=self._count,
+                    index_mb=index / 2**20)
 
     def labels(self, points) -> np.ndarray:
         """(n,) per point: 1 occupied, 0 free, -1 unknown."""

@@ -1,4 +1,4 @@
-"""The sonar returns a mission has received, as an immutable, persistent log.
+"""The sonar returns a mission has received, as an immutable, persistent log streamed to disk.
 
 `ScanLog` is a singly linked list growing at its head: appending a `ScanBatch` makes a new head
 that points to the old one, so each version of the log is a value that never changes and
@@ -7,16 +7,33 @@ log, every copy Drake makes of it (two per unrestricted update) is free because 
 value is its own copy, and each Context's history is its own. The octree map is a function of
 the log (`mapping.mapper`), and so is the recorded point cloud of the dive.
 
+Memory does not grow with the beams: a batch's arrays go, when it is appended, to the log's
+`ScanStore`, an append-only temporary file (deleted when the last version of the log goes),
+which only the most recent `CACHE_BATCHES` batches also keep in memory (what the mapper reads:
+the batches since its last update). A version holds its count, its parent, its record's offset
+and the running count of returns, about 100 bytes a batch. Versions of one log, and so the
+Contexts cloned from one another, share its store: a record never changes once written, and
+each version reaches only its own records. An empty log has no store; its first append opens
+one, so a fresh Context shares nothing with an earlier run. Reading an old batch (an octree
+rebuilt for a copied Context, `points.ply`) reads its record back.
+
 Frame: the navigation frame (the world as the vehicle believes it), metres, seconds.
 """
 
 from __future__ import annotations
 
+import tempfile
+from collections import OrderedDict
 from dataclasses import dataclass
+from typing import Iterator
 
 import numpy as np
 
 SOURCES = ("multibeam", "profiler")
+CACHE_BATCHES = 64  # the newest batches a store also keeps in memory
+# A record: this header, then the directions (n, 3) and ranges (n,) as little-endian float32.
+_HEADER = np.dtype([("time", "<f8"), ("source", "<i8"), ("origin", "<f8", (3,)),
+                    ("max_range", "<f8"), ("n", "<i8")])
 
 
 def _frozen(array, dtype) -> np.ndarray:
@@ -57,33 +74,129 @@ class ScanBatch:
         return self.origin + self.directions[hit] * self.ranges[hit, None]
 
 
+class ScanStore:
+    """The append-only file of one log's batches, with its newest `cache` batches in memory.
+
+    Shared, never copied (`__deepcopy__` returns it): records are immutable once written.
+    """
+
+    def __init__(self, cache: int = CACHE_BATCHES):
+        self._file = tempfile.TemporaryFile(prefix="drake_auv-scans-")
+        self._end = 0
+        self._cache: OrderedDict[int, ScanBatch] = OrderedDict()
+        self._size = int(cache)
+
+    def __deepcopy__(self, memo):
+        return self
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes written to the file."""
+        return self._end
+
+    def put(self, batch: ScanBatch) -> int:
+        """Writes `batch` at the end of the file; returns its record's offset."""
+        header = np.zeros(1, _HEADER)
+        header[0] = (batch.time, batch.source, batch.origin, batch.max_range, len(batch.ranges))
+        offset = self._end
+        self._file.seek(offset)
+        self._file.write(header.tobytes())
+        self._file.write(np.ascontiguousarray(batch.directions, "<f4").tobytes())
+        self._file.write(np.ascontiguousarray(batch.ranges, "<f4").tobytes())
+        self._end = self._file.tell()
+        self._remember(offset, batch)
+        return offset
+
+    def get(self, offset: int, remember: bool = True) -> ScanBatch:
+        """The batch recorded at `offset` (from memory when recent); `remember` False: a pass
+        over old records that should not evict the recent ones."""
+        batch = self._cache.get(offset)
+        if batch is not None:
+            self._cache.move_to_end(offset)
+            return batch
+        self._file.seek(offset)
+        header = np.frombuffer(self._file.read(_HEADER.itemsize), _HEADER)[0]
+        n = int(header["n"])
+        directions = np.frombuffer(self._file.read(12 * n), "<f4").reshape(n, 3)
+        ranges = np.frombuffer(self._file.read(4 * n), "<f4")
+        batch = ScanBatch(float(header["time"]), int(header["source"]),
+                          _frozen(header["origin"], np.float64), directions, ranges,
+                          float(header["max_range"]))  # frombuffer of bytes: read-only
+        if remember:
+            self._remember(offset, batch)
+        return batch
+
+    def _remember(self, offset: int, batch: ScanBatch) -> None:
+        self._cache[offset] = batch
+        while len(self._cache) > self._size:
+            self._cache.popitem(last=False)
+
+
+@dataclass(frozen=True, eq=False)
+class _Batches:
+    """Some consecutive batches of a log, oldest first, read from its store when asked
+    (`batches()`, what `reconstruction.pointcloud.from_scan_log` reads)."""
+
+    store: ScanStore
+    offsets: list
+
+    def batches(self) -> list[ScanBatch]:
+        return [self.store.get(offset, remember=False) for offset in self.offsets]
+
+
 @dataclass(frozen=True, eq=False)
 class ScanLog:
-    """A version of the log: `count` batches, the newest `batch`, the older ones in `parent`."""
+    """A version of the log: `count` batches, the newest in `store` at `offset`, the older ones
+    in `parent`; `returns`: the beams with a return (finite range) of all `count` batches."""
 
     count: int = 0
-    batch: ScanBatch | None = None
     parent: "ScanLog | None" = None
+    store: ScanStore | None = None
+    offset: int = -1
+    returns: int = 0
 
     def __deepcopy__(self, memo):
         return self  # immutable, and so are the versions it points to
 
-    def append(self, batch: ScanBatch) -> "ScanLog":
-        return ScanLog(self.count + 1, batch, self)
+    @property
+    def batch(self) -> ScanBatch | None:
+        """The newest batch (None for the empty log)."""
+        return None if self.count == 0 else self.store.get(self.offset)
 
-    def since(self, older: "ScanLog | None") -> list[ScanBatch] | None:
-        """The batches appended after version `older`, oldest first; None when `older` is not
-        a version of this log's past (then a consumer must start again from the empty log)."""
+    def append(self, batch: ScanBatch) -> "ScanLog":
+        store = self.store if self.store is not None else ScanStore()
+        return ScanLog(self.count + 1, self, store, store.put(batch),
+                       self.returns + int(np.count_nonzero(np.isfinite(batch.ranges))))
+
+    def _offsets_since(self, older: "ScanLog | None") -> list[int] | None:
         older_count = 0 if older is None else older.count
         node, out = self, []
         while node.count > older_count:
-            out.append(node.batch)
+            out.append(node.offset)
             node = node.parent
         if older is not None and older.count > 0 and node is not older:
             return None
         out.reverse()
         return out
 
+    def since(self, older: "ScanLog | None") -> list[ScanBatch] | None:
+        """The batches appended after version `older`, oldest first; None when `older` is not
+        a version of this log's past (then a consumer must start again from the empty log)."""
+        offsets = self._offsets_since(older)
+        return None if offsets is None else [self.store.get(o) for o in offsets]
+
     def batches(self) -> list[ScanBatch]:
-        """Every batch, oldest first."""
+        """Every batch, oldest first (all in memory: for short logs; see `chunks`)."""
         return self.since(None)
+
+    def chunks(self, size: int = 500) -> Iterator[_Batches]:
+        """The batches, oldest first, `size` at a time, each group read from the store only
+        when its `batches()` is called: a whole dive in bounded memory."""
+        offsets = self._offsets_since(None)
+        for start in range(0, len(offsets), size):
+            yield _Batches(self.store, offsets[start:start + size])
+
+    def iter_batches(self) -> Iterator[ScanBatch]:
+        """Every batch, oldest first, read one at a time."""
+        for chunk in self.chunks():
+            yield from chunk.batches()

@@ -179,7 +179,8 @@ class _Vector:
 
 @dataclass(frozen=True)
 class SiteSpec:
-    """Where the mission flies: exactly one of `scenario` (built-in) or `world` (a mesh file).
+    """Where the mission flies: exactly one of `scenario` (built-in), `world` (a mesh file) or
+    `tile` (a survey grid whose site files are generated on first use, `mission.site`).
 
     Attributes:
         scenario: a name of `drake_auv.scenarios.list_scenarios()`.
@@ -194,6 +195,10 @@ class SiteSpec:
         start: (x, y, z, yaw_deg) start pose in site coordinates, m and deg (None: the
             scenario's, or chosen by the runner).
         max_range_m: range of the sonars, m.
+        tile: georeferenced bathymetry grid (GeoTIFF) the site is cut from: a 1 m world
+            interpolated from it, its faces inside `roi` the target, the grid the prior.
+        roi: (xmin, ymin, xmax, ymax) of the region of interest in the tile's world frame
+            (m from its first cell), required with `tile`.
     """
 
     scenario: str | None = None
@@ -205,6 +210,8 @@ class SiteSpec:
     crs: str | None = None
     start: tuple | None = None
     max_range_m: float = 20.0
+    tile: Path | None = None
+    roi: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -495,7 +502,10 @@ _CHECKS = {
         prior_spacing_m=_Number(0.0, 100.0, "m", low_open=True, nullable=True),
         crs=_Text(nullable=True),
         start=_Vector(("x", "y", "z", "yaw_deg"), "m, m, m, deg"),
-        max_range_m=_Number(0.0, 200.0, "m", low_open=True)),
+        max_range_m=_Number(0.0, 200.0, "m", low_open=True),
+        tile=_File("a georeferenced bathymetry grid (GeoTIFF), relative to the mission file, "
+                   "or null"),
+        roi=_Vector(("xmin", "ymin", "xmax", "ymax"), "m, the tile's world frame")),
     NavigationSpec: dict(
         heading_bias_deg=_Number(-10.0, 10.0, "deg"),
         dvl_scale_error=_Number(-0.1, 0.1), random_walk=_Number(0.0, 1.0, "m/sqrt(m)")),
@@ -673,14 +683,20 @@ def _join(where: str, key) -> str:
 
 
 def _site_rule(reader: _Reader, v: dict, where: str):
-    if (v["scenario"] is None) == (v["world"] is None):
-        reader.fail(where, "needs exactly one of scenario or world",
-                    "scenario: <name> or world: <mesh file>")
-    if v["scenario"] is not None:
+    if sum(v[key] is not None for key in ("scenario", "world", "tile")) != 1:
+        reader.fail(where, "needs exactly one of scenario, world or tile",
+                    "scenario: <name>, world: <mesh file> or tile: <GeoTIFF> with roi")
+    if (v["tile"] is None) != (v["roi"] is None):
+        reader.fail(f"{where}.roi", "goes with tile (both or neither)",
+                    _CHECKS[SiteSpec]["roi"].allowed + ", with tile")
+    if v["roi"] is not None and not (v["roi"][0] < v["roi"][2] and v["roi"][1] < v["roi"][3]):
+        reader.fail(f"{where}.roi", f"{list(v['roi'])} has min >= max",
+                    "xmin < xmax and ymin < ymax")
+    if v["world"] is None:
         for key in ("target", "prior", "crs"):
             if v[key] is not None:
                 reader.fail(f"{where}.{key}", "only for a site given by its world file",
-                            "null with a scenario")
+                            "null with a scenario or a tile")
 
 
 def _plan_rule(reader: _Reader, v: dict, where: str):

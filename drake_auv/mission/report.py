@@ -31,6 +31,7 @@ from matplotlib.figure import Figure
 
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.visibility import coverage_share
+from drake_auv.mapping.mapper import map_memory
 from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
 from drake_auv.reconstruction.products import products_markdown, write_products
@@ -168,6 +169,7 @@ def summarise(result: MissionResult) -> dict:
         timing.update(replan_steps=len(wall), replan_median_ms=float(np.median(wall) * 1e3),
                       replan_p95_ms=float(np.percentile(wall, 95) * 1e3))
     summary["timing"] = timing
+    summary["map"] = map_memory(result.online_map, result.scan_log)
     return _rounded(summary)
 
 

@@ -120,10 +120,11 @@ def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndar
 
 def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
                 progress: bool = True, plan: MissionPlan | None = None,
-                realtime_rate: float = 0.0) -> MissionResult:
+                realtime_rate: float = 0.0, probe=None) -> MissionResult:
     """Flies `spec` in one dive, at `site` (default `load_site(spec.site, spec.seed)`) with
     `plan` (default `plan_mission(spec, site)`), paced at `realtime_rate` times real time
-    (0: as fast as possible; pacing changes no result)."""
+    (0: as fast as possible; pacing changes no result); `probe(root_context)`, when given, is
+    called at every simulator step (a benchmark's sampling of memory and wall time)."""
     site = site if site is not None else load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
     plan = plan if plan is not None else plan_mission(spec, site)
@@ -140,6 +141,8 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
         now = int(root_context.get_time())
         if now > bar.n:
             bar.update(now - bar.n)
+        if probe is not None:
+            probe(root_context)
         return supervisor.monitor(root_context)
 
     simulator.set_monitor(monitor)

@@ -5,14 +5,24 @@ eastings near 500 km). The mission works in a LOCAL frame: local = site - origin
 unchanged, z up, sea surface z = 0), `origin` the centre of the world's horizontal bounds
 rounded to 1 m, so float32 ray casting keeps millimetres. `Site.to_site` converts outputs
 back. Built-in scenarios are already local (origin 0). Pure Python, no Drake.
+
+A site given as `tile` + `roi` (a survey grid and a region of it) is made of files generated
+once by `terrain.site_files.write_site_files` (1 m world, the grid as prior, UTM) into a cache
+folder, `$DRAKE_AUV_CACHE/sites/<tile stem>_<roi>` (default `~/.cache/drake_auv`), and then
+loaded as a site given by its files.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
+import os
+import shutil
+import tempfile
 import warnings
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -25,6 +35,48 @@ from drake_auv.terrain.mesh import top_surface
 
 TARGET_TOLERANCE = 0.05  # m, a world face lies on the target when its centroid is this close
 DEFAULT_PRIOR_SPACING = 1.0  # m, the prior's cell when sampled from a user's world
+TILE_WORLD_SPACING = 1.0  # m, the world mesh's cell of a site cut from a tile
+TILE_MARGIN = 40.0  # m of world around a tile site's region
+
+
+def cache_dir() -> Path:
+    """Where generated site files go: $DRAKE_AUV_CACHE, else ~/.cache/drake_auv."""
+    return Path(os.environ.get("DRAKE_AUV_CACHE") or Path.home() / ".cache" / "drake_auv")
+
+
+def tile_site_files(spec: SiteSpec, label: str = "mission") -> SiteSpec:
+    """`spec` (a `tile` + `roi` site) as a site given by its files, generated on first use into
+    `cache_dir()` (in a temporary folder renamed into place, so concurrent runs never read a
+    half-written site). Raises MissionFileError for a missing or unusable tile."""
+    from drake_auv.terrain.readers import read_bathymetry
+    from drake_auv.terrain.site_files import write_site_files
+
+    tile = spec.tile
+    if not tile.is_file():
+        raise MissionFileError(label, "site.tile", f"{tile.name} not found ({tile})",
+                               "an existing georeferenced bathymetry grid (GeoTIFF)")
+    folder = cache_dir() / "sites" / (tile.stem + "_" + "_".join(f"{v:g}" for v in spec.roi))
+    if not (folder / "prior.tif").is_file():
+        try:
+            bathy = read_bathymetry(tile)
+            folder.parent.mkdir(parents=True, exist_ok=True)
+            work = Path(tempfile.mkdtemp(dir=folder.parent, prefix=".partial-"))
+            write_site_files(bathy, spec.roi, work, world_spacing=TILE_WORLD_SPACING,
+                             margin=TILE_MARGIN)
+            try:
+                work.rename(folder)
+            except OSError:  # another run wrote it first
+                shutil.rmtree(work, ignore_errors=True)
+        except ValueError as err:
+            raise MissionFileError(label, "site.roi", " ".join(str(err).split()),
+                                   "a region inside the tile with room for the margin "
+                                   f"({TILE_MARGIN:g} m)") from None
+        except OSError as err:
+            raise MissionFileError(label, "site.tile", f"cannot write the site files to "
+                                   f"{folder} ({err.strerror or err})",
+                                   "a writable $DRAKE_AUV_CACHE") from None
+    return dataclasses.replace(spec, tile=None, roi=None, world=folder / "world.ply",
+                               target=folder / "target.ply", prior=folder / "prior.tif")
 
 
 @dataclass
@@ -158,6 +210,8 @@ def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
     """The site of `spec`, its prior shifted by `spec.prior_error_m` in a direction drawn from
     `seed`. Raises MissionFileError (`label`: the mission file's name) naming the field for a
     missing or unusable file."""
+    if spec.tile is not None:
+        spec = tile_site_files(spec, label)
     if spec.scenario is not None:
         scenario = get_scenario(spec.scenario)
         prior = scenario.prior_map(spec.prior_error_m, seed, spacing=spec.prior_spacing_m)

@@ -78,6 +78,9 @@ class Path:
     def __len__(self) -> int:
         return len(self.points)
 
+    def __deepcopy__(self, memo):
+        return self  # immutable: frozen, read-only arrays (a Drake source's copies are free)
+
     @classmethod
     def concatenate(cls, paths: list["Path"]) -> "Path":
         """Joins paths end to start, in order."""

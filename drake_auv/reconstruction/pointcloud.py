@@ -76,10 +76,12 @@ class PointCloud:
         return self.subset(np.all((self.points >= lo) & (self.points <= hi), axis=1))
 
     def thin(self, voxel: float) -> "PointCloud":
-        """One return per cube of side `voxel` m (the earliest), keeping its origin and time."""
+        """One return per cube of side `voxel` m (the earliest), keeping its origin and time.
+        The cubes are a grid fixed in the frame, so thinning parts of a cloud and then their
+        union gives the thinned whole."""
         if not voxel > 0:
             raise ValueError(f"thin: voxel must be > 0 m, got {voxel}")
-        keys = np.floor((self.points - self.points.min(axis=0)) / voxel).astype(np.int64)
+        keys = np.floor(self.points / voxel).astype(np.int64)
         _, first = np.unique(keys, axis=0, return_index=True)
         return self.subset(np.sort(first))
 
@@ -105,22 +107,33 @@ def from_scan_log(log: ScanLog, sources=SOURCES) -> PointCloud:
 
 def write_ply(cloud: PointCloud, filename) -> None:
     """Writes `cloud` as a binary little-endian PLY (vertex properties in the module doc)."""
+    write_ply_chunks([cloud], len(cloud), filename)
+
+
+def write_ply_chunks(clouds, count: int, filename) -> None:
+    """Writes the `clouds` (an iterable of `PointCloud`, `count` points in all) one after the
+    other as one binary little-endian PLY, holding one chunk in memory at a time."""
     dtype = np.dtype([(name, "<f8") for name in POSITION + ORIGIN + ("time",)]
                      + [("source", "u1")])
-    data = np.empty(len(cloud), dtype)
-    for k, name in enumerate(POSITION):
-        data[name] = cloud.points[:, k]
-        data[ORIGIN[k]] = cloud.origins[:, k]
-    data["time"], data["source"] = cloud.times, cloud.sources
     header = ["ply", "format binary_little_endian 1.0",
               "comment drake_auv sonar returns; source: " + ", ".join(
                   f"{k} {s}" for k, s in enumerate(SOURCES)),
-              f"element vertex {len(cloud)}"]
+              f"element vertex {count}"]
     header += [f"property double {name}" for name in POSITION + ORIGIN + ("time",)]
     header += ["property uchar source", "end_header"]
+    written = 0
     with open(filename, "wb") as f:
         f.write(("\n".join(header) + "\n").encode("ascii"))
-        f.write(data.tobytes())
+        for cloud in clouds:
+            data = np.empty(len(cloud), dtype)
+            for k, name in enumerate(POSITION):
+                data[name] = cloud.points[:, k]
+                data[ORIGIN[k]] = cloud.origins[:, k]
+            data["time"], data["source"] = cloud.times, cloud.sources
+            f.write(data.tobytes())
+            written += len(cloud)
+    if written != count:
+        raise ValueError(f"{filename}: {written} points written, the header says {count}")
 
 
 def _ply_header(f, filename):

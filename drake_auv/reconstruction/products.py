@@ -11,7 +11,8 @@ over the whole mesh in the local frame: every vertex's distance to the true worl
 (`site.world`: a vertex on the seabed is right, one on a surface no return supports is
 not), and the share of the target's area (`site.target_mesh`), all of it and the part the
 returns saw, within 0.5 m of the surface. Needs only the result's `scan_log` and `site`: no
-Drake.
+Drake. The returns are read from the log's file a chunk at a time (`write_points`,
+`dive_cloud`): memory holds the thinned cloud, whatever the dive's length.
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ from pathlib import Path as FilePath
 import numpy as np
 import trimesh
 
-from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply
+from drake_auv.mapping.scan_log import ScanLog
+from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply_chunks
 from drake_auv.reconstruction.scoring import score
 from drake_auv.reconstruction.surface import (SUPPORT, Reconstruction, open3d_available,
                                               open3d_error, reconstruct)
@@ -47,15 +49,31 @@ class MissionSurface:
 
 
 def dive_cloud(result, voxel: float = THIN_VOXEL) -> PointCloud:
-    """Every return of the dive, one per `voxel` m cube; local frame (navigation)."""
-    cloud = from_scan_log(result.scan_log)
-    return cloud.thin(voxel) if len(cloud) else cloud
+    """Every return of the dive, one per `voxel` m cube; local frame (navigation). Read from
+    the log a chunk of batches at a time, each chunk thinned before the next is read."""
+    parts = [from_scan_log(chunk).thin(voxel) for chunk in result.scan_log.chunks()]
+    parts = [p for p in parts if len(p)]
+    if not parts:
+        return from_scan_log(ScanLog())
+    cloud = PointCloud(*(np.concatenate([getattr(p, name) for p in parts])
+                         for name in ("points", "origins", "times", "sources")))
+    return cloud.thin(voxel) if len(parts) > 1 else cloud
 
 
 def target_returns(result, cloud: PointCloud) -> int:
     """The returns of `cloud` in the target's box grown by `CROP_MARGIN`: whether to build."""
     lo, hi = result.site.target_mesh.bounds
     return len(cloud.crop(lo, hi, CROP_MARGIN))
+
+
+def write_points(result, filename) -> int:
+    """Writes every return of the dive (`result.scan_log`) to `filename` (PLY, site
+    coordinates, `pointcloud.write_ply`'s format), streamed from the log's file a chunk of
+    batches at a time, so memory does not grow with the dive; returns the number of points."""
+    log = result.scan_log
+    write_ply_chunks((from_scan_log(chunk).shifted(result.site.to_site)
+                      for chunk in log.chunks()), log.returns, filename)
+    return log.returns
 
 
 def mission_surface(result, depth: int = 9, trim: float = 0.05, k: int = 200,
@@ -90,7 +108,7 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
     from drake_auv.reconstruction.figures import fig_reconstruction
 
     out = FilePath(outdir)
-    write_ply(from_scan_log(result.scan_log).shifted(result.site.to_site), out / "points.ply")
+    write_points(result, out / "points.ply")
     surface = mission_surface(result)
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
         if open3d_error() is not None and target_returns(result, dive_cloud(result)) \

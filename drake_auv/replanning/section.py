@@ -174,13 +174,6 @@ def _kdtree(points: np.ndarray) -> cKDTree:
     return cKDTree(points, leafsize=64, balanced_tree=False, compact_nodes=False)
 
 
-def voxel_log_odds(octree_map, points: np.ndarray) -> np.ndarray:
-    """(m,) log-odds of the octree's voxels at `points` (m, 3), read from its leaves."""
-    tree = octree_map.tree
-    return np.fromiter((tree.search(p).getLogOdds() for p in points), dtype=float,
-                       count=len(points))
-
-
 class _DistanceField2D:
     """Euclidean distance transform (`scipy.ndimage.distance_transform_edt`) of voxel
     columns (m, 2) on the voxel grid over the box [lo, hi] (m), cell centres on the voxel
@@ -595,8 +588,7 @@ def replan_section(position, waypoints, next_index: int, occupied,
     start = time.perf_counter()
     resolution = 0.5
     if hasattr(occupied, "occupied_points"):
-        local = occupied.occupied_points(lo, hi)
-        log_odds = voxel_log_odds(occupied, local)
+        local, log_odds = occupied.occupied_points(lo, hi, log_odds=True)
         resolution = occupied.resolution
     else:
         occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)

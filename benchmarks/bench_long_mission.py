@@ -1,0 +1,152 @@
+"""Survey-scale dive (issue 21): the built-in `monterey_wall` mission (a steep 160 m x 160 m
+window of a Monterey Bay tile, 1 m world, the ~10 m survey as prior, Omega 10 m, plan and
+replanned survey, about 3.8 h of dive), its cost per simulated hour.
+
+Per simulated hour: the replanning step's median and p95 (wall, ms), the real-time factor, the
+process's resident memory at the hour's end and its peak so far (MB); the octree's own memory;
+the mission's coverage, true distance and contact. Acceptance (docs/benchmarks.md, "Survey-scale
+dives"): step median <= 10 ms and p95 <= 25 ms in every hour, the last hour's median within
+1.5x of the first's, resident memory growing by less than 100 MB per hour after the first.
+`--surveys N` flies the replanned survey N times in the dive (the single one is already 3.8 h);
+`--max-time S` stops it after S simulated seconds.
+
+    .venv/bin/python benchmarks/bench_long_mission.py [--surveys 2] [--max-time S] [--json F]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from _reference import machine
+from drake_auv.mission.config import BUILTIN_DIR, mission_from_dict
+from drake_auv.mission.report import summarise
+from drake_auv.mission.runner import run_mission
+from drake_auv.reconstruction.products import write_points
+from drake_auv.replanning.replanner import STEP_FIELDS
+
+HOUR = 3600.0
+
+
+def rss_mb() -> float:
+    """Current resident set size of this process, MB (Linux /proc; the peak elsewhere)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * resource.getpagesize() / 2**20
+    except OSError:
+        return peak_mb()
+
+
+def peak_mb() -> float:
+    """Peak resident set size of this process so far, MB."""
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / 2**20 if sys.platform == "darwin" else peak / 2**10
+
+
+class Probe:
+    """Samples wall time and memory every `every` simulated seconds (the runner's probe)."""
+
+    def __init__(self, every: float = 60.0):
+        self.every, self.next = every, 0.0
+        self.rows: list[tuple] = []  # (sim s, wall s, rss MB, peak MB)
+        self.start = time.perf_counter()
+
+    def __call__(self, context) -> None:
+        t = context.get_time()
+        if t >= self.next:
+            self.rows.append((t, time.perf_counter() - self.start, rss_mb(), peak_mb()))
+            self.next += self.every
+            if len(self.rows) > 1 and t % HOUR < self.every:  # an hour done: progress line
+                print(f"  {t:.0f} s simulated, {self.rows[-1][1]:.0f} s wall, RSS "
+                      f"{self.rows[-1][2]:.0f} MB", flush=True)
+
+
+def per_hour(result, probe: Probe) -> list[dict]:
+    """One row per simulated hour (the last one partial): steps, real-time factor, memory."""
+    steps = result.replanning
+    t_step = steps[:, STEP_FIELDS.index("time")]
+    wall = 1e3 * steps[:, STEP_FIELDS.index("wall_time")]
+    samples = np.array(probe.rows)
+    rows = []
+    for h in range(int(np.ceil(result.duration_s / HOUR))):
+        mine = wall[(t_step >= h * HOUR) & (t_step < (h + 1) * HOUR)]
+        inside = samples[(samples[:, 0] >= h * HOUR) & (samples[:, 0] <= (h + 1) * HOUR)]
+        if len(mine) == 0 or len(inside) < 2:
+            continue
+        (t0, w0), (t1, w1) = inside[0, :2], inside[-1, :2]
+        rows.append(dict(hour=h + 1, sim_s=float(t1 - t0), steps=int(len(mine)),
+                         step_median_ms=float(np.median(mine)),
+                         step_p95_ms=float(np.percentile(mine, 95)),
+                         real_time_factor=float((t1 - t0) / max(w1 - w0, 1e-9)),
+                         rss_end_mb=float(inside[-1, 2]), peak_mb=float(inside[-1, 3])))
+    return rows
+
+
+def long_mission(name: str, seed: int, surveys: int = 1, max_time: float | None = None):
+    """The built-in mission `name` with its survey step flown `surveys` times and the time cap
+    `max_time` (s; None: the legs' budgets)."""
+    path = BUILTIN_DIR / f"{name}.yaml"
+    raw = yaml.safe_load(path.read_text())
+    survey = [step for step in raw["steps"] if "survey" in step]
+    raw["steps"] += survey * (surveys - 1)
+    raw["seed"] = seed
+    if max_time is not None:
+        raw.setdefault("limits", {})["max_time_s"] = max_time
+    return mission_from_dict(raw, path.parent, path.name, source=path)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--mission", default="monterey_wall")
+    parser.add_argument("--surveys", type=int, default=1,
+                        help="fly the replanned survey this many times")
+    parser.add_argument("--max-time", type=float, default=None, help="simulated s cap")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--json", help="write the figures to this file")
+    args = parser.parse_args()
+    print(machine())
+    spec = long_mission(args.mission, args.seed, args.surveys, args.max_time)
+    probe = Probe()
+    start = time.perf_counter()
+    result = run_mission(spec, progress=False, probe=probe)
+    wall = time.perf_counter() - start
+    summary = summarise(result)
+    rows = per_hour(result, probe)
+    print(f"\n{args.mission}: {result.duration_s:.0f} s simulated in {wall:.0f} s wall "
+          f"({result.duration_s / wall:.1f}x), completed {result.completed}, multibeam "
+          f"coverage {100 * summary['coverage']['multibeam']:.1f} %, true distance mean "
+          f"{summary['distance_to_target']['mean_m']:.2f} m (sd "
+          f"{summary['distance_to_target']['sd_m']:.2f}), contact {summary['contact']}")
+    m = summary["map"]
+    print(f"map: {m['leaves']} OctoMap leaves, {m['octree_mb']:.0f} MB; {m['candidates']} "
+          f"candidate voxels, index {m['index_mb']:.0f} MB; {m['batches']} batches, "
+          f"{m['returns']} returns, scan file {m['scan_file_mb']:.0f} MB (on disk)")
+    print("\n| hour | steps | step median (ms) | step p95 (ms) | real-time factor | RSS at end "
+          "(MB) | peak RSS (MB) |\n|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['hour']} | {r['steps']} | {r['step_median_ms']:.1f} | "
+              f"{r['step_p95_ms']:.1f} | {r['real_time_factor']:.1f} | {r['rss_end_mb']:.0f} | "
+              f"{r['peak_mb']:.0f} |")
+    with tempfile.TemporaryDirectory() as folder:
+        t0 = time.perf_counter()
+        n = write_points(result, Path(folder) / "points.ply")
+        size = (Path(folder) / "points.ply").stat().st_size
+        print(f"\npoints.ply: {n} returns, {size / 2**20:.0f} MB, written in "
+              f"{time.perf_counter() - t0:.1f} s; peak RSS after it {peak_mb():.0f} MB")
+    if args.json:
+        Path(args.json).write_text(json.dumps(dict(
+            machine=machine(), duration_s=result.duration_s, wall_s=wall, hours=rows,
+            coverage=summary["coverage"], distance=summary["distance_to_target"],
+            contact=summary["contact"], map=summary["map"]), indent=1))
+
+
+if __name__ == "__main__":
+    main()
