@@ -117,7 +117,7 @@ def build(site, spec, plan, caster, follower=None):
     *_, supervisor, _ = add_behaviours(builder, vehicle, profiler, mapper, spec, plan, site,
                                        estimated, returns, replanner=follower)
     camera, multibeam_coverage = add_coverage_recorders(
-        builder, caster, vehicle, spec, site, site.max_range, 1.0 / multibeam.period)
+        builder, caster, vehicle, spec, site, site.max_range, multibeam)
     logs = (LogVectorOutput(vehicle.dynamics.state_output, builder, 0.1),
             LogVectorOutput(supervisor.leg_output, builder, SUPERVISOR_PERIOD))
     return builder.Build(), supervisor, multibeam_coverage, camera, logs
