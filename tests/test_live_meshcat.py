@@ -26,16 +26,17 @@ SHORT = ["--set", "limits.max_time_s=30", "--quiet"]
 
 def screenshot(url: str, png) -> np.ndarray:
     """(h, w, 3) floats in [0, 1]: the live page at `url` in headless Chromium, once the scene
-    has arrived: the scene comes over a websocket, which Chromium's virtual time does not wait
-    for, so an attempt that still shows Meshcat's empty page (no seabed) is retried longer."""
-    for budget_ms in (12000, 30000, 60000):
+    has arrived over its websocket: a virtual-time budget alone (with `--timeout` as well, the
+    screenshot came at the page's load, before the scene: Meshcat's empty grid), and an
+    attempt that still shows the empty page (no seabed) is retried longer."""
+    for budget_ms in (20000, 40000, 60000):
         with tempfile.TemporaryDirectory() as profile:
             subprocess.run(
                 [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update",
                  "--disable-sync", f"--user-data-dir={profile}", "--use-angle=swiftshader",
                  "--enable-unsafe-swiftshader", "--hide-scrollbars", "--window-size=640,480",
-                 f"--timeout={budget_ms // 2}", f"--virtual-time-budget={budget_ms}",
+                 f"--virtual-time-budget={budget_ms}",
                  f"--screenshot={png}", url],
                 check=True, capture_output=True, timeout=180)
         view = imread(png)[..., :3]
