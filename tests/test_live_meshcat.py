@@ -24,21 +24,54 @@ CHROMIUM = shutil.which("chromium")
 SHORT = ["--set", "limits.max_time_s=30", "--quiet"]
 
 
+def _held_page(url: str, hold_s: float):
+    """A 127.0.0.1 HTTP server of a page framing `url` that also loads an image the server
+    answers only after `hold_s` real seconds: Chromium's virtual time stands still while a
+    fetch is pending, so its screenshot waits that long for the scene's websocket (a
+    virtual-time budget alone races ahead of it on a loaded machine: Meshcat's empty grid)."""
+    import http.server
+
+    class Handler(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):
+            if self.path == "/hold.gif":
+                time.sleep(hold_s)
+                body, kind = (b"GIF89a\x01\x00\x01\x00\x00\x00\x00;", "image/gif")
+            else:
+                body, kind = (f'<html><body style="margin:0"><iframe src="{url}" style="border:0;'
+                              'width:100%;height:100%"></iframe><img src="/hold.gif" '
+                              'style="display:none"></body></html>').encode(), "text/html"
+            self.send_response(200)
+            self.send_header("Content-Type", kind)
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def log_message(self, *args):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
+
+
 def screenshot(url: str, png) -> np.ndarray:
     """(h, w, 3) floats in [0, 1]: the live page at `url` in headless Chromium, once the scene
-    has arrived over its websocket: a virtual-time budget alone (with `--timeout` as well, the
-    screenshot came at the page's load, before the scene: Meshcat's empty grid), and an
-    attempt that still shows the empty page (no seabed) is retried longer."""
-    for budget_ms in (20000, 40000, 60000):
-        with tempfile.TemporaryDirectory() as profile:
-            subprocess.run(
-                [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update",
-                 "--disable-sync", f"--user-data-dir={profile}", "--use-angle=swiftshader",
-                 "--enable-unsafe-swiftshader", "--hide-scrollbars", "--window-size=640,480",
-                 f"--virtual-time-budget={budget_ms}",
-                 f"--screenshot={png}", url],
-                check=True, capture_output=True, timeout=180)
+    has arrived over its websocket (`_held_page`); an attempt that still shows the empty page
+    (no seabed) is held longer."""
+    for hold_s in (4.0, 10.0, 25.0):
+        server = _held_page(url, hold_s)
+        try:
+            with tempfile.TemporaryDirectory() as profile:
+                subprocess.run(
+                    [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                     "--disable-background-networking", "--disable-component-update",
+                     "--disable-sync", f"--user-data-dir={profile}", "--use-angle=swiftshader",
+                     "--enable-unsafe-swiftshader", "--hide-scrollbars", "--window-size=640,480",
+                     "--virtual-time-budget=5000", f"--screenshot={png}",
+                     f"http://127.0.0.1:{server.server_address[1]}/"],
+                    check=True, capture_output=True, timeout=180)
+        finally:
+            server.shutdown()
         view = imread(png)[..., :3]
         if seabed_fraction(view) > 0.3:
             break
