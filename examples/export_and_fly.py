@@ -11,7 +11,7 @@ sonars. Three missions on the same site and seed:
 - `cola2`: the plan's `mission.xml` flown as COLA2 executes it (`fly`);
 - `ardusub`: its `mission.plan` flown as ArduSub AUTO executes it (`fly`).
 
-Writes the exports, each mission's report, `comparison.md` / `comparison.json` (clearance,
+Writes the exports, each mission's report (unless `--no-reports`), `comparison.md` / `comparison.json` (clearance,
 coverage, duration, contact) and `comparison.png` (tracks from above, clearance against time).
 """
 
@@ -66,6 +66,9 @@ def main() -> None:
     parser.add_argument("--omega", type=float, default=10.0, help="offset Omega, m")
     parser.add_argument("--speed", type=float, default=1.0, help="survey speed, m/s")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--no-reports", action="store_true",
+                        help="skip each mission's report folder (its surface reconstruction "
+                             "of a large seabed takes minutes); the comparison is still written")
     parser.add_argument("-o", "--out", default="out/export_and_fly")
     args = parser.parse_args()
     out = Path(args.out)
@@ -86,7 +89,8 @@ def main() -> None:
         else:  # a split ArduSub mission flies its files one after the other, in one dive
             result = run_mission(load_mission(mission_file(out, name, args.seed, [
                 {"fly": {"file": file, "speed": args.speed}} for file in files])))
-        write_report(result, out / name)
+        if not args.no_reports:
+            write_report(result, out / name)
         summary = summarise(result)
         results[name] = result
         rows[name] = dict(min_clearance_m=summary["min_clearance_m"],
