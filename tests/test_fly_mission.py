@@ -1,6 +1,7 @@
 """Flying exported files: the plan of a real Monterey tile exported as COLA2 and QGC missions,
 each flown in the mission Diagram with its autopilot's semantics, against the internal plan."""
 
+import json
 import shutil
 from pathlib import Path
 
@@ -91,9 +92,7 @@ def test_bad_files_one_line_before_simulating(flown, tmp_path, capsys):
     (tmp_path / "broken.plan").write_text('{"fileType": "Plan", "mission": ')
     (tmp_path / "mission.kml").write_text("<kml/>")
     # the same mission moved 0.05 deg east: another site's file
-    text = (tmp_path / "mission.plan").read_text()
-    import json
-    plan = json.loads(text)
+    plan = json.loads((tmp_path / "mission.plan").read_text())
     for item in plan["mission"]["items"]:
         if item.get("command") == 16:
             item["params"][5] += 0.05
@@ -126,6 +125,20 @@ def test_heave_in_3d_only_for_cola2(tmp_path):
         {"fly": {"file": "mission.plan", "heave_in_3d": True}}]}))
     with pytest.raises(MissionFileError, match="only for COLA2"):
         load_mission(mission)
+
+
+def test_drake_auv_run_reports_a_fly_mission(flown, tmp_path):
+    """`drake-auv run` on a mission that only flies a file: the report, its figures and a
+    strict-JSON report.json (no Omega is known: every sample is scored)."""
+    folder, _, _ = flown
+    out = tmp_path / "run"
+    assert run_cli(["run", folder / "cola2.yaml", "-o", out, "--no-html", "--quiet", "--set",
+                    "limits.max_time_s=60"]) == 0
+    report = json.loads((out / "report.json").read_text(), parse_constant=lambda c: 1 / 0)
+    assert report["distance_to_target"]["near_m"] is None
+    assert report["phases"][0]["name"] == "survey"
+    for name in ("distance.png", "coverage.png", "trajectory.csv", "report.md"):
+        assert (out / name).stat().st_size > 0, name
 
 
 def test_a_campaign_flies_the_exported_file(flown, tmp_path):

@@ -153,7 +153,8 @@ def summarise(result: MissionResult) -> dict:
             min_m=float(result.distance.min()),
             map_mean_m=float(map_d.mean()) if len(map_d) else None,
             map_sd_m=float(map_d.std()) if len(map_d) else None,
-            near_m=near_distance(result), samples=int(scored.sum())),
+            near_m=near_distance(result) if np.isfinite(near_distance(result)) else None,
+            samples=int(scored.sum())),
         navigation_error_max_m=float(np.linalg.norm(
             result.estimated[:, :3] - result.state[:, :3], axis=1).max()),
         phases=phases,
@@ -299,7 +300,10 @@ def fig_distance(result: MissionResult) -> Figure:
         top.plot(np.where(mask, result.state[:, 0], np.nan),
                  np.where(mask, result.state[:, 1], np.nan), color=colour, lw=0.8, label=name)
     band = near_distance(result) / 2.0
-    ax.axhline(band, color="k", ls="--", lw=0.8, label=f"Omega = {band:g} m")
+    if np.isfinite(band):  # a mission that only flies an exported file knows no Omega
+        ax.axhline(band, color="k", ls="--", lw=0.8, label=f"Omega = {band:g} m")
+    else:
+        band = float(np.nanmax(result.distance)) / 3.0
     ax.axhline(VEHICLE_RADIUS, color="tab:red", lw=0.8, label="vehicle radius (contact)")
     ax.set(xlabel="mission time (s)", ylabel="m", ylim=(0, 3 * band),
            title="True distance (solid) and clearance to anything (dotted)")
