@@ -323,3 +323,29 @@ def test_support_trim_removes_the_surface_no_return_supports(one_sided_scan):
     assert bad_errors.max() > 1.0 and untrimmed.mesh.vertices[:, 2].min() < CENTRE[2] - 0.5
     assert untrimmed.support_m.max() > 1.0
     assert len(untrimmed.mesh.faces) > len(trimmed.mesh.faces)
+
+
+def test_outliers_are_dropped_before_poisson():
+    """Water-column clutter above a seen seabed: without the outlier removal screened Poisson
+    closes a surface through it that the support trim keeps; with it the surface stays on the
+    seabed. Fails when `outlier_mask` keeps every point."""
+    pytest.importorskip("open3d")
+    from drake_auv.reconstruction.pointcloud import PointCloud
+    from drake_auv.reconstruction.surface import outlier_mask, reconstruct
+
+    rng = np.random.default_rng(4)
+    g = np.arange(0.0, 20.0, 0.1)
+    x, y = np.meshgrid(g, g)
+    seabed = np.column_stack([x.ravel(), y.ravel(), 0.02 * rng.standard_normal(x.size)])
+    clutter = rng.uniform([0.0, 0.0, 1.0], [20.0, 20.0, 8.0], (10000, 3))
+    points = np.vstack([seabed, clutter])
+    origins = np.column_stack([points[:, :2], np.full(len(points), 10.0)])
+    cloud = PointCloud(points, origins, np.zeros(len(points)), np.zeros(len(points), np.uint8))
+    kept = outlier_mask(points)
+    assert kept[:len(seabed)].mean() > 0.99 and kept[len(seabed):].mean() < 0.05
+
+    def above(outliers):
+        mesh = reconstruct(cloud, depth=7, k=30, progress=False, outliers=outliers).mesh
+        return float((np.abs(mesh.vertices[:, 2]) > 0.5).mean())
+
+    assert above(3.0) < 0.05 < above(0.0)

@@ -3,7 +3,8 @@
 POINTS is a point cloud (`points.ply` of a mission, or any PLY with x, y, z; LAS/LAZ with
 laspy): normals from `--k` nearest neighbours, oriented towards each point's recorded sensor
 origin (by neighbour propagation when the file has none), screened Poisson at `--depth`, the
-lowest `--trim` share of density removed, then every face farther than `--support` local
+lowest `--trim` share of density removed (after the points whose neighbours lie `--outliers`
+times farther than usual), then every face farther than `--support` local
 spacings from the nearest point (the surface Poisson closes where nothing was seen). With
 `--target MESH` (same frame) the whole surface and the cloud are scored (accuracy of every
 vertex to `--world`, default the target; completeness of the target's area, all and seen) and
@@ -17,8 +18,8 @@ from __future__ import annotations
 
 from pathlib import Path as FilePath
 
-from drake_auv.reconstruction.surface import (DEPTH_RANGE, K_RANGE, SUPPORT, SUPPORT_RANGE,
-                                              TRIM_RANGE)
+from drake_auv.reconstruction.surface import (DEPTH_RANGE, K_RANGE, OUTLIERS, OUTLIERS_RANGE,
+                                              SUPPORT, SUPPORT_RANGE, TRIM_RANGE)
 
 
 def add_parser(subparsers) -> None:
@@ -44,6 +45,11 @@ def add_parser(subparsers) -> None:
                         help=f"remove faces farther than this many local point spacings from "
                              f"every point, in [{SUPPORT_RANGE[0]:g}, {SUPPORT_RANGE[1]:g}]; 0 "
                              f"keeps them (default {SUPPORT:g})")
+    parser.add_argument("--outliers", type=float, default=OUTLIERS,
+                        help="first drop every point whose 8 nearest neighbours lie farther "
+                             "than this many times the cloud's median (water-column clutter, "
+                             f"sea-surface ghosts): 0 (off) or in [1, {OUTLIERS_RANGE[1]:g}] "
+                             f"(default {OUTLIERS:g})")
     parser.add_argument("--target", help="true mesh (same frame) to score the result against")
     parser.add_argument("--world", help="with --target: the whole true world (same frame), to "
                                         "which every vertex's accuracy is measured (default: "
@@ -79,7 +85,7 @@ def run(args) -> int:
         raise ValueError("--world and --crop need --target")
     if args.crop is not None and not args.crop >= 0:
         raise ValueError(f"--crop must be >= 0 m, got {args.crop}")
-    check_parameters(10 ** 9, args.depth, args.k, args.trim, args.support)  # before any work
+    check_parameters(10 ** 9, args.depth, args.k, args.trim, args.support, args.outliers)  # before any work
     cloud = read_point_cloud(args.points)
     target = load_mesh(FilePath(args.target), "--target", "reconstruct") if args.target \
         else None
@@ -89,7 +95,8 @@ def run(args) -> int:
     check_parameters(len(cloud), args.depth, args.k, args.trim)
     load_open3d()  # its real import error, before any work
     surface = reconstruct(cloud, depth=args.depth, trim=args.trim, k=args.k,
-                          support=args.support, progress=not args.quiet)
+                          support=args.support, progress=not args.quiet,
+                          outliers=args.outliers)
     mesh = surface.mesh
     line = (f"{args.out}: {len(mesh.vertices)} vertices, {len(mesh.faces)} faces from "
             f"{len(cloud)} points, median distance to a point "

@@ -26,8 +26,8 @@ import trimesh
 from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply_chunks
 from drake_auv.reconstruction.scoring import score
-from drake_auv.reconstruction.surface import (SUPPORT, Reconstruction, open3d_available,
-                                              open3d_error, reconstruct)
+from drake_auv.reconstruction.surface import (OUTLIERS, SUPPORT, Reconstruction,
+                                              open3d_available, open3d_error, reconstruct)
 
 CROP_MARGIN = 1.0  # m around the target's bounding box: its returns decide whether to build
 THIN_VOXEL = 0.1  # m, one return per cube before the normals and Poisson
@@ -88,7 +88,8 @@ def mission_surface(result, depth: int = 9, trim: float = 0.05, k: int = 200,
                           progress=progress)
     summary, errors = score(result.site.target_mesh, surface.mesh, cloud.points,
                             world=result.site.world)
-    summary.update(depth=depth, trim=trim, k=k, support=support, thin_voxel_m=THIN_VOXEL,
+    summary.update(depth=depth, trim=trim, k=k, support=support, outliers=OUTLIERS,
+                   thin_voxel_m=THIN_VOXEL,
                    support_median_m=float(np.median(surface.support_m)),
                    frame="local, navigation (as the vehicle believed)")
     return MissionSurface(cloud, surface, errors, summary)
@@ -141,7 +142,9 @@ def products_markdown(section: dict) -> str:
     s, p = section["surface"], section["point_cloud"]
     lines += [f"Every return of the dive as the vehicle believed it (navigation frame, drift "
               f"included), one per {section['thin_voxel_m']:g} m cube: normals from k = "
-              f"{section['k']} neighbours oriented towards the sensor, screened Poisson at "
+              f"{section['k']} neighbours oriented towards the sensor (returns whose neighbours "
+              f"lie over {section.get('outliers', OUTLIERS):g} x farther than usual dropped "
+              f"first), screened Poisson at "
               f"depth {section['depth']}, the lowest {100 * section['trim']:g} % of density "
               f"trimmed, then every face farther than {section['support']:g} local spacings "
               f"from a return (support trim; median distance of the kept vertices to a "

@@ -38,6 +38,9 @@ SUPPORT = 3.0  # default: a face farther than 3 local spacings from every return
 SPACING_NEIGHBOURS = 16  # returns whose nearest-neighbour spacings set the local spacing
 SPACING_CAP = 4.0  # a return's spacing counts up to this many times the cloud's median
 POISSON_SCALE = 1.1  # Open3D's default: the octree's cube is 1.1 x the cloud's extent
+OUTLIERS_RANGE = (0.0, 100.0)  # outlier ratio; 0: no outlier removal
+OUTLIERS = 3.0  # default: a return whose neighbours are 3 x farther than usual is dropped
+OUTLIER_NEIGHBOURS = 8
 MIN_POINTS = 10
 
 
@@ -107,7 +110,7 @@ class Reconstruction:
 
 
 def check_parameters(n_points: int, depth: int = 9, k: int = 200, trim: float = 0.05,
-                     support: float = SUPPORT) -> None:
+                     support: float = SUPPORT, outliers: float = OUTLIERS) -> None:
     """Raises ValueError naming the parameter and its allowed range when one is out of it."""
     if isinstance(depth, bool) or int(depth) != depth or not DEPTH_RANGE[0] <= depth <= \
             DEPTH_RANGE[1]:
@@ -120,6 +123,9 @@ def check_parameters(n_points: int, depth: int = 9, k: int = 200, trim: float = 
     if not SUPPORT_RANGE[0] <= support <= SUPPORT_RANGE[1]:
         raise ValueError(f"support must be in [{SUPPORT_RANGE[0]:g}, {SUPPORT_RANGE[1]:g}] "
                          f"local spacings (0: off), got {support}")
+    if not OUTLIERS_RANGE[0] <= outliers <= OUTLIERS_RANGE[1] or 0 < outliers < 1:
+        raise ValueError(f"outliers must be 0 (off) or in [1, {OUTLIERS_RANGE[1]:g}] times the "
+                         f"median neighbour distance, got {outliers}")
     if n_points < MIN_POINTS:
         raise ValueError(f"the point cloud has {n_points} point(s); a surface needs at least "
                          f"{MIN_POINTS}")
@@ -211,12 +217,30 @@ def support_trim(mesh: trimesh.Trimesh, points, support: float = SUPPORT,
     return trimmed, used, vertex_d[used]
 
 
+def outlier_mask(points, ratio: float = OUTLIERS,
+                 neighbours: int = OUTLIER_NEIGHBOURS) -> np.ndarray:
+    """(n,) True for the points kept: those whose mean distance to their `neighbours` nearest
+    points is at most `ratio` times the cloud's median of it (statistical outlier removal).
+    Water-column clutter and scattered sea-surface ghosts lie far from one another; left in,
+    screened Poisson closes a surface through them that the support trim cannot tell from a
+    real one (the boulder demo: median vertex error 1.0 m, 0.075 m without them)."""
+    points = np.asarray(points, dtype=float)
+    if ratio <= 0 or len(points) <= neighbours:
+        return np.ones(len(points), bool)
+    mean = cKDTree(points).query(points, k=neighbours + 1)[0][:, 1:].mean(axis=1)
+    return mean <= ratio * np.median(mean)
+
+
 def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 200,
-                support: float = SUPPORT, progress: bool = True) -> Reconstruction:
-    """The trimmed screened-Poisson surface of `cloud` (normals from k neighbours, oriented by
-    the recorded sensor origins when the cloud has them; faces farther than `support` local
+                support: float = SUPPORT, progress: bool = True,
+                outliers: float = OUTLIERS) -> Reconstruction:
+    """The trimmed screened-Poisson surface of `cloud` (outliers dropped first, see
+    `outlier_mask`, none when `outliers` is 0; normals from k neighbours, oriented by the
+    recorded sensor origins when the cloud has them; faces farther than `support` local
     spacings from every point removed, none when 0), with a progress bar over the stages."""
-    check_parameters(len(cloud), depth, k, trim, support)
+    check_parameters(len(cloud), depth, k, trim, support, outliers)
+    cloud = cloud.subset(np.flatnonzero(outlier_mask(cloud.points, outliers)))
+    check_parameters(len(cloud), depth, k, trim, support, outliers)
     with tqdm(total=3, desc="reconstruct", unit="stage", disable=not progress,
               leave=False) as bar:
         bar.set_postfix_str(f"normals (k = {k}) of {len(cloud)} points")
