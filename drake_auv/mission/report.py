@@ -234,8 +234,9 @@ def report_markdown(summary: dict) -> str:
               f"{_fmt(c['multibeam_angle_sd_deg'], '.1f')}); by the camera: "
               f"**{100 * c['camera']:.1f} %** ({_fmt(c['camera_angle_mean_deg'], '.1f')} deg, "
               f"sd {_fmt(c['camera_angle_sd_deg'], '.1f')}).",
-              f"- True distance to the target over {d['samples']} survey samples within "
-              f"{d['near_m']:g} m: mean {_fmt(d['mean_m'], '.2f')} m, sd {_fmt(d['sd_m'], '.2f')} m;"
+              f"- True distance to the target over {d['samples']} survey samples"
+              + (f" within {d['near_m']:g} m" if d["near_m"] is not None else "")
+              + f": mean {_fmt(d['mean_m'], '.2f')} m, sd {_fmt(d['sd_m'], '.2f')} m;"
               f" minimum over the dive {d['min_m']:.2f} m. Against the on-line map: mean "
               f"{_fmt(d['map_mean_m'], '.2f')} m, sd {_fmt(d['map_sd_m'], '.2f')} m.",
               f"- Minimum clearance to anything: {summary['min_clearance_m']:.2f} m: "
