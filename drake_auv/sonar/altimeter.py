@@ -19,6 +19,7 @@ Ports: inputs `true_state` (12); outputs `altitude` (1, m, NaN without bottom lo
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,8 +64,10 @@ class DvlParams:
                 raise ValueError(f"DvlParams.{name} must be in {allowed}, got "
                                  f"{getattr(self, name)}")
 
+    @functools.cached_property
     def beams_body(self) -> np.ndarray:
-        """(4, 3) unit beam directions in the body frame (x forward, y left, z up)."""
+        """(4, 3) unit beam directions in the body frame (x forward, y left, z up), built
+        once per parameter set (read at every measurement)."""
         b = np.radians(self.beam_deg)
         azimuth = np.radians([45.0, 135.0, 225.0, 315.0])
         return np.column_stack([np.sin(b) * np.cos(azimuth), np.sin(b) * np.sin(azimuth),
@@ -76,7 +79,7 @@ def measure_altitude(caster: RayCaster, params: DvlParams, state: np.ndarray,
     """The DVL's altitude at the true `state` (12), m; NaN without bottom lock. `rng` None:
     no noise."""
     rot = rotation_world_body(state[3], state[4], state[5])
-    directions = params.beams_body() @ rot.T
+    directions = params.beams_body @ rot.T
     ranges, _ = caster.cast_unit(np.asarray(state[:3], float), directions, params.max_range)
     if rng is not None:
         sigma = params.range_sigma_fraction * np.nan_to_num(ranges) + params.range_sigma_m
