@@ -18,7 +18,8 @@ import numpy as np
 from _reference import machine, print_reference, reference_factor
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.runner import run_mission
-from drake_auv.perception import FollowingParams, HorizontalFollower, estimate_profile
+from drake_auv.following import FollowingParams, HorizontalFollower
+from drake_auv.perception import estimate_profile
 
 SIM_SECONDS = 120.0
 RUNS = 3

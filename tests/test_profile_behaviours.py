@@ -4,8 +4,8 @@ cast against polygon profiles (no Drake): pool corners, a convex block, the C wi
 import numpy as np
 import pytest
 
-from drake_auv.perception import (FollowingParams, HorizontalFollower, VerticalFollower,
-                                  estimate_profile, follow_step)
+from drake_auv.following import FollowingParams, HorizontalFollower, VerticalFollower, follow_step
+from drake_auv.perception import estimate_profile
 
 
 def _polyline(vertices, closed):

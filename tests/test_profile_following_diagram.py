@@ -11,8 +11,8 @@ from pydrake.systems.primitives import LogVectorOutput
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.mission.config import MissionFileError, load_mission
-from drake_auv.perception import FollowingParams
-from drake_auv.perception.controller import FollowConfig, ProfileFollowingController
+from drake_auv.following import FollowingParams
+from drake_auv.following.controller import FollowConfig, ProfileFollowingController
 from drake_auv.scenarios import get_scenario
 from drake_auv.sonar.noise import SonarNoise
 from drake_auv.sonar.profiler import FOLLOWING_SETUP, PencilBeamProfiler

@@ -42,7 +42,7 @@ from drake_auv.mission.faults import NavigationJump, SonarSilence, ThrusterFailu
 from drake_auv.mission.plan import SENSOR_AZIMUTH, MissionPlan, plan_mission, terrain_elevation
 from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
-from drake_auv.perception.controller import ProfileFollowingController
+from drake_auv.following.controller import ProfileFollowingController
 from drake_auv.replanning.replanner import Replanner
 from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar

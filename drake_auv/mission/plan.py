@@ -25,8 +25,8 @@ from drake_auv.mission.config import (FlyStep, FollowStep, MissionFileError, Mis
                                       PlanStep, SurveyStep)
 from drake_auv.mission.legs import Leg
 from drake_auv.mission.site import Site
-from drake_auv.perception.behaviours import EstimatorParams, FollowingParams
-from drake_auv.perception.controller import FollowConfig
+from drake_auv.following.behaviours import EstimatorParams, FollowingParams
+from drake_auv.following.controller import FollowConfig
 from drake_auv.planning.path import Path
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.vehicle.path_reference import PathLeg

@@ -54,7 +54,7 @@ class MissionResult:
         replanning: (k, 5) replanning steps (`replanner.STEP_FIELDS`), planned ones only.
         scan_log: the returns recorded by the mapper; online_map: its final octree.
         profile: (n, 7) the profile-following controller's `profile` output (NaN rows
-            without a controller; see `perception.controller`), sampled with the state.
+            without a controller; see `following.controller`), sampled with the state.
         reference: (n, 8) the tracker's reference.
         completed: whether the supervisor ended the dive (False: the time cap did).
         wall_s: wall time of the simulation, s.

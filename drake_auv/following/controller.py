@@ -27,7 +27,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.leg_signal import LEG_SIZE, read_leg
-from drake_auv.perception.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
+from drake_auv.following.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.model import STATE_SIZE
 from drake_auv.vehicle.path_reference import trajectory_reference
