@@ -171,7 +171,12 @@ def test_the_long_monterey_mission_flies_at_survey_scale(tmp_path, monkeypatch):
     summary = summarise(result)
     assert result.completed and result.duration_s > 2 * 3600
     assert not summary["contact"] and summary["coverage"]["multibeam"] > 0.9
-    assert abs(summary["distance_to_target"]["mean_m"] - 10.0) < 1.5
+    # The offset on the true seabed, not `distance_to_target`: the target is the ROI, and the
+    # lanes that cover its edges fly outside it, where the nearest target point is the edge.
+    # The plan is made on a prior shifted by 2 m, so the replanned survey must hold Omega to
+    # within that error.
+    survey = np.array([result.plan.legs[leg].phase == "survey" for leg in result.leg_at])
+    assert abs(result.clearance[survey].mean() - result.plan.omega) < result.spec.site.prior_error_m
     log = result.scan_log
     assert len(log.store._cache) <= CACHE_BATCHES < log.count
     assert summary["map"]["batches"] == log.count and summary["map"]["octree_mb"] > 0
