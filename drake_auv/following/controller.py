@@ -1,6 +1,6 @@
 """`ProfileFollowingController`: sensor-based profile following as a Drake LeafSystem.
 
-A thin adapter over `drake_auv.following.behaviours` (`HorizontalFollower` / `VerticalFollower`): at the
+A thin adapter over `HorizontalFollower` / `VerticalFollower` (`following.behaviours`): at the
 profiler's update period, while one of its legs flies, it feeds the new returns to the
 follower's local map and stores the tracker reference it computes. A new leg starts a new
 follower (empty local map, its own mode and depth or plane). The follower's state (local map,
