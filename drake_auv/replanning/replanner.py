@@ -46,15 +46,12 @@ STEP_FIELDS = ("time", "wall_time", "query_time", "next_index", "planned")
 
 @dataclass(frozen=True)
 class _Plan:
-    """The current section and its timed trajectory (None before the first step of a leg).
-    Immutable: a step stores a new one and the trajectory is never modified, so Drake's copies
-    of the state may share it."""
+    """The current section and its timed trajectory (None before the first step of a leg): a
+    step stores a new one. Drake's copies of it at each step (once a second) are plain deep
+    copies of a few dozen points and segments."""
 
     plan: SectionPlan | None = None
     trajectory: PiecewisePolynomial | None = None
-
-    def __deepcopy__(self, memo):
-        return self
 
 
 def _placeholder_path() -> Path:
