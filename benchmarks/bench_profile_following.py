@@ -56,11 +56,12 @@ def main() -> None:
     state = np.zeros(12)
     state[2] = -4.0
     world_points = np.column_stack([points, np.full(len(points), -4.0)])
-    follower.update(0.0, state, world_points)
+    held, _ = follower.update(follower.initial_state(), 0.0, state, world_points)
     clock = iter(np.arange(1, 10_000) * 0.1)
-    upd_ms = min(timeit.repeat(lambda: follower.update(next(clock), state, np.empty((0, 3))),
+    upd_ms = min(timeit.repeat(lambda: follower.update(held, next(clock), state,
+                                                       np.empty((0, 3))),
                                number=50, repeat=5)) / 50 * 1e3
-    print(f"HorizontalFollower.update (map of {len(follower.map)} returns): {upd_ms:.2f} ms")
+    print(f"HorizontalFollower.update (map of {len(held.map)} returns): {upd_ms:.2f} ms")
 
     factors = [pool_real_time_factor() for _ in range(RUNS)]
     median = statistics.median(factors)

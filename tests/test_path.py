@@ -71,3 +71,25 @@ def test_to_trajectory_reference():
     assert ref.shape == (8,)
     assert np.allclose(ref[:3], [2.5, 0, -5])
     assert np.allclose(ref[4:7], [0.5, 0, 0])
+
+
+def test_chain_trajectory_times_the_pieces_like_their_concatenation():
+    """A transit ending near a plan whose headings wrap: the chained trajectory has the
+    concatenated path's breaks and samples (yaw continuous, no spin at the joins); built
+    with the joins dropped, or the yaw not carried over, it would not."""
+    transit = Path(np.array([[0.0, 0, -5], [3, 0, -5], [3, 2, -4]]), [0.0, 3.0, 3.1],
+                   (0, 0, -1))
+    plan = Path(np.array([[3.0, 2.5, -4], [3, 6, -4], [0, 6, -4]]), [-3.1, 3.0, -3.0],
+                (0, 0, -1))
+    chained = Path.chain_trajectory([transit, plan], speed=0.5)
+    whole = Path.concatenate([transit, plan]).to_trajectory(speed=0.5)
+    assert np.allclose(chained.get_segment_times(), whole.get_segment_times(), atol=1e-12)
+    t = np.array(whole.get_segment_times())
+    assert np.allclose(chained.vector_values(t), whole.vector_values(t), atol=1e-12)
+    assert np.abs(np.diff(chained.vector_values(t)[3])).max() <= 3.0 + 1e-9  # no 2 pi spin
+    shifted = Path.chain_trajectory([transit, plan], speed=0.5)
+    shifted.shiftRight(7.0)
+    assert shifted.start_time() == 7.0
+    assert np.allclose(shifted.EvalDerivative(7.0 + 2.0, 1), whole.EvalDerivative(2.0, 1))
+    single = Path.chain_trajectory([Path(np.zeros((1, 3)), 0.0, (0, 0, -1))], speed=0.5)
+    assert single.end_time() == 1.0  # one sample: held 1 s

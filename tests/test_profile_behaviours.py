@@ -50,6 +50,7 @@ def _vehicle_step(p, yaw, ref):
 
 def _run_horizontal(segs, start, yaw, duration, params):
     follower = HorizontalFollower(params, seed=0)
+    held = follower.initial_state()
     p, beam, log = np.array(start, float), 0.0, []
     for k in range(int(duration / DT)):
         angles = yaw + beam + STEP * np.arange(3)
@@ -59,7 +60,7 @@ def _run_horizontal(segs, start, yaw, duration, params):
         points = np.column_stack([p[:2] + ranges[:, None] * dirs, np.full(3, p[2])])
         state = np.zeros(12)
         state[:3], state[5] = p, yaw
-        out = follower.update(k * DT, state, points)
+        held, out = follower.update(held, k * DT, state, points)
         p, yaw = _vehicle_step(p, yaw, out.reference)
         front = _cast(p[:2], np.array([[np.cos(yaw), np.sin(yaw)]]), segs)[0]
         log.append((k * DT, p[0], p[1], p[2], _distance(p[:2], segs), front))
@@ -99,6 +100,7 @@ def _run_vertical(profile, start_sh, duration, params, plane_yaw=0.3):
     with z = h + Z0. Log rows: s, h, true distance, cos(yaw - plane_yaw), turning, z reference."""
     e = np.array([np.cos(plane_yaw), np.sin(plane_yaw), 0.0])
     follower = VerticalFollower(params, seed=0)
+    held = follower.initial_state()
     sh, yaw, beam, log = np.array(start_sh, float), plane_yaw, 0.0, []
     for k in range(int(duration / DT)):
         angles = beam + STEP * np.arange(3)
@@ -108,16 +110,17 @@ def _run_vertical(profile, start_sh, duration, params, plane_yaw=0.3):
         hits = sh + _cast(sh, dirs, profile)[:, None] * dirs
         state = np.zeros(12)
         state[:3], state[5] = sh[0] * e + [0, 0, sh[1] + Z0], yaw
-        out = follower.update(k * DT, state, hits[:, :1] * e + (hits[:, 1:] + Z0) * [0, 0, 1])
+        held, out = follower.update(held, k * DT, state,
+                                    hits[:, :1] * e + (hits[:, 1:] + Z0) * [0, 0, 1])
         p, yaw = _vehicle_step(state[:3], yaw, out.reference)
         sh = np.array([p @ e, p[2] - Z0])
         log.append((sh[0], sh[1], _distance(sh, profile), np.cos(yaw - plane_yaw),
                     out.mode == "turn", out.reference[2]))
-    return np.array(log), follower
+    return np.array(log), held
 
 
 def test_vertical_whole_c_with_ceiling_turn():
-    log, follower = _run_vertical(C_PROFILE, [0.0, 2.0], 240, FollowingParams(offset=2.0))
+    log, held = _run_vertical(C_PROFILE, [0.0, 2.0], 240, FollowingParams(offset=2.0))
     assert np.all(log[:, 2] > 1.5)  # no contact, offset held within 0.5 m
     above = log[:, 1] > 11.5
     under_ceiling = (log[:, 0] > 13) & (log[:, 0] < 17) & (log[:, 1] > 5) & (log[:, 1] < 7)
@@ -126,7 +129,7 @@ def test_vertical_whole_c_with_ceiling_turn():
     # under the ceiling it moves towards -s facing -s: it turned instead of backing up
     first_ceiling = np.flatnonzero(under_ceiling)[0]
     assert log[first_ceiling, 3] < -0.9
-    assert np.any(log[:, 4]) and follower.turns >= 2
+    assert np.any(log[:, 4]) and held.turns >= 2
     assert log[-1, 0] > 25 and abs(log[-1, 1] - 2.0) < 0.3  # out of the C, back on the seabed
 
 
@@ -160,19 +163,23 @@ def test_params_validation():
         FollowingParams(offset=7.0)
     follower = HorizontalFollower()
     with pytest.raises(ValueError, match="state"):
-        follower.update(0.0, np.full(12, np.nan), np.empty((0, 3)))
+        follower.update(follower.initial_state(), 0.0, np.full(12, np.nan), np.empty((0, 3)))
+    with pytest.raises(ValueError, match="depth_z"):
+        HorizontalFollower(depth_z=np.nan)
 
 
-def test_follower_copy_is_independent_and_repeats_the_same_draws():
+def test_update_returns_a_new_state_and_leaves_the_old_one_as_it_was():
     import copy
 
     wall = np.column_stack([np.full(60, 2.5), np.linspace(-3, 3, 60), np.full(60, -4.0)])
-    state = np.zeros(12)
-    state[2] = -4.0
+    x = np.zeros(12)
+    x[2] = -4.0
     follower = HorizontalFollower(FollowingParams(), seed=4)
-    follower.update(0.0, state, wall)
-    clone = copy.deepcopy(follower)
-    a = clone.update(0.1, state, wall + [0.0, 0.0, 0.0])
-    assert len(clone.map) == 120 and len(follower.map) == 60  # the original is untouched
-    b = follower.update(0.1, state, wall)
-    assert np.array_equal(a.reference, b.reference)  # same RANSAC draws from the copied state
+    first, _ = follower.update(follower.initial_state(), 0.0, x, wall)
+    clone = copy.deepcopy(first)  # what Drake does to abstract state
+    second, a = follower.update(clone, 0.1, x, wall)
+    assert len(second.map) == 120 and len(clone.map) == 60 and len(first.map) == 60
+    assert clone.rng == first.rng and second.rng != first.rng  # RANSAC drew from a copy
+    _, b = follower.update(first, 0.1, x, wall)
+    assert np.array_equal(a.reference, b.reference)  # same draws from an equal state
+    assert (second.start_time, second.time, first.time) == (0.0, 0.1, 0.0)

@@ -3,9 +3,11 @@
 import numpy as np
 import pytest
 
-from drake_auv.replanning.section import (ReplanningCost, ReplanningParameters, SliceMap,
-                                           collect_section, initial_trajectory, passed_index,
-                                           replan_section, resample_polyline)
+from drake_auv.replanning.cost import ReplanningCost
+from drake_auv.replanning.fields import DEPTH_MARGIN, SliceMap
+from drake_auv.replanning.section import (ReplanningParameters, collect_section,
+                                           initial_trajectory, passed_index, replan_section,
+                                           resample_polyline)
 
 WAYPOINTS = np.stack([np.zeros(20), np.arange(20.0), np.full(20, -5.0)], axis=1)
 
@@ -241,7 +243,6 @@ def test_3d_offset_near_the_trajectory_is_interpolated_and_exact_elsewhere():
     """Metric "3d": after `prepare_tube` the offset within the tube is the trilinear read of
     exact node distances (within 2 cm of the KD-tree's at 5-8 m from a curved face), and
     beyond the tube exactly the KD-tree's."""
-    from drake_auv.replanning.section import DEPTH_MARGIN
     rng = np.random.default_rng(3)
     u = rng.normal(size=(4000, 3))
     sphere = 5.0 * u / np.linalg.norm(u, axis=1, keepdims=True)  # voxels of a 5 m boulder

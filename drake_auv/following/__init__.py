@@ -3,8 +3,8 @@
 system that runs them on the profiler's returns. The behaviours are pure numpy; the controller
 is the LeafSystem beside them."""
 
-from drake_auv.following.behaviours import (FollowerOutput, FollowingParams, HorizontalFollower,
-                                            VerticalFollower, follow_step)
+from drake_auv.following.behaviours import (FollowerOutput, FollowerState, FollowingParams,
+                                            HorizontalFollower, VerticalFollower, follow_step)
 
-__all__ = ["FollowerOutput", "FollowingParams", "HorizontalFollower", "VerticalFollower",
-           "follow_step"]
+__all__ = ["FollowerOutput", "FollowerState", "FollowingParams", "HorizontalFollower",
+           "VerticalFollower", "follow_step"]

@@ -21,14 +21,16 @@ it faces along the plane, and when advancing would mean moving backwards (the mo
 horizontal component opposes the heading by more than `turn_threshold`, which happens under a
 ceiling) it turns 180 degrees in place, holding the offset, before it goes on.
 
-Both are pure (numpy) and own their local map; the Drake controller is a thin adapter.
+Both are pure (numpy) and immutable: an update takes a `FollowerState` (the local map, the
+RANSAC generator's state, the yaw and turn state) and returns the next one, so the Drake
+controller, a thin adapter, holds that state in its Context and no copy shares anything mutable.
 Reference: `[x, y, z, yaw, vx, vy, vz, yaw_rate]` in the world frame (architecture.md).
 """
 
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -129,7 +131,7 @@ def follow_step(estimate: ProfileEstimate, params: FollowingParams):
     return correction, fade * params.speed * tangent
 
 
-@dataclass
+@dataclass(frozen=True)
 class FollowerOutput:
     """One update: the tracker reference (8,), the estimate (None if no profile is seen) and
     the behaviour's mode ("search", "follow" or "turn")."""
@@ -139,74 +141,99 @@ class FollowerOutput:
     mode: str
 
 
+@dataclass(frozen=True)
+class FollowerState:
+    """Everything a follower remembers between updates; an update returns a new one and
+    never changes this one, so a Drake context's copy of it is an independent follower.
+
+    Attributes:
+        map: the `LocalProfileMap` of recent returns (an update adds to a copy of it).
+        rng: the RANSAC generator's `bit_generator.state`, so a copy repeats the same draws.
+        time, start_time: of the last and the first update, s (None before any).
+        yaw_ref, yaw_rate_ref: the rate-limited yaw reference, rad and rad/s (None: not set).
+        look: (2,) direction of the estimator's sector, scan-plane axes (None: not set).
+        normal: (2,) the last estimated profile normal (None before any).
+        anchor: horizontal mode, the z held, m; vertical mode, the plane's yaw, rad (None:
+            taken at the first update).
+        heading_sign: vertical mode, +1 facing along the plane, -1 against it (0: not set).
+        turns: vertical mode, how many 180 degree turns it has made.
+    """
+
+    map: LocalProfileMap
+    rng: dict
+    time: float | None = None
+    start_time: float | None = None
+    yaw_ref: float | None = None
+    yaw_rate_ref: float = 0.0
+    look: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    anchor: float | None = None
+    heading_sign: int = 0
+    turns: int = 0
+
+
 class _Follower:
-    """Common part: local map, seeded RANSAC generator, rate-limited yaw reference."""
+    """Common part of the two followers: immutable (parameters, anchor, seed); each `update`
+    takes a `FollowerState` and returns the next one with its output."""
 
     DEFAULT_MAX_AGE = 20.0  # s
 
-    def __init__(self, params: FollowingParams, seed: int):
+    def __init__(self, params: FollowingParams, anchor, seed: int, name: str):
+        if anchor is not None and not np.isfinite(anchor):
+            raise ValueError(f"{type(self).__name__} {name} must be finite, got {anchor}")
         self.params = params
-        self.map = LocalProfileMap(params.max_age or self.DEFAULT_MAX_AGE, params.max_points)
-        self.rng = np.random.default_rng(seed)
-        self.yaw_ref = None
-        self.yaw_rate_ref = 0.0
-        self.time = None
-        self.start_time = None
-        self.look = None
-        self.normal = None
+        self.anchor = None if anchor is None else float(anchor)
+        self.seed = int(seed)
 
-    def __deepcopy__(self, memo):
-        # Drake copies abstract state at every update: share what is never modified in place
-        # (the frozen params, the map's arrays, which every update replaces) and copy the
-        # rest; the generator's state is copied so the copy draws the same numbers.
-        clone = copy.copy(self)
-        clone.map = copy.copy(self.map)
-        clone.rng = np.random.default_rng()
-        clone.rng.bit_generator.state = self.rng.bit_generator.state
-        return clone
+    def initial_state(self) -> FollowerState:
+        """The state before the first update: an empty map, the generator seeded."""
+        return FollowerState(
+            LocalProfileMap(self.params.max_age or self.DEFAULT_MAX_AGE, self.params.max_points),
+            np.random.default_rng(self.seed).bit_generator.state, anchor=self.anchor)
 
-    def _begin(self, time, state, points_nav):
-        state = np.asarray(state, dtype=float)
-        if state.shape != (12,) or not np.all(np.isfinite(state)):
-            raise ValueError(f"state must be a finite 12-vector, got shape {state.shape}")
-        dt = 0.0 if self.time is None else time - self.time
+    def _begin(self, state: FollowerState, time, x, points_nav):
+        """Checks the estimated state `x` (12), adds the returns to a copy of the map; returns
+        (x, dt, the new map, the state with the new time and start time)."""
+        x = np.asarray(x, dtype=float)
+        if x.shape != (12,) or not np.all(np.isfinite(x)):
+            raise ValueError(f"state must be a finite 12-vector, got shape {x.shape}")
+        dt = 0.0 if state.time is None else time - state.time
         if dt < 0:
-            raise ValueError(f"follower updates must go forward in time: {time} < {self.time}")
-        self.time = time
-        if self.start_time is None:
-            self.start_time = time
-        if self.yaw_ref is None:
-            self.yaw_ref = float(state[5])
-        self.map.add(points_nav, time)
-        return state, dt
+            raise ValueError(f"follower updates must go forward in time: {time} < {state.time}")
+        local_map = copy.copy(state.map)  # its arrays are replaced, never changed in place
+        local_map.add(points_nav, time)
+        state = replace(state, map=local_map, time=time,
+                        start_time=time if state.start_time is None else state.start_time,
+                        yaw_ref=float(x[5]) if state.yaw_ref is None else state.yaw_ref)
+        return x, dt, state
 
-    def _search_speed(self) -> float:
+    def _search_speed(self, state: FollowerState) -> float:
         """Speed of the search behaviour: zero during the warm-up."""
-        return 0.0 if self.time - self.start_time < self.params.warmup else self.params.search_speed
+        warming = state.time - state.start_time < self.params.warmup
+        return 0.0 if warming else self.params.search_speed
 
-    def _steer_yaw(self, target, dt):
+    def _steer_yaw(self, state: FollowerState, target, dt) -> tuple[float, float]:
         """Moves the yaw reference towards `target` with a rate bounded by `yaw_rate` and
         changed by at most `yaw_accel` * dt, braking in time to stop on the target (a smooth
-        reference the tracker can follow without overshoot); returns the reference's rate."""
+        reference the tracker can follow without overshoot); returns (yaw, rate), rad, rad/s."""
         if dt <= 0:
-            return self.yaw_rate_ref
+            return state.yaw_ref, state.yaw_rate_ref
         p = self.params
-        error = float(wrap_angle(target - self.yaw_ref))
+        error = float(wrap_angle(target - state.yaw_ref))
         braking = np.sign(error) * np.sqrt(2.0 * p.yaw_accel * abs(error))
         desired = np.clip(braking, -p.yaw_rate, p.yaw_rate)
-        rate = self.yaw_rate_ref + np.clip(desired - self.yaw_rate_ref, -p.yaw_accel * dt,
-                                           p.yaw_accel * dt)
+        rate = state.yaw_rate_ref + np.clip(desired - state.yaw_rate_ref, -p.yaw_accel * dt,
+                                            p.yaw_accel * dt)
         if abs(rate * dt) > abs(error) and np.sign(rate) == np.sign(error):
             rate = error / dt  # land on the target
-        self.yaw_ref = float(wrap_angle(self.yaw_ref + rate * dt))
-        self.yaw_rate_ref = float(rate)
-        return self.yaw_rate_ref
+        return float(wrap_angle(state.yaw_ref + rate * dt)), float(rate)
 
-    def _estimate(self, points):
-        estimate = estimate_profile(points, self.params.estimator, self.rng, self.look, self.normal)
-        if estimate is not None:
-            self.normal = estimate.normal
-        return estimate
+    def _estimate(self, state: FollowerState, points, look):
+        """The profile estimate (or None) and the generator's state after its draws."""
+        rng = np.random.default_rng()
+        rng.bit_generator.state = state.rng
+        estimate = estimate_profile(points, self.params.estimator, rng, look, state.normal)
+        return estimate, rng.bit_generator.state
 
 
 class HorizontalFollower(_Follower):
@@ -222,44 +249,42 @@ class HorizontalFollower(_Follower):
     DEFAULT_MAX_AGE = 10.0  # s
 
     def __init__(self, params: FollowingParams = FollowingParams(), depth_z=None, seed: int = 0):
-        super().__init__(params, seed)
-        if depth_z is not None and not np.isfinite(depth_z):
-            raise ValueError(f"HorizontalFollower depth_z must be finite, got {depth_z}")
-        self.depth_z = None if depth_z is None else float(depth_z)
+        super().__init__(params, depth_z, seed, "depth_z")
 
-    def update(self, time: float, state, points_nav) -> FollowerOutput:
-        """Adds the new return points (navigation frame) and computes the reference from the
-        estimated `state` (12)."""
-        state, dt = self._begin(time, state, points_nav)
-        if self.depth_z is None:
-            self.depth_z = float(state[2])
-        position = state[:3]
-        points = self.map.horizontal_slice(position, self.params.plane_band)
-        facing = state[5] - self.params.yaw_offset
-        if self.look is None:
-            self.look = np.array([np.cos(facing), np.sin(facing)])
-        estimate = self._estimate(points)
+    def update(self, state: FollowerState, time: float, x,
+               points_nav) -> tuple[FollowerState, FollowerOutput]:
+        """Adds the new return points (navigation frame) to the map and computes the reference
+        from the estimated state `x` (12); returns the new state and the output."""
+        x, dt, state = self._begin(state, time, x, points_nav)
+        p = self.params
+        depth_z = float(x[2]) if state.anchor is None else state.anchor
+        position = x[:3]
+        points = state.map.horizontal_slice(position, p.plane_band)
+        facing = x[5] - p.yaw_offset
+        look = np.array([np.cos(facing), np.sin(facing)]) if state.look is None else state.look
+        estimate, rng = self._estimate(state, points, look)
         reference = np.zeros(8)
         if estimate is None:
-            ahead = self.yaw_ref - self.params.yaw_offset
-            heading = np.array([np.cos(ahead), np.sin(ahead)])
+            ahead = state.yaw_ref - p.yaw_offset
             reference[:2] = position[:2]
-            reference[4:6] = self._search_speed() * heading
-            mode = "search"
-            yaw_rate = self._steer_yaw(self.yaw_ref, dt)
+            reference[4:6] = self._search_speed(state) * np.array([np.cos(ahead), np.sin(ahead)])
+            mode, normal = "search", state.normal
+            yaw, yaw_rate = self._steer_yaw(state, state.yaw_ref, dt)
         else:
-            correction, velocity = follow_step(estimate, self.params)
+            correction, velocity = follow_step(estimate, p)
             reference[:2] = position[:2] + correction
             reference[4:6] = velocity
-            yaw_rate = self._steer_yaw(np.arctan2(-estimate.normal[1], -estimate.normal[0])
-                                       + self.params.yaw_offset, dt)
-            tangent = self.params.side * np.array([estimate.normal[1], -estimate.normal[0]])
-            self.look = tangent
+            normal = estimate.normal
+            yaw, yaw_rate = self._steer_yaw(state, np.arctan2(-normal[1], -normal[0])
+                                            + p.yaw_offset, dt)
+            look = p.side * np.array([normal[1], -normal[0]])
             mode = "follow"
-        reference[2] = self.depth_z
-        reference[3] = self.yaw_ref
+        reference[2] = depth_z
+        reference[3] = yaw
         reference[7] = yaw_rate
-        return FollowerOutput(reference, estimate, mode)
+        state = replace(state, rng=rng, yaw_ref=yaw, yaw_rate_ref=yaw_rate, look=look,
+                        normal=normal, anchor=depth_z)
+        return state, FollowerOutput(reference, estimate, mode)
 
 
 class VerticalFollower(_Follower):
@@ -276,53 +301,51 @@ class VerticalFollower(_Follower):
     """
 
     def __init__(self, params: FollowingParams = FollowingParams(), plane_yaw=None, seed: int = 0):
-        super().__init__(params, seed)
-        if plane_yaw is not None and not np.isfinite(plane_yaw):
-            raise ValueError(f"VerticalFollower plane_yaw must be finite, got {plane_yaw}")
-        self.plane_yaw = None if plane_yaw is None else float(plane_yaw)
-        self.heading_sign = None
-        self.turns = 0
+        super().__init__(params, plane_yaw, seed, "plane_yaw")
 
-    def update(self, time: float, state, points_nav) -> FollowerOutput:
-        """Adds the new return points (navigation frame) and computes the reference from the
-        estimated `state` (12)."""
-        state, dt = self._begin(time, state, points_nav)
-        if self.plane_yaw is None:
-            self.plane_yaw = float(state[5])
-        if self.heading_sign is None:
-            self.heading_sign = 1 if np.cos(state[5] - self.plane_yaw) >= 0 else -1
-        e = np.array([np.cos(self.plane_yaw), np.sin(self.plane_yaw), 0.0])
+    def update(self, state: FollowerState, time: float, x,
+               points_nav) -> tuple[FollowerState, FollowerOutput]:
+        """Adds the new return points (navigation frame) to the map and computes the reference
+        from the estimated state `x` (12); returns the new state and the output."""
+        x, dt, state = self._begin(state, time, x, points_nav)
+        p = self.params
+        plane_yaw = float(x[5]) if state.anchor is None else state.anchor
+        sign = state.heading_sign or (1 if np.cos(x[5] - plane_yaw) >= 0 else -1)
+        turns = state.turns
+        e = np.array([np.cos(plane_yaw), np.sin(plane_yaw), 0.0])
         up = np.array([0.0, 0.0, 1.0])
-        position = state[:3]
-        points = self.map.vertical_slice(position, self.plane_yaw, self.params.plane_band)
-        if self.look is None:
-            self.look = np.array([float(self.heading_sign), 0.0])
-        estimate = self._estimate(points)
+        position = x[:3]
+        points = state.map.vertical_slice(position, plane_yaw, p.plane_band)
+        look = np.array([float(sign), 0.0]) if state.look is None else state.look
+        estimate, rng = self._estimate(state, points, look)
         correction = np.zeros(2)
         velocity = np.zeros(2)
+        normal = state.normal
         if estimate is None:
-            velocity = np.array([self.heading_sign * self._search_speed(), 0.0])
+            velocity = np.array([sign * self._search_speed(state), 0.0])
             mode = "search"
         else:
-            correction, velocity = follow_step(estimate, self.params)
+            normal = estimate.normal
+            correction, velocity = follow_step(estimate, p)
             speed = np.linalg.norm(velocity)
             if speed > 1e-9:
-                self.look = velocity / speed
-                if self.heading_sign * self.look[0] < -self.params.turn_threshold:
-                    self.heading_sign = -self.heading_sign  # ceiling: turn, do not back up
-                    self.turns += 1
+                look = velocity / speed
+                if sign * look[0] < -p.turn_threshold:
+                    sign, turns = -sign, turns + 1  # ceiling: turn, do not back up
             mode = "follow"
-        target = self.plane_yaw + (0.0 if self.heading_sign > 0 else np.pi)
-        if abs(wrap_angle(target - state[5])) > self.params.turn_tolerance:
+        target = plane_yaw + (0.0 if sign > 0 else np.pi)
+        if abs(wrap_angle(target - x[5])) > p.turn_tolerance:
             velocity = np.zeros(2)  # hold the offset while turning
             mode = "turn"
-        yaw_rate = self._steer_yaw(target, dt)
+        yaw, yaw_rate = self._steer_yaw(state, target, dt)
         reference = np.zeros(8)
         reference[:3] = position + correction[0] * e + correction[1] * up
-        reference[3] = self.yaw_ref
+        reference[3] = yaw
         reference[4:7] = velocity[0] * e + velocity[1] * up
         reference[7] = yaw_rate
-        if reference[2] >= -self.params.min_depth:  # depth limit: hold below it
-            reference[2] = -self.params.min_depth
+        if reference[2] >= -p.min_depth:  # depth limit: hold below it
+            reference[2] = -p.min_depth
             reference[6] = min(reference[6], 0.0)
-        return FollowerOutput(reference, estimate, mode)
+        state = replace(state, rng=rng, yaw_ref=yaw, yaw_rate_ref=yaw_rate, look=look,
+                        normal=normal, anchor=plane_yaw, heading_sign=sign, turns=turns)
+        return state, FollowerOutput(reference, estimate, mode)

@@ -1,12 +1,12 @@
 """`ProfileFollowingController`: sensor-based profile following as a Drake LeafSystem.
 
-A thin adapter over `drake_auv.perception` (`HorizontalFollower` / `VerticalFollower`): at the
+A thin adapter over `HorizontalFollower` / `VerticalFollower` (`following.behaviours`): at the
 profiler's update period, while one of its legs flies, it feeds the new returns to the
 follower's local map and stores the tracker reference it computes. A new leg starts a new
-follower (empty local map, its own mode and depth or plane). The follower (local map, RANSAC
-generator, yaw and turn state) is abstract state, boxed so that Drake's copies of the state
-cost nothing while it does not fly; a flying update copies it once (a few thousand points at
-most). Discrete-state groups: `reference` (8) with the time
+follower (empty local map, its own mode and depth or plane). The follower's state (local map,
+RANSAC generator's state, yaw and turn state: an immutable `FollowerState` that each update
+replaces) is abstract state; Drake's copies of it at every update are plain deep copies (a
+few thousand points at most). Discrete-state groups: `reference` (8) with the time
 it was computed (`reference_time`), the last returns' sequence and leg (`consumed`), and
 `profile` (7). Between updates the reference position is extrapolated with its velocity, so
 the tracker's position error does not build up along the profile.
@@ -19,7 +19,6 @@ orientation, valid, mode]` in the scan plane's 2D axes (horizontal: x, y; vertic
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,7 +26,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.leg_signal import LEG_SIZE, read_leg
-from drake_auv.following.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
+from drake_auv.following.behaviours import (FollowerState, FollowingParams, HorizontalFollower,
+                                            VerticalFollower)
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.model import STATE_SIZE
 from drake_auv.vehicle.path_reference import trajectory_reference
@@ -64,18 +64,6 @@ class FollowConfig:
         return VerticalFollower(self.params, plane_yaw=self.plane_yaw, seed=seed)
 
 
-@dataclass(frozen=True)
-class _Held:
-    """The follower as abstract state, boxed: the box is never changed (an update copies the
-    follower, advances the copy and stores a new box), so Drake's state copies of it, two at
-    every periodic update whether a leg flies or not, share it for free."""
-
-    follower: object
-
-    def __deepcopy__(self, memo):
-        return self
-
-
 class ProfileFollowingController(LeafSystem):
     """Drives the tracker from profiler returns.
 
@@ -102,9 +90,10 @@ class ProfileFollowingController(LeafSystem):
             "returns", AbstractValue.Make(SonarReturns.empty(20.0)))
         self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
-        first = min(self.legs)
+        self._followers = {leg: config.follower(self.seed + leg)
+                           for leg, config in self.legs.items()}  # immutable
         self._follower_index = self.DeclareAbstractState(
-            AbstractValue.Make(_Held(self.legs[first].follower(self.seed + first))))
+            AbstractValue.Make(self._followers[min(self.legs)].initial_state()))
         self._reference = self.DeclareDiscreteState(8)
         self._reference_time = self.DeclareDiscreteState(1)
         self._consumed = self.DeclareDiscreteState(np.array([-1.0, -1.0]))  # sequence, leg
@@ -123,31 +112,30 @@ class ProfileFollowingController(LeafSystem):
                                    self.time_ticket()})
         self.profile_output = self.DeclareStateOutputPort("profile", self._profile)
 
-    def follower(self, context):
-        """The follower (its map, turn count, ...) held in this system's own `context`
+    def follower(self, context) -> FollowerState:
+        """The follower's state (its map, turn count, ...) held in this system's own `context`
         (from a diagram's context: `GetMyContextFromRoot`), for inspection."""
-        return context.get_abstract_state(self._follower_index).get_value().follower
+        return context.get_abstract_state(self._follower_index).get_value()
 
     def _update_reference(self, context, state):
         leg, _ = read_leg(self.leg_input, context)
-        config = self.legs.get(leg)
-        if config is None:
+        follower = self._followers.get(leg)
+        if follower is None:
             return  # not flying
         t = context.get_time()
         sequence, flown = context.get_discrete_state(self._consumed).get_value()
-        if flown != leg:  # a new leg: a new follower
-            follower = config.follower(self.seed + leg)
+        if flown != leg:  # a new leg: a new follower's state
+            held = follower.initial_state()
         else:
-            follower = self.follower(context)
-            if follower.time is not None and t <= follower.time:
+            held = self.follower(context)
+            if held.time is not None and t <= held.time:
                 return  # the initialization and the first periodic event share t = 0
-            follower = copy.deepcopy(follower)
-        state.get_mutable_abstract_state(self._follower_index).set_value(_Held(follower))
         returns = self.returns_input.Eval(context) if self.returns_input.HasValue(context) else None
         points = np.empty((0, 3))
         if returns is not None and returns.sequence != sequence:  # each batch once
             points, sequence = returns.points_nav, returns.sequence
-        out = follower.update(t, self.state_input.Eval(context), points)
+        held, out = follower.update(held, t, self.state_input.Eval(context), points)
+        state.get_mutable_abstract_state(self._follower_index).set_value(held)
         profile = np.full(PROFILE_SIZE, np.nan)
         profile[5] = 0.0
         if out.estimate is not None:

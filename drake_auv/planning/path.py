@@ -13,6 +13,8 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.planning.polyline import arc_length
+
 _CSV_FIELDS = ("x", "y", "z", "heading", "sensor_x", "sensor_y", "sensor_z", "label")
 
 
@@ -98,7 +100,7 @@ class Path:
 
     def arc_length(self) -> np.ndarray:
         """(N,) cumulative distance along the path from its first sample, m."""
-        return np.concatenate([[0.0], np.cumsum(self.segment_lengths())])
+        return arc_length(self.points)
 
     @property
     def length(self) -> float:
@@ -112,7 +114,7 @@ class Path:
                 for lab in dict.fromkeys(self.labels.tolist())}
 
     def select(self, mask) -> "Path":
-        """The samples where `mask` is true, in order."""
+        """The samples where `mask` (booleans, or indices) selects, in order."""
         mask = np.asarray(mask)
         return Path(self.points[mask], self.heading[mask], self.sensor_dir[mask], self.labels[mask])
 
@@ -160,21 +162,47 @@ class Path:
         """(N,) heading without 2 pi jumps, for interpolation."""
         return np.unwrap(self.heading)
 
-    def to_trajectory(self, speed: float, start_time: float = 0.0,
-                      yaw_rate: float = np.radians(15.0)):
-        """A Drake `PiecewisePolynomial` of [x, y, z, yaw] through the samples (first-order hold).
+    def to_trajectory(self, speed: float, yaw_rate: float = np.radians(15.0),
+                      yaw0: float | None = None):
+        """A Drake `PiecewisePolynomial` of [x, y, z, yaw] through the samples (first-order
+        hold), timed by `times` from t = 0 (`shiftRight` moves it; a single sample is held 1 s).
 
-        Feed it to `TrajectorySource(traj, output_derivative_order=1)` to get the 8-vector
-        reference [x, y, z, yaw, vx, vy, vz, yaw_rate] the tracker takes.
+        The yaw is unwrapped, and with `yaw0` (rad) shifted by whole turns to start nearest it
+        (so a trajectory joined after another does not spin). Feed it to
+        `TrajectorySource(traj, output_derivative_order=1)` to get the 8-vector reference
+        [x, y, z, yaw, vx, vy, vz, yaw_rate] the tracker takes.
         """
         from pydrake.trajectories import PiecewisePolynomial
 
-        t = start_time + self.times(speed, yaw_rate)
-        samples = np.vstack([self.points.T, self.unwrapped_heading()])
+        t = self.times(speed, yaw_rate)
+        yaw = self.unwrapped_heading()
+        if yaw0 is not None:
+            yaw = yaw + 2.0 * np.pi * np.round((yaw0 - yaw[0]) / (2.0 * np.pi))
+        samples = np.vstack([self.points.T, yaw])
         if len(t) == 1:
             t = np.array([t[0], t[0] + 1.0])
             samples = np.hstack([samples, samples])
         return PiecewisePolynomial.FirstOrderHold(t, samples)
+
+    @classmethod
+    def chain_trajectory(cls, paths: list["Path"], speed: float,
+                         yaw_rate: float = np.radians(15.0)):
+        """One `PiecewisePolynomial` of [x, y, z, yaw] through `paths` in order, from t = 0:
+        each path's own trajectory (`to_trajectory`) shifted to where the one before ends,
+        joined by the segment from its last sample to the next one's first (timed like any
+        segment), the yaw continuous across the joins. The same timing as `to_trajectory` of
+        the concatenated path, built from the pieces' trajectories."""
+        pieces = [paths[0]]
+        for a, b in zip(paths, paths[1:]):
+            pieces += [cls.concatenate([a.select([-1]), b.select([0])]), b]
+        pieces = [p for p in pieces if len(p) >= 2] or pieces[:1]
+        trajectory = pieces[0].to_trajectory(speed, yaw_rate)
+        for piece in pieces[1:]:
+            end = trajectory.end_time()
+            part = piece.to_trajectory(speed, yaw_rate, yaw0=float(trajectory.value(end)[3, 0]))
+            part.shiftRight(end)
+            trajectory.ConcatenateInTime(part)
+        return trajectory
 
     def to_csv(self, filename) -> None:
         """Writes one row per sample with the columns x, y, z, heading, sensor_x/y/z, label."""

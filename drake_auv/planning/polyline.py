@@ -1,4 +1,5 @@
-"""Vectorised helpers for polylines (any dimension): densify, length, headings."""
+"""Vectorised helpers for polylines: densify, resample, arc length and length (any dimension),
+projection onto a 3D polyline, headings. The one place arc length and projection are computed."""
 
 from __future__ import annotations
 
@@ -19,11 +20,16 @@ def densify(points: np.ndarray, spacing: float) -> np.ndarray:
     return np.vstack([out, points[-1:]])
 
 
+def arc_length(points: np.ndarray) -> np.ndarray:
+    """(N,) cumulative distance along the polyline (N, d) from its first vertex."""
+    seg = np.linalg.norm(np.diff(np.asarray(points, dtype=float), axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(seg)])
+
+
 def resample(points: np.ndarray, spacing: float) -> np.ndarray:
     """Evenly spaced samples (at most `spacing` apart) along a polyline, ends included."""
     points = np.asarray(points, dtype=float)
-    seg = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    arc = np.concatenate([[0.0], np.cumsum(seg)])
+    arc = arc_length(points)
     total = arc[-1]
     if total <= 0:
         return points[:1].copy()
@@ -62,3 +68,50 @@ def motion_heading(points: np.ndarray, fallback: float = 0.0,
     start = yaw[first[0]] if first.size else fallback
     out = np.where(idx >= 0, yaw[np.maximum(idx, 0)], start)
     return np.append(out, out[-1])
+
+
+class Polyline:
+    """A polyline (M >= 2, 3) prepared for projections: `project(points)` gives the arclength
+    (m) of the nearest point on it to each of `points` (..., 3), and the distance to it (m)."""
+
+    def __init__(self, points: np.ndarray):
+        points = np.asarray(points, dtype=float)
+        self.a, self.ab = points[:-1], np.diff(points, axis=0)
+        self.seg_sq = np.maximum(np.einsum("mk,mk->m", self.ab, self.ab), 1e-12)
+        self.seg_len = np.sqrt(self.seg_sq)
+        self.s0 = np.concatenate([[0.0], np.cumsum(self.seg_len)])[:-1]
+        self.length = float(self.seg_len.sum())
+        self.a_ab = np.einsum("mk,mk->m", self.a, self.ab)
+        self.a_sq = np.einsum("mk,mk->m", self.a, self.a)
+        self._ab_a = np.vstack([self.ab, -2.0 * self.a]).T  # (3, 2m): p.ab and -2 p.a at once
+
+    def project(self, points: np.ndarray):
+        flat = points.reshape(-1, 3)
+        # |p - a - t ab|^2 = |p|^2 - 2 p.a + |a|^2 - 2 t (p - a).ab + t^2 |ab|^2 from one
+        # (n, 3) x (3, 2m) product (the segments' a and ab are fixed); |p|^2 is the same for
+        # every segment, so it is added after the nearest segment is chosen.
+        m = len(self.a)
+        products = flat @ self._ab_a
+        u = products[:, :m] - self.a_ab  # (p - a).ab
+        t = u / self.seg_sq
+        np.minimum(t, 1.0, out=t)
+        np.maximum(t, 0.0, out=t)
+        gap = products[:, m:] + self.a_sq + t * (t * self.seg_sq - 2.0 * u)
+        best = np.argmin(gap, axis=1)
+        rows = np.arange(len(best))
+        s = self.s0[best] + t[rows, best] * self.seg_len[best]
+        gap_sq = gap[rows, best] + np.einsum("nk,nk->n", flat, flat)
+        return (s.reshape(points.shape[:-1]),
+                np.sqrt(np.maximum(gap_sq, 0.0)).reshape(points.shape[:-1]))
+
+
+def polyline_progress(points: np.ndarray, polyline: np.ndarray):
+    """Arclength along `polyline` (M >= 2, 3) of the nearest point to each of `points`
+    (..., 3), and the distance to it, m."""
+    return Polyline(polyline).project(np.asarray(points, dtype=float))
+
+
+def project(points: np.ndarray, polyline: np.ndarray):
+    """Arclength along `polyline` (M >= 2, 3) of the nearest point to each of `points`
+    (..., 3), and the distance to it, m."""
+    return Polyline(polyline).project(np.asarray(points, dtype=float))

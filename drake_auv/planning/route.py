@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_auv.planning.path import Path
-from drake_auv.planning.polyline import densify, motion_heading
+from drake_auv.planning.polyline import arc_length, densify, motion_heading
 from drake_auv.planning.surface import TerrainSurface
 
 DOWN = np.array([0.0, 0.0, -1.0])
@@ -97,7 +97,7 @@ class RouteBuilder:
             xy = self.nogo.detour(a[:2], b[:2])
             if xy is None:
                 return False
-            arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
+            arc = arc_length(xy)
             z = a[2] + (b[2] - a[2]) * arc / max(arc[-1], 1e-12)
             corners = np.column_stack([xy, z])
         line = densify(corners, self.ds)[1:-1]

@@ -35,7 +35,7 @@ from pydrake.trajectories import PiecewisePolynomial
 from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import Path
-from drake_auv.planning.polyline import motion_heading
+from drake_auv.planning.polyline import arc_length, motion_heading
 from drake_auv.replanning.section import (OPTIMIZERS, ReplanningParameters, SectionPlan,
                                           replan_section)
 from drake_auv.vehicle.model import STATE_SIZE
@@ -46,15 +46,12 @@ STEP_FIELDS = ("time", "wall_time", "query_time", "next_index", "planned")
 
 @dataclass(frozen=True)
 class _Plan:
-    """The current section and its timed trajectory (None before the first step of a leg).
-    Immutable: a step stores a new one and the trajectory is never modified, so Drake's copies
-    of the state may share it."""
+    """The current section and its timed trajectory (None before the first step of a leg): a
+    step stores a new one. Drake's copies of it at each step (once a second) are plain deep
+    copies of a few dozen points and segments."""
 
     plan: SectionPlan | None = None
     trajectory: PiecewisePolynomial | None = None
-
-    def __deepcopy__(self, memo):
-        return self
 
 
 def _placeholder_path() -> Path:
@@ -146,8 +143,7 @@ class Replanner(LeafSystem):
         x = self.state_input.Eval(context)
         if current.plan is not None:
             samples = current.trajectory.vector_values(current.trajectory.get_segment_times())
-            arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(samples[:3].T, axis=0),
-                                                                  axis=1))])
+            arc = arc_length(samples[:3].T)
             at = np.interp(t, current.trajectory.get_segment_times(), arc)
             next_index = current.plan.next_index(at)
         nominal = self.nominal_input.Eval(context)
@@ -184,7 +180,9 @@ class Replanner(LeafSystem):
         heading = x[5] + np.angle(np.exp(1j * (heading - x[5])))  # nearest turn first
         path = Path(pts, heading, np.column_stack([np.cos(heading), np.sin(heading),
                                                    np.zeros(len(pts))]))
-        return path.to_trajectory(self.speed, start_time=t, yaw_rate=self.yaw_rate)
+        trajectory = path.to_trajectory(self.speed, yaw_rate=self.yaw_rate)
+        trajectory.shiftRight(t)
+        return trajectory
 
     def _calc_reference(self, context, output):
         output.SetFromVector(trajectory_reference(

@@ -1,4 +1,7 @@
-"""The pieces of the realtime replanning loop (reference, Section 5.5.3), pure numpy/scipy.
+"""The realtime replanning loop's sections (reference, Section 5.5.3), pure numpy/scipy: the
+section bookkeeping and one step's orchestration; the map's distance fields are in
+`replanning.fields`, the cost in `replanning.cost`, projection and arc length in
+`planning.polyline`.
 
 At each replanning step, with the vehicle at x (navigation frame):
 1. `collect_section`: nominal waypoints w_i, in order from the next unvisited one, while
@@ -30,10 +33,10 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 import numpy as np
-from scipy import ndimage
-from scipy.spatial import cKDTree
 
-from drake_auv.planning.polyline import length, resample
+from drake_auv.planning.polyline import Polyline, arc_length, length, project, resample
+from drake_auv.replanning.cost import ReplanningCost
+from drake_auv.replanning.fields import DEPTH_MARGIN, SliceMap
 from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 
 OPTIMIZERS = ("stomp", "none")
@@ -146,10 +149,10 @@ def passed_index(position, waypoints, next_index: int, window: int,
     local = waypoints[first:min(next_index + window + 1, len(waypoints))]
     if len(local) < 2:
         return next_index
-    s_x, _ = polyline_progress(x[None], local)
+    s_x, _ = project(x[None], local)
     if s_x[0] <= 0.0:  # level with or before the polyline's start: passed only when near
         return next_index + int(np.linalg.norm(x - waypoints[next_index]) <= capture_radius)
-    s_w = _arclength(local)[next_index - first:]
+    s_w = arc_length(local)[next_index - first:]
     return next_index + int(np.count_nonzero(s_w <= s_x[0] + capture_radius))
 
 
@@ -161,313 +164,6 @@ def resample_polyline(points, spacing: float) -> np.ndarray:
     if total <= 1e-9:
         return np.repeat(points[:1], 3, axis=0)
     return resample(points, min(spacing, total / 2.0))
-
-
-DEPTH_MARGIN = 1.0  # m, how far rollouts may stray from the section's depths (see SliceMap)
-
-
-def _kdtree(points: np.ndarray) -> cKDTree:
-    """KD-tree of voxel centres, built for this use: rebuilt at every step and queried from
-    metres away, where the voxels of a surface are nearly equidistant and a default tree
-    visits many small leaves. Large, unbalanced (sliding-midpoint) leaves answer the same
-    nearest neighbours 2-4x faster here and build faster."""
-    return cKDTree(points, leafsize=64, balanced_tree=False, compact_nodes=False)
-
-
-class _DistanceField2D:
-    """Euclidean distance transform (`scipy.ndimage.distance_transform_edt`) of voxel
-    columns (m, 2) on the voxel grid over the box [lo, hi] (m), cell centres on the voxel
-    centres; distances from the box's voxels to the nearest column, m."""
-
-    def __init__(self, points: np.ndarray, lo: np.ndarray, hi: np.ndarray, resolution: float):
-        self.origin = (np.floor(lo / resolution) + 0.5) * resolution  # the first cell's centre
-        self.cell = resolution
-        shape = np.floor((hi - self.origin) / resolution).astype(int) + 2
-        cells = np.round((points - self.origin) / resolution).astype(int)
-        cells = cells[np.all((cells >= 0) & (cells < shape), axis=1)]
-        free = np.ones(shape, bool)
-        free[cells[:, 0], cells[:, 1]] = False
-        self.field = (ndimage.distance_transform_edt(free, sampling=resolution) if len(cells)
-                      else np.full(shape, np.inf))
-        self._last = (np.array(shape) - 1)[:, None]  # the largest cell index per axis
-
-    def _coords(self, points: np.ndarray) -> np.ndarray:
-        return ((points[:, :2] - self.origin) / self.cell).T
-
-    def interpolate(self, points: np.ndarray) -> np.ndarray:
-        """(n,) bilinear interpolation at `points` (n, >= 2); the box's edge beyond it."""
-        return ndimage.map_coordinates(self.field, self._coords(points), order=1,
-                                       mode="nearest")
-
-    def lower_bound(self, points: np.ndarray) -> np.ndarray:
-        """(n,) at most the distance from `points` (inside the box) to the nearest column:
-        the nearest cell's value less half a cell diagonal."""
-        idx = np.rint(self._coords(points)).astype(int)
-        np.maximum(idx, 0, out=idx)
-        np.minimum(idx, self._last, out=idx)
-        return self.field[idx[0], idx[1]] - self.cell * np.sqrt(0.5)
-
-
-@lru_cache(maxsize=8)
-def _ball_offsets(radius: float) -> np.ndarray:
-    """(m, 3) integer grid offsets within `radius` + sqrt(3) cells of the origin: every
-    corner of the cells of points within `radius` cells."""
-    reach = radius + np.sqrt(3.0)
-    r = int(np.ceil(reach))
-    grid = np.arange(-r, r + 1)
-    offsets = np.stack(np.meshgrid(grid, grid, grid, indexing="ij"), axis=-1).reshape(-1, 3)
-    return offsets[np.einsum("ij,ij->i", offsets, offsets) <= reach * reach]
-
-
-class _TubeField3D:
-    """The exact 3D distance to a KD-tree's points at the grid nodes (spacing `cell`, m)
-    around a trajectory (N, 3), read by trilinear interpolation: NaN where a point's cell has
-    a corner that was not computed (more than `pad` m from every trajectory point).
-
-    STOMP's rollouts stay near the trajectory it starts from, and exact nearest-voxel queries
-    from 6-10 m away cost ~3 us a point (1 ms for 11 rollouts of 30 points, 40 times a step
-    on the boulder); computing the nodes once and interpolating costs one query per node.
-    The distance field is smooth away from the surface, so at 0.5 m nodes the interpolation
-    error is millimetres at the offset."""
-
-    def __init__(self, tree: cKDTree, trajectory: np.ndarray, pad: float, cell: float):
-        self.cell = cell
-        self.origin = np.floor((trajectory.min(axis=0) - pad) / cell) * cell - cell
-        self.shape = tuple(np.floor((trajectory.max(axis=0) + pad - self.origin) / cell)
-                           .astype(int) + 3)
-        centres = np.rint((trajectory - self.origin) / cell).astype(int)
-        nodes = (centres[:, None, :] + _ball_offsets(pad / cell)[None]).reshape(-1, 3)
-        nodes = nodes[np.all((nodes >= 0) & (nodes < self.shape), axis=1)]
-        flat = np.unique(np.ravel_multi_index(nodes.T, self.shape))
-        self.field = np.full(self.shape, np.nan)
-        node_points = np.column_stack(np.unravel_index(flat, self.shape)) * cell + self.origin
-        self.field.flat[flat] = tree.query(node_points)[0]
-
-    def interpolate(self, points: np.ndarray) -> np.ndarray:
-        """(n,) trilinear interpolation at `points` (n, 3); NaN outside the computed nodes."""
-        return ndimage.map_coordinates(self.field, ((points - self.origin) / self.cell).T,
-                                       order=1, mode="constant", cval=np.nan)
-
-
-class SliceMap:
-    """The on-line map near a section, as the fields the replanning cost reads.
-
-    Built once per replanning step from the occupied voxels in the section's box whose
-    log-odds reach `min_log_odds` (all of them when no log-odds are given):
-    - offset, metric "horizontal": a 2D Euclidean distance transform (`scipy.ndimage`) of the
-      voxels within `depth_band` of the section's depths, on the voxel grid over the box,
-      read by bilinear interpolation; metric "3d": the exact 3D distance to any voxel (a
-      KD-tree: a 3D transform of the box costs 10-30 ms here). inf where none is mapped;
-    - clearance: the exact 3D distance to the voxels within `clearance + margin` of the
-      section's depths, the only ones that can be nearer than `clearance` to a point of the
-      section (rollouts stay within `margin` of its depths: the depth cost holds them); a 2D
-      distance transform of that slab rules most points out, a 3D KD-tree measures the rest;
-    - `band_points` / `nearest_band`: the band's voxels, for the yaw that faces them.
-    """
-
-    def __init__(self, occupied: np.ndarray, z_range: tuple[float, float], depth_band: float,
-                 clearance: float, margin: float = DEPTH_MARGIN, metric: str = "horizontal",
-                 log_odds: np.ndarray | None = None, min_log_odds: float = 0.0,
-                 box: tuple | None = None, resolution: float = 0.5):
-        occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)
-        if log_odds is not None:
-            occupied = occupied[np.asarray(log_odds, dtype=float) >= min_log_odds]
-        z = occupied[:, 2]
-        if metric == "3d":
-            self.dims = 3
-            self.band_points = occupied
-        else:
-            self.dims = 2
-            in_band = (z >= z_range[0] - depth_band) & (z <= z_range[1] + depth_band)
-            self.band_points = occupied[in_band, :2]
-        self.band_tree = _kdtree(self.band_points) if len(self.band_points) else None
-        if box is None:  # the occupied voxels' box, widened by the reach of the offset
-            box = (occupied.min(axis=0) - 15.0, occupied.max(axis=0) + 15.0) if len(
-                occupied) else (np.zeros(3), np.zeros(3))
-        lo, hi = np.asarray(box[0], dtype=float)[:2], np.asarray(box[1], dtype=float)[:2]
-        self._field = (_DistanceField2D(self.band_points, lo, hi, resolution)
-                       if self.dims == 2 and len(self.band_points) else None)
-        reach = clearance + margin
-        slab = occupied[(z >= z_range[0] - reach) & (z <= z_range[1] + reach)]
-        # Horizontal distance to the slab: a lower bound of the 3D one that rules most points
-        # out before the exact 3D query.
-        self._slab_field = _DistanceField2D(slab[:, :2], lo, hi, resolution) if len(
-            slab) else None
-        self.slab_tree_3d = _kdtree(slab) if len(slab) else None
-        self._tube = None
-        self.resolution = resolution
-
-    def prepare_tube(self, trajectory: np.ndarray, pad: float) -> None:
-        """Metric "3d": precomputes the offset on the grid nodes within `pad` m of
-        `trajectory` (N, 3) (`_TubeField3D`); `offset` interpolates there and queries the
-        KD-tree exactly elsewhere. No effect for the horizontal metric (already a field)."""
-        if self.dims == 3 and self.band_tree is not None:
-            self._tube = _TubeField3D(self.band_tree, np.asarray(trajectory, dtype=float),
-                                      pad, self.resolution)
-
-    def clearance(self, points: np.ndarray, upper_bound: float) -> np.ndarray:
-        """3D distance to the nearest counted voxel centre, inf beyond `upper_bound`, m."""
-        flat = points.reshape(-1, 3)
-        d = np.full(len(flat), np.inf)
-        if self._slab_field is None:
-            return d.reshape(points.shape[:-1])
-        near = self._slab_field.lower_bound(flat) < upper_bound
-        if near.any():
-            d[near], _ = self.slab_tree_3d.query(flat[near], distance_upper_bound=upper_bound)
-        return d.reshape(points.shape[:-1])
-
-    def offset(self, points: np.ndarray) -> np.ndarray:
-        """Distance from `points` (..., 3) to the band's voxels (horizontal or 3D), m; inf
-        where the band holds none."""
-        shape = points.shape[:-1]
-        if self.band_tree is None:
-            return np.full(shape, np.inf)
-        if self._field is None:
-            flat = points.reshape(-1, 3)
-            if self._tube is None:
-                return self.band_tree.query(flat)[0].reshape(shape)
-            d = self._tube.interpolate(flat)
-            outside = np.isnan(d)
-            if outside.any():
-                d[outside] = self.band_tree.query(flat[outside])[0]
-            return d.reshape(shape)
-        return self._field.interpolate(points.reshape(-1, 3)).reshape(shape)
-
-    def nearest_band(self, points: np.ndarray, upper_bound: float):
-        """Distance to, and index in `band_points` of, the nearest band voxel, m (inf, and
-        len(band_points), beyond `upper_bound`)."""
-        if self.band_tree is None:
-            n = len(points)
-            return np.full(n, np.inf), np.zeros(n, dtype=int)
-        return self.band_tree.query(points[:, :self.dims], distance_upper_bound=upper_bound)
-
-
-class Polyline:
-    """A polyline (M >= 2, 3) prepared for projections: `project(points)` gives the arclength
-    (m) of the nearest point on it to each of `points` (..., 3), and the distance to it (m)."""
-
-    def __init__(self, points: np.ndarray):
-        points = np.asarray(points, dtype=float)
-        self.a, self.ab = points[:-1], np.diff(points, axis=0)
-        self.seg_sq = np.maximum(np.einsum("mk,mk->m", self.ab, self.ab), 1e-12)
-        self.seg_len = np.sqrt(self.seg_sq)
-        self.s0 = np.concatenate([[0.0], np.cumsum(self.seg_len)])[:-1]
-        self.length = float(self.seg_len.sum())
-        self.a_ab = np.einsum("mk,mk->m", self.a, self.ab)
-        self.a_sq = np.einsum("mk,mk->m", self.a, self.a)
-        self._ab_a = np.vstack([self.ab, -2.0 * self.a]).T  # (3, 2m): p.ab and -2 p.a at once
-
-    def project(self, points: np.ndarray):
-        flat = points.reshape(-1, 3)
-        # |p - a - t ab|^2 = |p|^2 - 2 p.a + |a|^2 - 2 t (p - a).ab + t^2 |ab|^2 from one
-        # (n, 3) x (3, 2m) product (the segments' a and ab are fixed); |p|^2 is the same for
-        # every segment, so it is added after the nearest segment is chosen.
-        m = len(self.a)
-        products = flat @ self._ab_a
-        u = products[:, :m] - self.a_ab  # (p - a).ab
-        t = u / self.seg_sq
-        np.minimum(t, 1.0, out=t)
-        np.maximum(t, 0.0, out=t)
-        gap = products[:, m:] + self.a_sq + t * (t * self.seg_sq - 2.0 * u)
-        best = np.argmin(gap, axis=1)
-        rows = np.arange(len(best))
-        s = self.s0[best] + t[rows, best] * self.seg_len[best]
-        gap_sq = gap[rows, best] + np.einsum("nk,nk->n", flat, flat)
-        return (s.reshape(points.shape[:-1]),
-                np.sqrt(np.maximum(gap_sq, 0.0)).reshape(points.shape[:-1]))
-
-
-def polyline_progress(points: np.ndarray, polyline: np.ndarray):
-    """Arclength along `polyline` (M >= 2, 3) of the nearest point to each of `points`
-    (..., 3), and the distance to it, m."""
-    return Polyline(polyline).project(np.asarray(points, dtype=float))
-
-
-def _huber(x: np.ndarray, delta: float) -> np.ndarray:
-    """x^2 within delta, 2 delta |x| - delta^2 beyond (same value and slope at delta)."""
-    a = np.abs(x)
-    return np.where(a <= delta, a * a, 2.0 * delta * a - delta * delta)
-
-
-class ReplanningCost:
-    """Per-timestep state cost of STOMP rollouts (K, N, 3) -> (K, N), the sum of `terms`.
-
-    Per point i (weights in `ReplanningParameters`; docs/replanning.md says why each):
-    - offset (points that keep it): huber(d_i - Omega), d the `SliceMap.offset` field;
-      0 where nothing is mapped;
-    - obstacle: max(0, clearance - c_i)^2, c the 3D distance to the counted voxels;
-    - depth: (z_i - z_ref_i)^2 (horizontal metric; 3D metric: points without offset only);
-    - route (points without offset: lanes, transits): squared distance to the route;
-    - progress: max(0, s_ref_i - s_i)^2, s_i the arclength of point i projected on the
-      route (the vehicle, the section's waypoints and the next ones) and s_ref_i an even
-      advance from the vehicle (0) to `goal` (the section's last waypoint), so lagging
-      (hovering) costs;
-    - spacing: (|p_i - p_(i-1)| - spacing)^2 (0 at the first point): evenly spaced points, so
-      the trajectory neither bunches (hovers) nor folds back on itself;
-    - terminal (last point only, times `terminal_weight`): its offset and progress terms
-      again, the goal set of the free end.
-
-    `initial` (N, 3) is the initial trajectory (its depths are z_ref); `route` (M >= 2, 3)
-    the nominal path from the vehicle's position; `goal` the arclength along it (m) that the
-    trajectory's end should reach.
-    """
-
-    def __init__(self, slice_map: SliceMap, route: np.ndarray, initial: np.ndarray,
-                 params: ReplanningParameters, keep_offset: np.ndarray | None = None,
-                 goal: float | None = None):
-        self.slice_map = slice_map
-        self.route = route if isinstance(route, Polyline) else Polyline(route)
-        initial = np.asarray(initial, dtype=float)
-        self.z_ref = initial[:, 2]
-        self.params = params
-        n = len(self.z_ref)
-        self.keep = (np.ones(n, bool) if keep_offset is None
-                     else np.asarray(keep_offset, dtype=bool))
-        self._keep_all = bool(self.keep.all())
-        self.s_ref = np.linspace(0.0, self.route.length if goal is None else goal, n)
-        depth = np.full(n, params.depth_weight)
-        if params.offset_metric == "3d":
-            depth[self.keep] = 0.0  # the offset along the normal sets the depth there
-        self.depth_weight = depth
-
-    def terms(self, trajectories: np.ndarray) -> dict:
-        """The unweighted per-point terms (K, N) of `trajectories` (K, N, 3)."""
-        p = self.params
-        shape = trajectories.shape[:-1]
-        if self._keep_all:  # contours: every point keeps the offset, none follows the route
-            d = self.slice_map.offset(trajectories)
-            offset = np.where(np.isfinite(d), _huber(d - p.omega, p.huber), 0.0)
-        else:
-            offset = np.zeros(shape)
-            if self.keep.any():
-                d = self.slice_map.offset(trajectories[..., self.keep, :])
-                offset[..., self.keep] = np.where(np.isfinite(d), _huber(d - p.omega, p.huber),
-                                                  0.0)
-        c = self.slice_map.clearance(trajectories, p.clearance)
-        s, gap = self.route.project(trajectories)
-        route = np.zeros(shape) if self._keep_all else np.where(self.keep, 0.0, gap * gap)
-        lag = self.s_ref - s
-        np.maximum(lag, 0.0, out=lag)
-        obstacle = p.clearance - c
-        np.maximum(obstacle, 0.0, out=obstacle)
-        step = trajectories[..., 1:, :] - trajectories[..., :-1, :]
-        spacing = np.empty(shape)
-        spacing[..., 0] = 0.0
-        spacing[..., 1:] = (np.sqrt(np.einsum("...k,...k->...", step, step)) - p.spacing) ** 2
-        depth = trajectories[..., 2] - self.z_ref
-        return dict(offset=offset, obstacle=obstacle * obstacle, depth=depth * depth,
-                    route=route, progress=lag * lag, spacing=spacing)
-
-    def __call__(self, trajectories: np.ndarray) -> np.ndarray:
-        p, t = self.params, self.terms(trajectories)
-        cost = (p.offset_weight * t["offset"] + p.obstacle_weight * t["obstacle"]
-                + self.depth_weight * t["depth"] + p.progress_weight * t["progress"]
-                + p.spacing_weight * t["spacing"])
-        if not self._keep_all:
-            cost += p.route_weight * t["route"]
-        cost[..., -1] += p.terminal_weight * (p.offset_weight * t["offset"][..., -1]
-                                              + p.progress_weight * t["progress"][..., -1])
-        return cost
 
 
 def initial_trajectory(position, section_points, spacing: float) -> np.ndarray:
@@ -489,7 +185,7 @@ def warm_start(position, previous: np.ndarray, route: Polyline, section_points: 
     beyond that part's end; resampled every `spacing` m."""
     x = _check_position(position)
     s_x, _ = Polyline(previous).project(x[None])
-    ahead = previous[_arclength(previous) > s_x[0] + 0.5 * spacing]
+    ahead = previous[arc_length(previous) > s_x[0] + 0.5 * spacing]
     # Up to the section's end, and up to where it would turn back along the route: the
     # trajectory neither outgrows the section nor carries a fold into the next step.
     progress = route.project(ahead)[0] if len(ahead) else np.zeros(0)
@@ -499,10 +195,6 @@ def warm_start(position, previous: np.ndarray, route: Polyline, section_points: 
     s_end = route.project(ahead[-1:])[0][0] if len(ahead) else 0.0
     extra = section_points[waypoint_s > s_end + spacing]
     return resample_polyline(np.vstack([x, ahead, extra]), spacing)
-
-
-def _arclength(points: np.ndarray) -> np.ndarray:
-    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
 
 
 @lru_cache(maxsize=64)
@@ -630,7 +322,7 @@ def replan_section(position, waypoints, next_index: int, occupied,
     # A waypoint is passed where the trajectory's progress along the route reaches it (the
     # trajectory need not come near it: the prior map may have put it inside the structure).
     progress = np.maximum.accumulate(route.project(trajectory)[0])
-    s_opt = _arclength(trajectory)
+    s_opt = arc_length(trajectory)
     at = np.interp(waypoint_s, progress, s_opt, right=np.inf)
     d_h, nearest = slice_map.nearest_band(trajectory, 2.0 * params.omega)
     facing = np.full(len(d_h), np.nan)

@@ -1,0 +1,100 @@
+"""The replanning cost STOMP minimises (reference, Section 5.5.3; weights and why each term:
+docs/replanning.md, "Cost"), pure numpy."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from drake_auv.planning.polyline import Polyline
+from drake_auv.replanning.fields import SliceMap
+
+if TYPE_CHECKING:
+    from drake_auv.replanning.section import ReplanningParameters
+
+def _huber(x: np.ndarray, delta: float) -> np.ndarray:
+    """x^2 within delta, 2 delta |x| - delta^2 beyond (same value and slope at delta)."""
+    a = np.abs(x)
+    return np.where(a <= delta, a * a, 2.0 * delta * a - delta * delta)
+
+
+class ReplanningCost:
+    """Per-timestep state cost of STOMP rollouts (K, N, 3) -> (K, N), the sum of `terms`.
+
+    Per point i (weights in `ReplanningParameters`; docs/replanning.md says why each):
+    - offset (points that keep it): huber(d_i - Omega), d the `SliceMap.offset` field;
+      0 where nothing is mapped;
+    - obstacle: max(0, clearance - c_i)^2, c the 3D distance to the counted voxels;
+    - depth: (z_i - z_ref_i)^2 (horizontal metric; 3D metric: points without offset only);
+    - route (points without offset: lanes, transits): squared distance to the route;
+    - progress: max(0, s_ref_i - s_i)^2, s_i the arclength of point i projected on the
+      route (the vehicle, the section's waypoints and the next ones) and s_ref_i an even
+      advance from the vehicle (0) to `goal` (the section's last waypoint), so lagging
+      (hovering) costs;
+    - spacing: (|p_i - p_(i-1)| - spacing)^2 (0 at the first point): evenly spaced points, so
+      the trajectory neither bunches (hovers) nor folds back on itself;
+    - terminal (last point only, times `terminal_weight`): its offset and progress terms
+      again, the goal set of the free end.
+
+    `initial` (N, 3) is the initial trajectory (its depths are z_ref); `route` (M >= 2, 3)
+    the nominal path from the vehicle's position; `goal` the arclength along it (m) that the
+    trajectory's end should reach.
+    """
+
+    def __init__(self, slice_map: SliceMap, route: np.ndarray, initial: np.ndarray,
+                 params: ReplanningParameters, keep_offset: np.ndarray | None = None,
+                 goal: float | None = None):
+        self.slice_map = slice_map
+        self.route = route if isinstance(route, Polyline) else Polyline(route)
+        initial = np.asarray(initial, dtype=float)
+        self.z_ref = initial[:, 2]
+        self.params = params
+        n = len(self.z_ref)
+        self.keep = (np.ones(n, bool) if keep_offset is None
+                     else np.asarray(keep_offset, dtype=bool))
+        self._keep_all = bool(self.keep.all())
+        self.s_ref = np.linspace(0.0, self.route.length if goal is None else goal, n)
+        depth = np.full(n, params.depth_weight)
+        if params.offset_metric == "3d":
+            depth[self.keep] = 0.0  # the offset along the normal sets the depth there
+        self.depth_weight = depth
+
+    def terms(self, trajectories: np.ndarray) -> dict:
+        """The unweighted per-point terms (K, N) of `trajectories` (K, N, 3)."""
+        p = self.params
+        shape = trajectories.shape[:-1]
+        if self._keep_all:  # contours: every point keeps the offset, none follows the route
+            d = self.slice_map.offset(trajectories)
+            offset = np.where(np.isfinite(d), _huber(d - p.omega, p.huber), 0.0)
+        else:
+            offset = np.zeros(shape)
+            if self.keep.any():
+                d = self.slice_map.offset(trajectories[..., self.keep, :])
+                offset[..., self.keep] = np.where(np.isfinite(d), _huber(d - p.omega, p.huber),
+                                                  0.0)
+        c = self.slice_map.clearance(trajectories, p.clearance)
+        s, gap = self.route.project(trajectories)
+        route = np.zeros(shape) if self._keep_all else np.where(self.keep, 0.0, gap * gap)
+        lag = self.s_ref - s
+        np.maximum(lag, 0.0, out=lag)
+        obstacle = p.clearance - c
+        np.maximum(obstacle, 0.0, out=obstacle)
+        step = trajectories[..., 1:, :] - trajectories[..., :-1, :]
+        spacing = np.empty(shape)
+        spacing[..., 0] = 0.0
+        spacing[..., 1:] = (np.sqrt(np.einsum("...k,...k->...", step, step)) - p.spacing) ** 2
+        depth = trajectories[..., 2] - self.z_ref
+        return dict(offset=offset, obstacle=obstacle * obstacle, depth=depth * depth,
+                    route=route, progress=lag * lag, spacing=spacing)
+
+    def __call__(self, trajectories: np.ndarray) -> np.ndarray:
+        p, t = self.params, self.terms(trajectories)
+        cost = (p.offset_weight * t["offset"] + p.obstacle_weight * t["obstacle"]
+                + self.depth_weight * t["depth"] + p.progress_weight * t["progress"]
+                + p.spacing_weight * t["spacing"])
+        if not self._keep_all:
+            cost += p.route_weight * t["route"]
+        cost[..., -1] += p.terminal_weight * (p.offset_weight * t["offset"][..., -1]
+                                              + p.progress_weight * t["progress"][..., -1])
+        return cost
