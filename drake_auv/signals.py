@@ -22,6 +22,8 @@ import re
 
 import numpy as np
 
+from drake_auv.vehicle.model import THRUSTER_NAMES
+
 
 class NamedVector:
     """A view naming the entries of the last axis of the array it wraps; subclasses set
@@ -150,12 +152,18 @@ Wrench = _signal(
     "Wrench", ("X", "Y", "Z", "N"),
     "The tracker's body-frame wrench (4): forces along x, y, z (N) and the moment about z (N m).")
 
+Thrust = _signal(
+    "Thrust", THRUSTER_NAMES,
+    "The five thrusts (N), in the order of `vehicle.model.THRUSTER_NAMES`.")
+
 _STATE_PORTS = ("state", "estimated_state", "true_state", "estimated_in")
-# (system class, port name) or port name -> view; the class entry wins
+# (system class, port name) or port name -> view; the class entry wins. Not named: arrays of
+# one kind of value (a coverage recorder's `face_angles`, one per target face).
 PORT_SIGNALS = {
     **{name: VehicleState for name in _STATE_PORTS},
     "reference": Reference, "response_reference": Reference, "leg": LegSignal,
     "response": Response, "profile": Profile, "step": ReplanningStep, "wrench": Wrench,
+    "thrust": Thrust, "thrust_command": Thrust,
     "path_status": PathStatus, "replanner_status": ReplannerStatus,
     "autopilot_status": PilotStatus,
     ("PathReference", "status"): PathStatus, ("Replanner", "status"): ReplannerStatus,
@@ -187,9 +195,15 @@ def signal_views(diagram) -> dict:
             for port in _ports(system, kind):
                 view = port_signal(port)
                 if view is not None:
-                    views[(system.get_name(), kind, port.get_index())] = view
+                    views[(system.get_name(), kind, int(port.get_index()))] = view
     links = [((sink.get_name(), "u", int(i)), (source.get_name(), "y", int(o)))
              for (sink, i), (source, o) in diagram.connection_map().items()]
+    for system in diagram.GetSystems():  # a PortSwitch passes one of its inputs through
+        if type(system).__name__ == "PortSwitch":
+            out = (system.get_name(), "y", 0)
+            links += [((system.get_name(), "u", k), out)
+                      for k in range(system.num_input_ports())
+                      if system.get_input_port(k).size() > 0]
     changed = True
     while changed:
         changed = False
