@@ -228,7 +228,7 @@ def annotate_graphviz(diagram, dot: str) -> str:
         end = dot.find("</TABLE>", head)
         block = dot[head:end]
         for kind, index, fields in ports:
-            block = re.sub(rf'(<TD PORT="{kind}{index}" BORDER="1" >)([^<]*)(</TD>)',
+            block = re.sub(rf'(<TD PORT="{kind}{index}" [^>]*>)([^<]*)(</TD>)',
                            lambda m: f"{m[1]}{m[2]} [{fields}]{m[3]}", block, count=1)
         dot = dot[:head] + block + dot[end:]
     return dot
