@@ -33,7 +33,8 @@ class NamedVector:
     _fields: tuple[str, ...] = ()
 
     def __init__(self, obj):
-        self._obj = obj
+        """`obj`: the array to name (aliased); anything else (a list) is read as a new one."""
+        self._obj = obj if isinstance(obj, np.ndarray) else np.asarray(obj, dtype=float)
 
     @classmethod
     def get_fields(cls) -> tuple[str, ...]:
