@@ -95,7 +95,7 @@ VehicleState = _signal(
     "VehicleState", ("x", "y", "z", "roll", "pitch", "yaw", "u", "v", "w", "p", "q", "r"),
     "Vehicle state (12): world position (m) and roll, pitch, yaw (rad); body-frame linear (m/s) "
     "and angular (rad/s) velocities.",
-    position=("x", "z"), attitude=("roll", "yaw"), linear_velocity=("u", "w"),
+    position=("x", "z"), xy=("x", "y"), attitude=("roll", "yaw"), linear_velocity=("u", "w"),
     angular_velocity=("p", "r"))
 Reference = _signal(
     "Reference", ("x", "y", "z", "yaw", "vx", "vy", "vz", "yaw_rate"),
