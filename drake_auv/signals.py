@@ -128,10 +128,6 @@ Profile = _signal(
     "`ProfileFollowingController.profile` (7), in the scan plane's 2D axes: distances (m, NaN "
     "while no profile is seen), the normal, the orientation (rad), valid (0/1), mode "
     "(`following.controller.MODES`).", normal=("normal_a", "normal_b"))
-FollowReference = _signal(
-    "FollowReference", Reference.get_fields(),
-    "The controller's stored reference (8), extrapolated with its velocity between updates.",
-    position=("x", "z"), velocity=("vx", "vz"))
 Consumed = _signal(
     "Consumed", ("sequence", "leg"),
     "The controller's `consumed` group (2): the last returns' sequence, the leg they fed.")
@@ -152,7 +148,6 @@ LegProgress = _signal(
 Wrench = _signal(
     "Wrench", ("X", "Y", "Z", "N"),
     "The tracker's body-frame wrench (4): forces along x, y, z (N) and the moment about z (N m).")
-
 Thrust = _signal(
     "Thrust", THRUSTER_NAMES,
     "The five thrusts (N), in the order of `vehicle.model.THRUSTER_NAMES`.")

@@ -6,7 +6,7 @@ follower's local map and stores the tracker reference it computes. A new leg sta
 follower (empty local map, its own mode and depth or plane). The follower (local map, RANSAC
 generator, yaw and turn state) is abstract state, boxed so that Drake's copies of the state
 cost nothing while it does not fly; a flying update copies it once (a few thousand points at
-most). Discrete-state groups (views in `drake_auv.signals`): `reference` (`FollowReference`)
+most). Discrete-state groups (views in `drake_auv.signals`): `reference` (`Reference`)
 with the time it was computed (`reference_time`), the last returns' sequence and leg
 (`Consumed`), and `profile` (`Profile`). Between updates the reference position is
 extrapolated with its velocity, so the tracker's position error does not build up along the
@@ -29,7 +29,7 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.following.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
-from drake_auv.signals import Consumed, FollowReference, Profile, Reference, VehicleState
+from drake_auv.signals import Consumed, Profile, Reference, VehicleState
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.path_reference import trajectory_reference
 
@@ -112,7 +112,7 @@ class ProfileFollowingController(LeafSystem):
         first = min(self.legs)
         self._follower_index = self.DeclareAbstractState(
             AbstractValue.Make(_Held(self.legs[first].follower(self.seed + first))))
-        self._reference = self.DeclareDiscreteState(FollowReference.size())
+        self._reference = self.DeclareDiscreteState(Reference.size())
         self._reference_time = self.DeclareDiscreteState(1)
         self._consumed = self.DeclareDiscreteState(np.full(Consumed.size(), -1.0))
         self._profile = self.DeclareDiscreteState(_no_profile())
@@ -172,7 +172,7 @@ class ProfileFollowingController(LeafSystem):
         if consumed.leg != leg:  # before the leg's first update
             output.SetFromVector(trajectory_reference(None, 0.0, self.state_input, context))
             return
-        reference = FollowReference(context.get_discrete_state(self._reference).get_value().copy())
+        reference = Reference(context.get_discrete_state(self._reference).get_value().copy())
         since = context.get_time() - context.get_discrete_state(self._reference_time)[0]
         reference.position += reference.velocity * since
         output.SetFromVector(reference[:])
