@@ -80,7 +80,7 @@ def ablation_run(task: tuple) -> dict:
     d = summary["distance_to_target"]
     near = result.distance[_scored_samples(result)]
     steps = 1e3 * ReplanningStep(result.replanning).wall_time
-    track = dict(times=result.times, xy=VehicleState(result.state).position[:, :2], distance=result.distance,
+    track = dict(times=result.times, xy=VehicleState(result.state).xy, distance=result.distance,
                  nominal=result.plan.nominal.points[:, :2], target=_outline(result))
     return dict(seed=seed, optimizer=optimizer, track=track, mean_m=d["mean_m"], sd_m=d["sd_m"],
                 min_m=d["min_m"], abs_error_m=float(np.abs(near - result.plan.omega).mean()),

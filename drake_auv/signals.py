@@ -77,7 +77,8 @@ def _field(k: int, name: str) -> property:
     def put(self, value):
         self._obj[..., k] = value
 
-    return property(lambda self: self._obj[..., k], put, doc=f"field {name}")
+    # a vector's field reads as a scalar (as pydrake's namedview), a table's as its column
+    return property(lambda self: self._obj[..., k][()], put, doc=f"field {name}")
 
 
 def _signal(name: str, fields: tuple[str, ...], doc: str, **spans: tuple[str, str]):

@@ -71,6 +71,9 @@ def test_views_alias_vectors_and_name_the_columns_of_tables():
     x = np.arange(12.0)
     state = VehicleState(x)
     assert (state.yaw, state.r) == (5.0, 11.0)
+    yaw = state.yaw
+    x[5] = 2.0
+    assert yaw == 5.0 and state.yaw == 2.0  # a field reads a scalar, the view follows x
     state.position = [7.0, 8.0, 9.0]
     state.yaw = -1.0
     assert x[:6].tolist() == [7.0, 8.0, 9.0, 3.0, 4.0, -1.0]

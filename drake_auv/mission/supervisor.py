@@ -136,11 +136,13 @@ class MissionSupervisor(LeafSystem):
         jumped = bool(np.linalg.norm(position - watch.position) > self.rules.jump_m)
         watch.position = position
         if self.reference_input.HasValue(context):
-            error = np.linalg.norm(position - Reference(self.reference_input.Eval(context)).position)
+            reference = Reference(self.reference_input.Eval(context))
+            error = np.linalg.norm(position - reference.position)
             since = watch.tracking_since_s
             watch.tracking_since_s = (since if since >= 0 else t) \
                 if error > self.rules.tracking_error_m else -1.0
-        tracking = watch.tracking_since_s >= 0 and t - watch.tracking_since_s >= self.rules.tracking_s
+        since = watch.tracking_since_s
+        tracking = since >= 0 and t - since >= self.rules.tracking_s
         return watch[:], jumped, tracking
 
     def _respond(self, context, t: float, x: np.ndarray, watch: np.ndarray, jumped: bool,

@@ -224,7 +224,8 @@ class VehicleVisualizer(LeafSystem):
         t = context.get_time()
         scene = self.scene
         when = scene.recording_time(t) if scene.recording else None
-        scene.meshcat.SetTransform(self.vehicle_path, RigidTransform(RollPitchYaw(x.attitude), x.position),
+        scene.meshcat.SetTransform(self.vehicle_path,
+                                   RigidTransform(RollPitchYaw(x.attitude), x.position),
                                    when)
         if not self.trail:
             return
