@@ -31,7 +31,7 @@ from drake_auv.mission.config import BUILTIN_DIR, mission_from_dict
 from drake_auv.mission.report import summarise
 from drake_auv.mission.runner import run_mission
 from drake_auv.reconstruction.products import write_points
-from drake_auv.replanning.replanner import STEP_FIELDS
+from drake_auv.signals import ReplanningStep
 
 HOUR = 3600.0
 
@@ -71,9 +71,8 @@ class Probe:
 
 def per_hour(result, probe: Probe) -> list[dict]:
     """One row per simulated hour (the last one partial): steps, real-time factor, memory."""
-    steps = result.replanning
-    t_step = steps[:, STEP_FIELDS.index("time")]
-    wall = 1e3 * steps[:, STEP_FIELDS.index("wall_time")]
+    steps = ReplanningStep(result.replanning)
+    t_step, wall = steps.time, 1e3 * steps.wall_time
     samples = np.array(probe.rows)
     rows = []
     for h in range(int(np.ceil(result.duration_s / HOUR))):

@@ -22,16 +22,15 @@ import numpy as np
 from _reference import machine, print_reference, reference_factor
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.runner import run_mission
-from drake_auv.replanning.replanner import STEP_FIELDS
+from drake_auv.signals import ReplanningStep
 
-WALL = STEP_FIELDS.index("wall_time")
 
 
 def one_run(spec) -> dict:
     cpu, wall = time.process_time(), time.perf_counter()
     result = run_mission(spec, progress=False)
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-    steps = result.replanning[:, WALL] * 1e3
+    steps = ReplanningStep(result.replanning).wall_time * 1e3
     return dict(sim=result.duration_s, wall=result.wall_s, total_wall=wall, cpu=cpu,
                 rtf=result.duration_s / result.wall_s, rtf_cpu=result.duration_s / cpu,
                 steps=len(steps), step_median=float(np.median(steps)),

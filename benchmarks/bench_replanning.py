@@ -47,7 +47,7 @@ from drake_auv.mapping.octree_map import OctreeMap
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.report import _scored_samples, summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
-from drake_auv.replanning.replanner import STEP_FIELDS
+from drake_auv.signals import ReplanningStep, VehicleState
 from drake_auv.scenarios import get_scenario
 from drake_auv.sonar.beams import fan_angles
 
@@ -79,8 +79,8 @@ def ablation_run(task: tuple) -> dict:
     summary = summarise(result)
     d = summary["distance_to_target"]
     near = result.distance[_scored_samples(result)]
-    steps = 1e3 * result.replanning[:, STEP_FIELDS.index("wall_time")]
-    track = dict(times=result.times, xy=result.state[:, :2], distance=result.distance,
+    steps = 1e3 * ReplanningStep(result.replanning).wall_time
+    track = dict(times=result.times, xy=VehicleState(result.state).xy, distance=result.distance,
                  nominal=result.plan.nominal.points[:, :2], target=_outline(result))
     return dict(seed=seed, optimizer=optimizer, track=track, mean_m=d["mean_m"], sd_m=d["sd_m"],
                 min_m=d["min_m"], abs_error_m=float(np.abs(near - result.plan.omega).mean()),
@@ -235,8 +235,8 @@ def main() -> None:
                                       overrides=[f"site.prior_error_m={args.error}",
                                                  f"sonar_noise={args.noise}"]),
                          progress=False)
-    step = {name: 1e3 * result.replanning[:, k] for k, name in enumerate(STEP_FIELDS)}
-    steps, query = step["wall_time"], step["query_time"]
+    step = ReplanningStep(1e3 * result.replanning)
+    steps, query = step.wall_time, step.query_time
     print(f"replanning step ({len(steps)} steps): median {np.median(steps):.1f} ms, "
           f"p95 {np.percentile(steps, 95):.1f} ms, max {steps.max():.1f} ms "
           f"(targets 10 / 25 ms; sonar_noise {args.noise})")

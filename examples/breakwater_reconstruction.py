@@ -26,6 +26,7 @@ from drake_auv.mission.config import load_mission
 from drake_auv.mission.runner import run_mission
 from drake_auv.reconstruction.figures import fig_reconstruction
 from drake_auv.reconstruction.products import ERROR_VMAX, mission_surface
+from drake_auv.signals import VehicleState
 
 RUNS = {"replanned": [], "nominal only": ["steps.1.survey.replanning=false"]}
 METRICS = (("surface", "accuracy_mean_m"), ("surface", "accuracy_p95_m"),
@@ -43,7 +44,8 @@ def fly(seed: int, overrides: list[str], extra: list[str]):
                distance_mean_m=float(result.distance[survey].mean()),
                distance_min_m=float(result.distance.min()),
                navigation_error_max_m=float(np.linalg.norm(
-                   result.estimated[:, :3] - result.state[:, :3], axis=1).max()),
+                   VehicleState(result.estimated).position
+                   - VehicleState(result.state).position, axis=1).max()),
                **({} if surface is None else surface.summary))
     return row, surface
 

@@ -29,6 +29,7 @@ from drake_auv.mission.recording import finish_recording, prepare_scene
 from drake_auv.mission.report import summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.mission.site import load_site
+from drake_auv.signals import VehicleState
 from drake_auv.visualization.octree import depth_colours
 
 matplotlib.use("Agg")
@@ -55,7 +56,7 @@ def overrides(args, replanning: bool) -> list[str]:
 def survey_xyz(result) -> np.ndarray:
     """(n, 3) true positions of the survey leg."""
     survey = [i for i, leg in enumerate(result.plan.legs) if leg.phase == "survey"]
-    return result.state[np.isin(result.leg_at, survey), :3]
+    return VehicleState(result.state[np.isin(result.leg_at, survey)]).position
 
 
 def figure(runs, filename) -> None:

@@ -39,8 +39,8 @@ from drake_auv.mission.diagram import (SUPERVISOR_PERIOD, add_behaviours,
                                        add_coverage_recorders, add_sonars)
 from drake_auv.mission.plan import plan_mission, terrain_elevation
 from drake_auv.mission.site import load_site
+from drake_auv.signals import LegSignal, Reference, ReplannerStatus, VehicleState
 from drake_auv.vehicle.diagram import add_girona500
-from drake_auv.vehicle.model import STATE_SIZE
 
 SPACING = 0.5  # m between the follower's samples along the track
 
@@ -50,9 +50,10 @@ class ConstantAltitudeFollower(LeafSystem):
     (x, y) -> seabed elevation, m), with the path's headings, on the mission legs `legs`.
 
     Stateless: the reference is a function of the time since the leg began (the supervisor's
-    `leg` input says when). Ports, those of the `Replanner` it replaces: inputs
-    `estimated_state` (12, unused: an open-loop reference) and `leg` (2); outputs `reference`
-    (8, world) and `status` (3: `[leg, finished, next_index]`, -1 off its legs).
+    `leg` input says when). Ports, those of the `Replanner` it replaces, laid out by
+    `drake_auv.signals`: inputs `estimated_state` (`VehicleState`, unused: an open-loop
+    reference) and `leg` (`LegSignal`); outputs `reference` (`Reference`, world) and `status`
+    (`ReplannerStatus`, leg -1 off its legs).
     """
 
     def __init__(self, path, terrain, altitude: float, speed: float, legs):
@@ -68,10 +69,10 @@ class ConstantAltitudeFollower(LeafSystem):
         self.heading = track.unwrapped_heading()
         self.arc = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(self.points, axis=0), axis=1))]
         self.speed, self.legs = float(speed), frozenset(int(leg) for leg in legs)
-        self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
+        self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
-        self.DeclareVectorOutputPort("reference", 8, self._calc_reference)
-        self.DeclareVectorOutputPort("status", 3, self._calc_status)
+        self.DeclareVectorOutputPort("reference", Reference.size(), self._calc_reference)
+        self.DeclareVectorOutputPort("status", ReplannerStatus.size(), self._calc_status)
 
     def _along(self, context) -> tuple[int, float]:
         """(leg, metres flown along the track; -1 before the leg)."""
@@ -84,21 +85,22 @@ class ConstantAltitudeFollower(LeafSystem):
         k = int(np.clip(np.searchsorted(self.arc, s, side="right") - 1, 0, len(self.arc) - 2))
         ds = self.arc[k + 1] - self.arc[k]
         w = (s - self.arc[k]) / ds if ds > 0 else 0.0
-        pose = np.r_[(1 - w) * self.points[k] + w * self.points[k + 1],
-                     (1 - w) * self.heading[k] + w * self.heading[k + 1]]
-        moving = 0.0 < s < self.arc[-1] and ds > 0
-        rates = (self.speed / ds * np.r_[self.points[k + 1] - self.points[k],
-                                         self.heading[k + 1] - self.heading[k]]
-                 if moving else np.zeros(4))
-        output.SetFromVector(np.r_[pose, rates])
+        reference = Reference.zeros()
+        reference.position = (1 - w) * self.points[k] + w * self.points[k + 1]
+        reference.yaw = (1 - w) * self.heading[k] + w * self.heading[k + 1]
+        if 0.0 < s < self.arc[-1] and ds > 0:  # moving
+            reference.velocity = self.speed / ds * (self.points[k + 1] - self.points[k])
+            reference.yaw_rate = self.speed / ds * (self.heading[k + 1] - self.heading[k])
+        output.SetFromVector(reference[:])
 
     def _calc_status(self, context, output):
         leg, s = self._along(context)
-        if s < 0:
-            output.SetFromVector([-1.0, 0.0, 0.0])
-            return
-        output.SetFromVector([leg, float(s >= self.arc[-1]),
-                              float(np.searchsorted(self.arc, s))])
+        status = ReplannerStatus.zeros()
+        status.leg = leg if s >= 0 else -1.0
+        if s >= 0:
+            status.finished = float(s >= self.arc[-1])
+            status.next_index = float(np.searchsorted(self.arc, s))
+        output.SetFromVector(status[:])
 
 
 def build(site, spec, plan, caster, follower=None):
@@ -134,20 +136,20 @@ def fly(site, spec, plan, caster, follower=None, max_time: float | None = None) 
     context = simulator.get_context()
     state_log, leg_log = (log.FindLog(context) for log in logs)
     survey = plan.replan_legs[0]
-    legs = leg_log.data()
-    started = legs[1][legs[0] == survey]
+    legs = LegSignal(leg_log.data().T)
+    started = legs.start_s[legs.index == survey]
     outcome = supervisor.outcomes(supervisor.GetMyContextFromRoot(context))[survey]
-    times, state = state_log.sample_times(), state_log.data()
+    times, state = state_log.sample_times(), VehicleState(state_log.data().T)
     flying = (times >= started[0]) if len(started) else np.zeros(len(times), bool)
     terrain = terrain_elevation(site)
-    altitude = state[2, flying] - terrain(state[0, flying], state[1, flying])
+    altitude = state.z[flying] - terrain(state.x[flying], state.y[flying])
     areas = np.asarray(site.world.area_faces)[site.target_faces]
     best = {name: recorder.best_angles(recorder.GetMyContextFromRoot(context))
             for name, recorder in (("multibeam", multibeam), ("camera", camera))}
     return dict(
         multibeam=coverage_share(best["multibeam"], areas),
         camera=coverage_share(best["camera"], areas),
-        clearance=float(mesh_distance(site.world, state[:3].T).min()),
+        clearance=float(mesh_distance(site.world, state.position).min()),
         altitude=float(altitude.mean()) if flying.any() else float("nan"),
         survey_s=float(context.get_time() - started[0]) if len(started) else 0.0,
         outcome=outcome)

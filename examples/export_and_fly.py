@@ -33,6 +33,7 @@ from drake_auv.mission.report import summarise, write_outputs as write_report  #
 from drake_auv.mission.runner import run_mission  # noqa: E402
 from drake_auv.mission.site import load_site  # noqa: E402
 from drake_auv.planning.export import write_outputs  # noqa: E402
+from drake_auv.signals import VehicleState  # noqa: E402
 from drake_auv.terrain.readers import read_bathymetry  # noqa: E402
 from drake_auv.terrain.site_files import write_site_files  # noqa: E402
 
@@ -112,7 +113,7 @@ def main() -> None:
     print("\n".join(lines))
     fig, (top, clear) = plt.subplots(1, 2, figsize=(13, 5.5))
     for name, result in results.items():
-        xy = result.site.to_site(result.state[:, :3])
+        xy = result.site.to_site(VehicleState(result.state).position)
         top.plot(xy[:, 0], xy[:, 1], lw=0.8, label=name)
         clear.plot(result.times, result.clearance, lw=0.8, label=name)
     top.set(aspect="equal", xlabel="easting (m, UTM 10N)", ylabel="northing (m)",

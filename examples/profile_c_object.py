@@ -28,6 +28,7 @@ from drake_auv.mission.plan import plan_mission
 from drake_auv.mission.recording import finish_recording, prepare_scene
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.mission.site import load_site
+from drake_auv.signals import Profile
 
 # The C in its x-z section (scenarios._c_object_geometry) and the seabed, for the figure.
 C_OUTLINE = np.array([[0, -20], [0, -17], [10, -17], [10, -9], [0, -9], [0, -6], [13, -6],
@@ -44,7 +45,8 @@ def run(spec, site, scene=None):
     follower = controller.follower(controller.GetMyContextFromRoot(result.context))
     t = result.times[mask]
     return dict(result=result, t=t - t[0], x=result.state[mask].T,
-                mode=result.profile[mask, 6], estimated=result.profile[mask, 0],
+                mode=Profile(result.profile[mask]).mode,
+                estimated=Profile(result.profile[mask]).distance,
                 clearance=result.clearance[mask], turns=follower.turns,
                 offset=result.plan.follow_legs[leg].params.offset)
 

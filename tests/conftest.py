@@ -14,7 +14,7 @@ settings.load_profile("deterministic")
 @pytest.fixture()
 def broken_open3d(tmp_path, monkeypatch):
     """An `open3d` that is installed but whose import fails as a missing system library does."""
-    from drake_auv.reconstruction.surface import _open3d_or_reason as loader
+    from drake_auv.reconstruction.surface import retry_open3d
 
     package = tmp_path / "site" / "open3d"
     package.mkdir(parents=True)
@@ -24,6 +24,6 @@ def broken_open3d(tmp_path, monkeypatch):
     for name in [m for m in sys.modules if m == "open3d" or m.startswith("open3d.")]:
         monkeypatch.delitem(sys.modules, name)
     monkeypatch.syspath_prepend(str(tmp_path / "site"))
-    loader.cache_clear()
+    retry_open3d()
     yield
-    loader.cache_clear()
+    retry_open3d()

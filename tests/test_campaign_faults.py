@@ -188,17 +188,16 @@ def test_output_in_the_way_is_refused_before_any_task(tmp_path, scheduler, capsy
 def test_a_row_that_cannot_be_written_stops_the_campaign_rows_kept(tmp_path, scheduler,
                                                                    capsys, monkeypatch):
     out = tmp_path / "out"
-    append = ResultsFile._append
+    append = ResultsFile.append
     written = []
 
-    def full_disk_after_one_row(self, text):
-        if text and not text.startswith("seed,"):
-            if written:
-                raise OSError(errno.ENOSPC, "No space left on device", str(self.path))
-            written.append(text)
-        append(self, text)
+    def full_disk_after_one_row(self, key, row):
+        if written:
+            raise OSError(errno.ENOSPC, "No space left on device", str(self.path))
+        written.append(key)
+        append(self, key, row)
 
-    monkeypatch.setattr(ResultsFile, "_append", full_disk_after_one_row)
+    monkeypatch.setattr(ResultsFile, "append", full_disk_after_one_row)
     assert _campaign(out, scheduler, "--seeds", "0:4") == 2
     err = _one_line(capsys)
     assert "results.csv: cannot write the row of run" in err and "No space left" in err
@@ -210,7 +209,7 @@ def test_a_row_that_cannot_be_written_stops_the_campaign_rows_kept(tmp_path, sch
             time.monotonic() < deadline:
         time.sleep(0.1)
     assert client.run_on_scheduler(lambda dask_scheduler: len(dask_scheduler.tasks)) == 0
-    monkeypatch.setattr(ResultsFile, "_append", append)
+    monkeypatch.setattr(ResultsFile, "append", append)
     assert _campaign(out, scheduler, "--seeds", "0:4") == 0  # the rerun runs the other three
     assert "4 runs (1 already in results.csv" in capsys.readouterr().out
     assert sorted(r["seed"] for r in _rows(out)) == ["0", "1", "2", "3"]

@@ -249,11 +249,11 @@ def test_open3d_that_does_not_load_says_why(tmp_path, capsys, broken_open3d):
 
 def test_open3d_not_installed_says_how(tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(sys.modules, "open3d", None)
-    surface._open3d_or_reason.cache_clear()
+    surface.retry_open3d()
     try:
         line = fault(capsys, ["reconstruct", str(_sphere_ply(tmp_path / "p.ply")), "-o",
                               str(tmp_path / "m.ply"), "--k", "20"])
     finally:
-        surface._open3d_or_reason.cache_clear()
+        surface.retry_open3d()
     assert "needs the optional open3d-cpu package, which is not installed: pip install " \
            "'drake_auv[reconstruct]'" in line

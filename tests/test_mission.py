@@ -140,9 +140,8 @@ def test_a_mission_on_the_users_own_files_in_utm(tmp_path):
     out = tmp_path / "out"
     assert main(["run", str(mission), "-o", str(out), "--quiet", "--no-html"]) == 0
     summary = json.loads((out / "report.json").read_text())
-    for key in ("multibeam", "camera"):
-        assert 0.0 <= summary["coverage"][key] <= 1.0
-    assert summary["coverage"]["multibeam"] > 0.05
+    # the short follow leg sees a third of the target with each sensor (measured: 1/3, 1/3)
+    assert summary["coverage"]["multibeam"] > 0.2 and summary["coverage"]["camera"] > 0.2
     assert summary["contact"] is False and summary["min_clearance_m"] > 1.0
     assert {"mean_m", "sd_m", "min_m", "map_mean_m"} <= set(summary["distance_to_target"])
     assert [p["name"] for p in summary["phases"]][:2] == ["transit", "follow"]
@@ -153,7 +152,12 @@ def test_a_mission_on_the_users_own_files_in_utm(tmp_path):
                              "est_z"]
     east = np.array([float(r["x"]) for r in rows])
     assert np.all(np.abs(east - LOCAL_ORIGIN[0]) < 100.0)  # back in UTM eastings
-    assert "mission_supervisor" in (out / "diagram.dot").read_text()
+    dot = (out / "diagram.dot").read_text()
+    assert "mission_supervisor" in dot
+    # every vector port labelled with its signal's fields, the logs' inputs too
+    assert dot.count(">reference [x y z yaw vx vy vz yaw_rate]<") >= 2
+    assert ">leg [index start_s]<" in dot and ">status [leg end_s]<" in dot
+    assert ">data [mode cause start_s x0 y0 z0 yaw0 x1 y1 z1]<" in dot  # the response log
 
 
 @pytest.mark.parametrize("change, message", [

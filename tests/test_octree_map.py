@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from drake_auv.mapping.octree_map import OctreeMap, _decode
+from drake_auv.mapping.octree_map import OctreeMap
 
 
 def _fan(n=480, aperture=np.radians(120.0), tilt=0.0):
@@ -156,8 +156,7 @@ def test_lazy_insertion_labels_match_eager_octomap_and_the_file_is_complete(tmp_
 
 def _brute_force_occupied(omap, lo, hi):
     """Occupied voxel centres in the box, every voxel ever hit read from the octree."""
-    codes = np.fromiter(omap._candidates, dtype=np.int64, count=len(omap._candidates))
-    centres = (_decode(codes) + 0.5) * omap.resolution
+    centres = omap.candidates()[0]
     centres = centres[np.all((centres >= lo) & (centres <= hi), axis=1)]
     return centres[np.asarray(omap.tree.getLabels(centres)) == 1] if len(centres) else centres
 

@@ -12,7 +12,8 @@ from drake_auv.mapping.mapper import OctreeMapper, OnlineMap
 from drake_auv.mapping.octree_map import OctreeMap
 from drake_auv.mapping.scan_log import ScanBatch, ScanLog
 from drake_auv.planning.path import Path
-from drake_auv.replanning.replanner import STEP_FIELDS, Replanner
+from drake_auv.replanning.replanner import Replanner
+from drake_auv.signals import Reference, ReplanningStep
 from drake_auv.sonar.returns import SonarReturns
 
 
@@ -112,14 +113,14 @@ def test_replanner_flies_towards_the_waypoints_at_survey_speed():
     context = _replanner_context(replanner, waypoints, state)
     simulator = Simulator(replanner, context)
     simulator.AdvanceTo(0.5)
-    ref = replanner.reference_output.Eval(context)
+    ref = Reference(replanner.reference_output.Eval(context))
     # Empty map: the plan is the straight line to the waypoints, flown at 0.5 m/s along +x.
-    assert ref[:3] == pytest.approx([0.25, 0.0, -5.0], abs=1e-6)
-    assert ref[4:7] == pytest.approx([0.5, 0.0, 0.0], abs=1e-6)
-    assert ref[3] == pytest.approx(0.0, abs=1e-9)
+    assert ref.position == pytest.approx([0.25, 0.0, -5.0], abs=1e-6)
+    assert ref.velocity == pytest.approx([0.5, 0.0, 0.0], abs=1e-6)
+    assert ref.yaw == pytest.approx(0.0, abs=1e-9)
     assert replanner.section(context).indices.tolist() == [0, 1, 2, 3]
-    step = dict(zip(STEP_FIELDS, replanner.step_output.Eval(context)))
-    assert step["planned"] == 1.0 and step["time"] == 0.0 and step["wall_time"] > 0
+    step = ReplanningStep(replanner.step_output.Eval(context))
+    assert step.planned == 1.0 and step.time == 0.0 and step.wall_time > 0
     assert replanner.status_output.Eval(context).tolist() == [0.0, 0.0, 0.0]
 
 

@@ -37,7 +37,7 @@ def _log(count, seed=0):
 
 def test_scan_log_keeps_a_bounded_window_in_memory_and_reads_the_rest_back():
     log, batches = _log(3 * CACHE_BATCHES)
-    assert len(log.store._cache) == CACHE_BATCHES  # the window, not the log
+    assert log.store.cached == CACHE_BATCHES  # the window, not the log
     assert log.returns == sum(np.isfinite(b.ranges).sum() for b in batches)
     read = list(log.iter_batches())
     assert len(read) == len(batches)
@@ -112,8 +112,9 @@ def test_box_queries_visit_only_their_tiles_and_read_exact_log_odds():
             d, r = _fan(rng, 200)
             again.insert_scan(np.array([x0 + 0.3 * k, 0.0, -5.0]), d, r, 20.0)
     again.occupied_points(lo, hi)
-    far = again._centres[:again._count, 0] > 40.0
-    assert far.any() and np.all(again._checked[:again._count][far] == -1)
+    centres, unread = again.candidates()
+    far = centres[:, 0] > 40.0
+    assert far.any() and np.all(unread[far]) and not unread[~far].all()
 
 
 def test_points_ply_is_streamed_in_the_format_of_write_ply(tmp_path):
@@ -178,7 +179,7 @@ def test_the_long_monterey_mission_flies_at_survey_scale(tmp_path, monkeypatch):
     survey = np.array([result.plan.legs[leg].phase == "survey" for leg in result.leg_at])
     assert abs(result.clearance[survey].mean() - result.plan.omega) < result.spec.site.prior_error_m
     log = result.scan_log
-    assert len(log.store._cache) <= CACHE_BATCHES < log.count
+    assert log.store.cached <= CACHE_BATCHES < log.count
     assert summary["map"]["batches"] == log.count and summary["map"]["octree_mb"] > 0
     assert write_points(result, tmp_path / "points.ply") == log.returns
     assert len(read_ply(tmp_path / "points.ply")) == log.returns

@@ -1,5 +1,9 @@
 """Sonar scans and coverage drawn in Meshcat (localhost)."""
 
+import base64
+import re
+
+import msgpack
 import numpy as np
 import pytest
 from pydrake.geometry import Meshcat, MeshcatParams
@@ -53,7 +57,24 @@ def test_scan_and_coverage_layers_in_a_diagram(meshcat):
     context = recorder.GetMyContextFromRoot(simulator.get_context())
     # The camera faces the block's south face from 6 m: part of it is covered, nothing else.
     assert 0.1 < recorder.coverage(context) < 0.5
-    assert len(scan_vis._clouds) == 4  # 6 scans so far, history 3 + the last
+    # 6 scans so far, all alike (a fixed pose): the cloud holds history 3 + the last
+    returns = sonar.GetOutputPort("returns").Eval(sonar.GetMyContextFromRoot(
+        simulator.get_context()))
+    assert returns.hit.sum() > 10
+    assert _drawn_points(meshcat, "/drake_auv/sonar/multibeam/points") == 4 * returns.hit.sum()
+
+
+def _drawn_points(meshcat, path: str) -> int:
+    """How many points the point cloud at `path` holds, read from Meshcat's scene (its static
+    HTML: msgpack commands, typed arrays as extension types)."""
+    for b64 in re.findall(r'data:application/octet-binary;base64,([A-Za-z0-9+/=]+)"',
+                          meshcat.StaticHtml()):
+        command = msgpack.unpackb(base64.b64decode(b64), strict_map_key=False,
+                                  ext_hook=lambda code, data: len(data))
+        if command.get("type") == "set_object" and command.get("path") == path:
+            position = command["object"]["geometries"][0]["data"]["attributes"]["position"]
+            return position["array"] // (4 * position["itemSize"])  # float32 xyz
+    raise AssertionError(f"no object at {path}")
 
 
 def test_draw_coverage_checks_its_input(meshcat):

@@ -8,26 +8,24 @@ autopilots' 10 Hz control rate) it checks the current item's arrival and hold, a
 next; the `reference` output is the tracker's reference for the current item.
 
 Discrete-state groups: `item` (`semantics.ITEM_FIELDS`, the current item's record) and
-`status` (`STATUS_FIELDS`: [leg, finished, item], -1 before its first leg).
+`status` (`signals.PilotStatus`, -1 before its first leg).
 
-Ports: inputs `estimated_state` (12), `leg` (2), `seabed_elevation` (1, m, NaN without
-bottom lock: the `DvlAltimeter`'s); outputs `reference` (8) and `status` (3).
+Ports (views in `drake_auv.signals`): inputs `estimated_state` (`VehicleState`), `leg`
+(`LegSignal`), `seabed_elevation` (1, m, NaN without bottom lock: the `DvlAltimeter`'s);
+outputs `reference` (`Reference`) and `status` (`PilotStatus`).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from pydrake.common.containers import namedview
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.autopilot.items import FlownMission
 from drake_auv.autopilot.semantics import (INDEX, ITEM_FIELDS, REACHED_S, SEABED_Z,
                                            item_reached, item_reference, start_record)
 from drake_auv.leg_signal import LEG_SIZE, read_leg
-from drake_auv.vehicle.model import STATE_SIZE
-
-STATUS_FIELDS = ("leg", "finished", "item")
-PilotStatus = namedview("PilotStatus", STATUS_FIELDS)
+from drake_auv.signals import PilotStatus, Reference, VehicleState
+from drake_auv.vehicle.path_reference import trajectory_reference
 
 
 class AutopilotPilot(LeafSystem):
@@ -44,16 +42,18 @@ class AutopilotPilot(LeafSystem):
             raise ValueError(f"AutopilotPilot period must be in (0, 1] s, got {period}")
         self.missions = {0: missions} if isinstance(missions, FlownMission) else dict(missions)
         self.period = float(period)
-        self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
+        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self.seabed_input = self.DeclareVectorInputPort("seabed_elevation", 1)
         initial = np.full(len(ITEM_FIELDS), np.nan)
         self._item = self.DeclareDiscreteState(initial)
-        self._status = self.DeclareDiscreteState(np.array([-1.0, 0.0, 0.0]))
+        status = PilotStatus.zeros()
+        status.leg = -1.0  # before its first leg
+        self._status = self.DeclareDiscreteState(status[:])
         self.DeclareInitializationDiscreteUpdateEvent(self._update_item)
         self.DeclarePeriodicDiscreteUpdateEvent(self.period, 0.0, self._update_item)
         self.reference_output = self.DeclareVectorOutputPort(
-            "reference", 8, self._calc_reference,
+            "reference", Reference.size(), self._calc_reference,
             prerequisites_of_calc={self.discrete_state_ticket(self._item),
                                    self.discrete_state_ticket(self._status),
                                    self.input_port_ticket(self.state_input.get_index()),
@@ -74,7 +74,9 @@ class AutopilotPilot(LeafSystem):
         if status.leg != leg:  # the leg begins: its first item
             discrete_state.set_value(self._item, start_record(
                 mission.autopilot, mission.legs, 0, t, x, seabed))
-            discrete_state.set_value(self._status, [leg, 0.0, 0.0])
+            status = PilotStatus.zeros()
+            status.leg = leg
+            discrete_state.set_value(self._status, status[:])
             return
         if status.finished:
             return
@@ -100,7 +102,7 @@ class AutopilotPilot(LeafSystem):
         status = PilotStatus(context.get_discrete_state(self._status).get_value())
         mission = self.missions.get(int(status.leg))
         if mission is None:  # before its first leg: hold the estimated pose
-            output.SetFromVector(np.concatenate([x[:3], [x[5]], np.zeros(4)]))
+            output.SetFromVector(trajectory_reference(None, 0.0, self.state_input, context))
             return
         record = context.get_discrete_state(self._item).get_value()
         item = mission.legs[int(record[INDEX])]

@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_auv.autopilot.items import LocalLeg
+from drake_auv.signals import Reference, VehicleState
 
 RISE_RATE = 0.3  # m/s, COLA2's no_altitude_goes_up ascent without bottom lock
 # The pilot's per-item record: item index, when it began (s), the leg's start (x0, y0, z0,
@@ -55,8 +56,8 @@ def start_record(autopilot: str, legs: tuple[LocalLeg, ...], index: int, t: floa
                  x: np.ndarray, seabed_z: float) -> np.ndarray:
     """The `ITEM_FIELDS` record of item `index` beginning at `t` with the vehicle at the
     estimated state `x` over the measured seabed `seabed_z` (NaN: no measurement yet)."""
-    leg = legs[index]
-    x0, y0, z0 = x[0], x[1], x[2]
+    leg, state = legs[index], VehicleState(x)
+    x0, y0, z0 = state.x, state.y, state.z
     if autopilot == "cola2" and leg.start is not None:
         x0, y0 = leg.start
         if leg.start_z is not None:
@@ -64,11 +65,11 @@ def start_record(autopilot: str, legs: tuple[LocalLeg, ...], index: int, t: floa
     elif autopilot == "ardusub" and index > 0:
         previous = legs[index - 1]
         x0, y0 = previous.end
-        z0 = leg_target_z(previous, seabed_z if np.isfinite(seabed_z) else x[2] - previous.z)
+        z0 = leg_target_z(previous, seabed_z if np.isfinite(seabed_z) else state.z - previous.z)
     if autopilot == "ardusub" and index > 0 and legs[index - 1].z_mode == leg.z_mode == "altitude":
         alt0 = legs[index - 1].z
     else:
-        alt0 = x[2] - seabed_z if np.isfinite(seabed_z) else leg.z
+        alt0 = state.z - seabed_z if np.isfinite(seabed_z) else leg.z
     return np.array([index, t, x0, y0, z0, alt0, -1.0, seabed_z], float)
 
 
@@ -80,7 +81,7 @@ def _track(leg: LocalLeg, record: np.ndarray, x: np.ndarray):
     if length < 1e-9:
         return a, np.zeros(2), 0.0, 0.0
     u = d / length
-    s = float(np.clip((x[:2] - a) @ u, 0.0, length))
+    s = float(np.clip((VehicleState(x).xy - a) @ u, 0.0, length))
     return a, u, length, s
 
 
@@ -95,6 +96,7 @@ def item_reference(autopilot: str, leg: LocalLeg, record: np.ndarray, x: np.ndar
         speed: commanded speed along the track, m/s.
     """
     a, u, length, s = _track(leg, record, x)
+    state = VehicleState(x)
     holding = record[REACHED_S] >= 0  # reached: held there for the item's hold time
     v = 0.0 if (holding or s >= length) else speed
     foot = np.asarray(leg.end, float) if holding else a + s * u
@@ -110,7 +112,7 @@ def item_reference(autopilot: str, leg: LocalLeg, record: np.ndarray, x: np.ndar
         elif measured:
             z = seabed_z + leg.z
         else:  # no_altitude_goes_up
-            z = x[2] + RISE_RATE
+            z = state.z + RISE_RATE
     else:
         if leg.z_mode == "depth":
             z = record[Z0] + fraction * (-leg.z - record[Z0])
@@ -118,29 +120,33 @@ def item_reference(autopilot: str, leg: LocalLeg, record: np.ndarray, x: np.ndar
         else:
             seabed = seabed_z if measured else record[SEABED_Z]
             altitude = record[ALT0] + fraction * (leg.z - record[ALT0])
-            z = seabed + altitude if np.isfinite(seabed) else x[2]
+            z = seabed + altitude if np.isfinite(seabed) else state.z
     if leg.yaw is not None:
         yaw = leg.yaw
     elif length > 0:
         yaw = float(np.arctan2(u[1], u[0]))
     else:
-        yaw = float(x[5])
-    return np.array([foot[0], foot[1], z, yaw, v * u[0], v * u[1], v * dz_ds, 0.0])
+        yaw = float(state.yaw)
+    reference = Reference.zeros()
+    reference.position, reference.yaw = [foot[0], foot[1], z], yaw
+    reference.velocity = [v * u[0], v * u[1], v * dz_ds]
+    return reference[:]
 
 
 def item_reached(autopilot: str, leg: LocalLeg, record: np.ndarray, x: np.ndarray,
                  seabed_z: float) -> bool:
     """Whether the vehicle at `x` has reached `leg`'s end (before any hold)."""
     _, _, length, s = _track(leg, record, x)
-    horizontal = float(np.hypot(*(x[:2] - np.asarray(leg.end, float))))
+    state = VehicleState(x)
+    horizontal = float(np.hypot(*(state.xy - np.asarray(leg.end, float))))
     passed = length > 0 and s >= length
     if autopilot == "cola2":
         return horizontal <= leg.tolerance or passed
     if leg.z_mode == "depth":
-        dz = x[2] + leg.z
+        dz = state.z + leg.z
     else:
         seabed = seabed_z if np.isfinite(seabed_z) else record[SEABED_Z]
-        dz = (x[2] - seabed - leg.z) if np.isfinite(seabed) else 0.0
+        dz = (state.z - seabed - leg.z) if np.isfinite(seabed) else 0.0
     return float(np.hypot(horizontal, dz)) <= leg.tolerance or passed
 
 

@@ -14,6 +14,7 @@ from pathlib import Path as FilePath
 import numpy as np
 
 from drake_auv.commands import add_recording_options
+from drake_auv.signals import Reference, VehicleState
 
 DEFAULT_OUT = "out/simulate"
 
@@ -95,13 +96,14 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     times, state = state_log.sample_times(), state_log.data()
     reference = handles.reference_log.FindLog(context).data()
     settle = float(path.times(speed)[min(settle_samples, len(path) - 1)])
-    result = FlightResult(times, state, reference, cross_track_distance(state[:3].T, path.points),
+    result = FlightResult(times, state, reference,
+                          cross_track_distance(VehicleState(state.T).position, path.points),
                           settle, wall)
     if scene is not None:
         scene.write_html(out_dir / "mission.html")
     plot_tracking_error(result, out_dir / "tracking_error.png")
     np.savetxt(out_dir / "state.csv", np.column_stack([times, state.T]), delimiter=",",
-               fmt="%.5f", header="t,x,y,z,roll,pitch,yaw,u,v,w,p,q,r", comments="")
+               fmt="%.5f", header=",".join(("t", *VehicleState.get_fields())), comments="")
     return result
 
 
@@ -124,9 +126,9 @@ def _arrival_monitor(diagram, path, end_time: float, bar):
             bar.update(int(t) - bar.n)
         if t < end_time:
             return EventStatus.DidNothing()
-        x = state_port.Eval(root_context)
-        settled = (np.linalg.norm(x[:3] - goal), np.linalg.norm(x[6:9]),
-                   abs(np.angle(np.exp(1j * (x[5] - heading)))))
+        x = VehicleState(state_port.Eval(root_context))
+        settled = (np.linalg.norm(x.position - goal), np.linalg.norm(x.linear_velocity),
+                   abs(np.angle(np.exp(1j * (x.yaw - heading)))))
         if all(value < limit for value, limit in zip(settled, SETTLED)):
             return EventStatus.ReachedTermination(diagram, "settled at the end of the path")
         return EventStatus.DidNothing()
@@ -141,7 +143,8 @@ def plot_tracking_error(result: FlightResult, filename) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    lag = np.linalg.norm(result.state[:3] - result.reference[:3], axis=0)
+    lag = np.linalg.norm(VehicleState(result.state.T).position
+                         - Reference(result.reference.T).position, axis=1)
     fig, ax = plt.subplots(figsize=(9, 3.5), constrained_layout=True)
     ax.plot(result.times, result.cross_track, label="cross-track error (to the path)")
     ax.plot(result.times, lag, lw=0.8, alpha=0.7, label="distance to the moving reference")

@@ -21,6 +21,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.geometry.visibility import (FaceVisibility, angle_histogram, coverage_share,
                                            merge_best)
+from drake_auv.signals import VehicleState
 from drake_auv.sonar.beams import AxisHits, SonarMount, fan_angles
 from drake_auv.sonar.range_sonar import STATE_SIZE, as_caster
 
@@ -92,9 +93,9 @@ class CoverageRecorder(LeafSystem):
             hits = self._shared_hits(context)
             slots, angles = self.visibility.beams(hits, hits.directions)
         else:
-            state = self.true_state_input.Eval(context)
-            r_wb = rotation_world_body(*state[3:6])
-            origin = state[:3] + r_wb @ self.mount.position
+            state = VehicleState(self.true_state_input.Eval(context))
+            r_wb = rotation_world_body(*state.attitude)
+            origin = state.position + r_wb @ self.mount.position
             if self.sensor == "camera":
                 slots, angles = self.visibility.camera(origin, r_wb @ self.axis_body,
                                                        self.aperture, self.max_range)

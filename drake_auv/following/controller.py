@@ -6,15 +6,16 @@ follower's local map and stores the tracker reference it computes. A new leg sta
 follower (empty local map, its own mode and depth or plane). The follower's state (local map,
 RANSAC generator's state, yaw and turn state: an immutable `FollowerState` that each update
 replaces) is abstract state; Drake's copies of it at every update are plain deep copies (a
-few thousand points at most). Discrete-state groups: `reference` (8) with the time
-it was computed (`reference_time`), the last returns' sequence and leg (`consumed`), and
-`profile` (7). Between updates the reference position is extrapolated with its velocity, so
-the tracker's position error does not build up along the profile.
+few thousand points at most). Discrete-state groups (views in `drake_auv.signals`):
+`reference` (`Reference`) with the time it was computed (`reference_time`), the last returns'
+sequence and leg (`Consumed`), and `profile` (`Profile`). Between updates the reference
+position is extrapolated with its velocity, so the tracker's position error does not build up
+along the profile.
 
-Ports: inputs `returns` (`SonarReturns`), `estimated_state` (12), `leg` (2); outputs
-`reference` (8, world) and `profile` (7): `[distance, normal_distance, normal_a, normal_b,
-orientation, valid, mode]` in the scan plane's 2D axes (horizontal: x, y; vertical: s, h), mode
-0 search, 1 follow, 2 turn; distances NaN while no profile is seen.
+Ports: inputs `returns` (`SonarReturns`), `estimated_state` (`VehicleState`), `leg`
+(`LegSignal`); outputs `reference` (`Reference`, world) and `profile` (`Profile`, in the scan
+plane's 2D axes: horizontal x, y; vertical s, h; mode an index into `MODES`; distances NaN
+while no profile is seen).
 """
 
 from __future__ import annotations
@@ -28,12 +29,18 @@ from pydrake.systems.framework import LeafSystem
 from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.following.behaviours import (FollowerState, FollowingParams, HorizontalFollower,
                                             VerticalFollower)
+from drake_auv.signals import Consumed, Profile, Reference, VehicleState
 from drake_auv.sonar.returns import SonarReturns
-from drake_auv.vehicle.model import STATE_SIZE
 from drake_auv.vehicle.path_reference import trajectory_reference
 
 MODES = ("search", "follow", "turn")
-PROFILE_SIZE = 7
+
+
+def _no_profile(mode: str = "search") -> np.ndarray:
+    """The `profile` value while no profile is seen: NaN distances, not valid, `mode`."""
+    profile = Profile(np.full(Profile.size(), np.nan))
+    profile.valid, profile.mode = 0.0, MODES.index(mode)
+    return profile[:]
 
 
 @dataclass(frozen=True)
@@ -88,22 +95,20 @@ class ProfileFollowingController(LeafSystem):
         self.seed = int(seed)
         self.returns_input = self.DeclareAbstractInputPort(
             "returns", AbstractValue.Make(SonarReturns.empty(20.0)))
-        self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
+        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self._followers = {leg: config.follower(self.seed + leg)
                            for leg, config in self.legs.items()}  # immutable
         self._follower_index = self.DeclareAbstractState(
             AbstractValue.Make(self._followers[min(self.legs)].initial_state()))
-        self._reference = self.DeclareDiscreteState(8)
+        self._reference = self.DeclareDiscreteState(Reference.size())
         self._reference_time = self.DeclareDiscreteState(1)
-        self._consumed = self.DeclareDiscreteState(np.array([-1.0, -1.0]))  # sequence, leg
-        initial_profile = np.full(PROFILE_SIZE, np.nan)
-        initial_profile[5:] = 0.0
-        self._profile = self.DeclareDiscreteState(initial_profile)
+        self._consumed = self.DeclareDiscreteState(np.full(Consumed.size(), -1.0))
+        self._profile = self.DeclareDiscreteState(_no_profile())
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_reference)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_reference)
         self.reference_output = self.DeclareVectorOutputPort(
-            "reference", 8, self._calc_reference,
+            "reference", Reference.size(), self._calc_reference,
             prerequisites_of_calc={self.discrete_state_ticket(self._reference),
                                    self.discrete_state_ticket(self._reference_time),
                                    self.discrete_state_ticket(self._consumed),
@@ -123,8 +128,8 @@ class ProfileFollowingController(LeafSystem):
         if follower is None:
             return  # not flying
         t = context.get_time()
-        sequence, flown = context.get_discrete_state(self._consumed).get_value()
-        if flown != leg:  # a new leg: a new follower's state
+        consumed = Consumed(context.get_discrete_state(self._consumed).get_value().copy())
+        if consumed.leg != leg:  # a new leg: a new follower's state
             held = follower.initial_state()
         else:
             held = self.follower(context)
@@ -132,30 +137,30 @@ class ProfileFollowingController(LeafSystem):
                 return  # the initialization and the first periodic event share t = 0
         returns = self.returns_input.Eval(context) if self.returns_input.HasValue(context) else None
         points = np.empty((0, 3))
-        if returns is not None and returns.sequence != sequence:  # each batch once
-            points, sequence = returns.points_nav, returns.sequence
+        if returns is not None and returns.sequence != consumed.sequence:  # each batch once
+            points, consumed.sequence = returns.points_nav, returns.sequence
+        consumed.leg = leg
         held, out = follower.update(held, t, self.state_input.Eval(context), points)
         state.get_mutable_abstract_state(self._follower_index).set_value(held)
-        profile = np.full(PROFILE_SIZE, np.nan)
-        profile[5] = 0.0
+        profile = Profile(_no_profile(out.mode))
         if out.estimate is not None:
             est = out.estimate
-            profile[:5] = (est.distance, est.normal_distance, est.normal[0], est.normal[1],
-                           est.orientation)
-            profile[5] = 1.0
-        profile[6] = MODES.index(out.mode)
+            profile.distance, profile.normal_distance = est.distance, est.normal_distance
+            profile.normal, profile.orientation = est.normal, est.orientation
+            profile.valid = 1.0
         discrete = state.get_mutable_discrete_state()
         discrete.set_value(self._reference, out.reference)
         discrete.set_value(self._reference_time, [t])
-        discrete.set_value(self._consumed, [sequence, leg])
-        discrete.set_value(self._profile, profile)
+        discrete.set_value(self._consumed, consumed[:])
+        discrete.set_value(self._profile, profile[:])
 
     def _calc_reference(self, context, output):
         leg, _ = read_leg(self.leg_input, context)
-        if context.get_discrete_state(self._consumed)[1] != leg:  # before the leg's first update
+        consumed = Consumed(context.get_discrete_state(self._consumed).get_value())
+        if consumed.leg != leg:  # before the leg's first update
             output.SetFromVector(trajectory_reference(None, 0.0, self.state_input, context))
             return
-        reference = context.get_discrete_state(self._reference).get_value().copy()
+        reference = Reference(context.get_discrete_state(self._reference).get_value().copy())
         since = context.get_time() - context.get_discrete_state(self._reference_time)[0]
-        reference[:3] += reference[4:7] * since
-        output.SetFromVector(reference)
+        reference.position += reference.velocity * since
+        output.SetFromVector(reference[:])

@@ -290,6 +290,12 @@ class OctreeMap:
             return self._centres[occupied], self._log_odds[occupied]
         return self._centres[occupied]
 
+    def candidates(self) -> tuple[np.ndarray, np.ndarray]:
+        """The voxels ever hit (a superset of the occupied ones), in insertion order: their
+        centres (n, 3), m, and whether each one's label was never read from the octree (n,)
+        (a box query reads only the voxels in its box)."""
+        return self._centres[:self._count].copy(), self._checked[:self._count] == -1
+
     @property
     def kdtree(self) -> cKDTree | None:
         """KD-tree of the occupied voxel centres (None while nothing is occupied)."""

@@ -94,6 +94,11 @@ class ScanStore:
         """Bytes written to the file."""
         return self._end
 
+    @property
+    def cached(self) -> int:
+        """How many batches are held in memory (at most `cache`)."""
+        return len(self._cache)
+
     def put(self, batch: ScanBatch) -> int:
         """Writes `batch` at the end of the file; returns its record's offset."""
         header = np.zeros(1, _HEADER)

@@ -16,6 +16,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
+from drake_auv.signals import VehicleState
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.model import NUM_THRUSTERS, STATE_SIZE, THRUSTER_NAMES
 
@@ -90,5 +91,5 @@ class NavigationJump(LeafSystem):
     def _calc_estimated_state(self, context, output):
         x = self.estimated_input.Eval(context).copy()
         if context.get_time() >= self.time:
-            x[:2] += self.offset
+            VehicleState(x).xy += self.offset
         output.SetFromVector(x)

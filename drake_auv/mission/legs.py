@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_auv.signals import LegProgress, PathStatus, PilotStatus, ReplannerStatus, VehicleState
+
 BEHAVIOURS = ("path", "follow", "replan", "autopilot")
 GOALS = ("arrive", "loops", "distance", "path_end", "replanner", "autopilot")
 
@@ -58,15 +60,19 @@ class Leg:
             raise ValueError(f"Leg max_duration must be > 0 s, got {self.max_duration}")
 
 
-PROGRESS_SIZE = 4  # [last bearing from the centre (rad), turned (rad), start x, start y]
+def _bearing(leg: Leg, state) -> float:
+    """Bearing of the vehicle's `state` (a `VehicleState`) from the loops' centre, rad."""
+    return float(np.arctan2(state.y - leg.centre[1], state.x - leg.centre[0]))
 
 
 def start_progress(leg: Leg, x: np.ndarray) -> np.ndarray:
-    """The progress record of `leg` beginning at the estimated state `x`."""
-    bearing = 0.0
-    if leg.goal == "loops":
-        bearing = float(np.arctan2(x[1] - leg.centre[1], x[0] - leg.centre[0]))
-    return np.array([bearing, 0.0, x[0], x[1]])
+    """The progress record (`signals.LegProgress`) of `leg` beginning at the estimated state
+    `x`."""
+    state = VehicleState(x)
+    progress = LegProgress.zeros()
+    progress.bearing = _bearing(leg, state) if leg.goal == "loops" else 0.0
+    progress.start = [state.x, state.y]
+    return progress[:]
 
 
 def advance_progress(leg: Leg, progress: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -74,31 +80,36 @@ def advance_progress(leg: Leg, progress: np.ndarray, x: np.ndarray) -> np.ndarra
     bearing's wrapped increments, so it counts laps in either direction)."""
     if leg.goal != "loops":
         return progress
-    bearing = float(np.arctan2(x[1] - leg.centre[1], x[0] - leg.centre[0]))
-    step = float(np.angle(np.exp(1j * (bearing - progress[0]))))
-    return np.array([bearing, progress[1] + step, progress[2], progress[3]])
+    advanced = LegProgress(np.array(progress, dtype=float))
+    bearing = _bearing(leg, VehicleState(x))
+    advanced.turned += float(np.angle(np.exp(1j * (bearing - advanced.bearing))))
+    advanced.bearing = bearing
+    return advanced[:]
 
 
 def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.ndarray,
                  path_status: np.ndarray, replanner_status: np.ndarray,
                  autopilot_status: np.ndarray | None = None) -> bool:
     """Whether leg number `index` has reached its goal at time `t` s, from the estimated state
-    `x` (12), its progress record, the path reference's status `[leg, end_time]`, the
-    replanner's `[leg, finished, next_index]` and the autopilot pilot's `[leg, finished,
-    item]`."""
+    `x` (`signals.VehicleState`), its progress record (`LegProgress`), the path reference's
+    status (`PathStatus`), the replanner's (`ReplannerStatus`) and the autopilot pilot's
+    (`PilotStatus`)."""
+    state, progress = VehicleState(x), LegProgress(progress)
+    path, replanner = PathStatus(path_status), ReplannerStatus(replanner_status)
     if leg.goal == "arrive":
-        distance = np.linalg.norm(x[:3] - np.asarray(leg.target))
-        if leg.handover is not None and path_status[0] == index and distance <= leg.handover:
+        distance = np.linalg.norm(state.position - np.asarray(leg.target))
+        if leg.handover is not None and path.leg == index and distance <= leg.handover:
             return True
-        return path_status[0] == index and t >= path_status[1] and distance <= leg.tolerance
+        return path.leg == index and t >= path.end_s and distance <= leg.tolerance
     if leg.goal == "path_end":
-        return path_status[0] == index and t >= path_status[1]
+        return path.leg == index and t >= path.end_s
     if leg.goal == "replanner":
-        return replanner_status[0] == index and replanner_status[1] > 0
+        return replanner.leg == index and replanner.finished > 0
     if leg.goal == "autopilot":
-        return (autopilot_status is not None and autopilot_status[0] == index
-                and autopilot_status[1] > 0)
+        pilot = None if autopilot_status is None else PilotStatus(autopilot_status)
+        return pilot is not None and pilot.leg == index and pilot.finished > 0
     if leg.goal == "loops":
-        return abs(progress[1]) >= 2.0 * np.pi * leg.loops
-    along = (x[0] - progress[2]) * leg.direction[0] + (x[1] - progress[3]) * leg.direction[1]
-    return along >= (leg.distance or 0.0) and (leg.end_depth is None or -x[2] <= leg.end_depth)
+        return abs(progress.turned) >= 2.0 * np.pi * leg.loops
+    along = ((state.x - progress.start_x) * leg.direction[0]
+             + (state.y - progress.start_y) * leg.direction[1])
+    return along >= (leg.distance or 0.0) and (leg.end_depth is None or -state.z <= leg.end_depth)

@@ -35,6 +35,7 @@ from drake_auv.mapping.mapper import map_memory
 from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
 from drake_auv.reconstruction.products import products_markdown, write_products
+from drake_auv.signals import ReplanningStep, VehicleState
 
 PHASE_COLOURS = {"transit": "0.45", "follow": "tab:green", "survey": "tab:blue"}
 
@@ -86,8 +87,8 @@ def map_distance(result: MissionResult, samples: np.ndarray) -> np.ndarray:
 
 def phase_summary(result: MissionResult, mask: np.ndarray) -> dict:
     """Statistics of the samples `mask` of the dive."""
-    t, xyz = result.times[mask], result.state[mask, :3]
-    nav_error = np.linalg.norm(result.estimated[mask, :3] - xyz, axis=1)
+    t, xyz = result.times[mask], VehicleState(result.state[mask]).position
+    nav_error = np.linalg.norm(VehicleState(result.estimated[mask]).position - xyz, axis=1)
     return dict(length_m=float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).sum()),
                 duration_s=float(t[-1] - t[0]) if len(t) else 0.0,
                 distance_min_m=float(result.distance[mask].min()),
@@ -124,7 +125,7 @@ def summarise(result: MissionResult) -> dict:
     areas = result.areas
     scored = _scored_samples(result)
     d = result.distance[scored]
-    map_d = map_distance(result, result.state[scored, :3])
+    map_d = map_distance(result, VehicleState(result.state[scored]).position)
     map_d = map_d[np.isfinite(map_d)]
     phases = []
     for phase in result.phases:
@@ -156,7 +157,8 @@ def summarise(result: MissionResult) -> dict:
             near_m=near_distance(result) if np.isfinite(near_distance(result)) else None,
             samples=int(scored.sum())),
         navigation_error_max_m=float(np.linalg.norm(
-            result.estimated[:, :3] - result.state[:, :3], axis=1).max()),
+            VehicleState(result.estimated).position - VehicleState(result.state).position,
+            axis=1).max()),
         phases=phases,
         faults={name: dataclasses.asdict(f) for name, f in result.spec.faults.active.items()},
         responses=result.responses,
@@ -166,7 +168,7 @@ def summarise(result: MissionResult) -> dict:
     timing = dict(wall_s=result.wall_s, sim_s=result.duration_s, simulation_s=result.wall_s,
                   real_time_factor=result.duration_s / max(result.wall_s, 1e-9))
     if len(result.replanning):
-        wall = result.replanning[:, 1]
+        wall = ReplanningStep(result.replanning).wall_time
         timing.update(replan_steps=len(wall), replan_median_ms=float(np.median(wall) * 1e3),
                       replan_p95_ms=float(np.percentile(wall, 95) * 1e3))
     summary["timing"] = timing
@@ -291,6 +293,7 @@ def fig_distance(result: MissionResult) -> Figure:
     fig = Figure(figsize=(13, 5))
     ax, top = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
     names = np.array([result.plan.legs[leg].phase for leg in result.leg_at])
+    state = VehicleState(result.state)
     for name in dict.fromkeys(names):
         mask = names == name
         colour = PHASE_COLOURS.get(name, "k")
@@ -298,8 +301,8 @@ def fig_distance(result: MissionResult) -> Figure:
         ax.plot(t, np.where(mask, result.distance, np.nan), color=colour, lw=0.9,
                 label=f"{name}: distance to the target")
         ax.plot(t, np.where(mask, result.clearance, np.nan), color=colour, lw=0.6, ls=":")
-        top.plot(np.where(mask, result.state[:, 0], np.nan),
-                 np.where(mask, result.state[:, 1], np.nan), color=colour, lw=0.8, label=name)
+        top.plot(np.where(mask, state.x, np.nan), np.where(mask, state.y, np.nan),
+                 color=colour, lw=0.8, label=name)
     band = near_distance(result) / 2.0
     if np.isfinite(band):  # a mission that only flies an exported file knows no Omega
         ax.axhline(band, color="k", ls="--", lw=0.8, label=f"Omega = {band:g} m")
@@ -324,14 +327,16 @@ def fig_distance(result: MissionResult) -> Figure:
 
 
 def write_trajectory(result: MissionResult, filename) -> None:
-    """`t, x, y, z, roll, pitch, yaw` (true) and `est_x, est_y, est_z` (navigation), in the
-    site's own horizontal coordinates."""
-    true_xyz = result.site.to_site(result.state[:, :3])
-    est_xyz = result.site.to_site(result.estimated[:, :3])
+    """`t`, the true pose (`signals.VehicleState`'s `x y z roll pitch yaw`) and the navigation's
+    position (`est_x est_y est_z`), in the site's own horizontal coordinates."""
+    state, estimated = VehicleState(result.state), VehicleState(result.estimated)
+    true_xyz = result.site.to_site(state.position)
+    est_xyz = result.site.to_site(estimated.position)
+    pose = VehicleState.get_fields()[:6]  # position and attitude
     with open(filename, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["t", "x", "y", "z", "roll", "pitch", "yaw", "est_x", "est_y", "est_z"])
-        for t, p, a, e in zip(result.times, true_xyz, result.state[:, 3:6], est_xyz):
+        writer.writerow(["t", *pose, *(f"est_{name}" for name in pose[:3])])
+        for t, p, a, e in zip(result.times, true_xyz, state.attitude, est_xyz):
             writer.writerow([f"{t:.2f}", *(f"{v:.3f}" for v in p), *(f"{v:.5f}" for v in a),
                              *(f"{v:.3f}" for v in e)])
 

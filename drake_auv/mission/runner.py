@@ -24,7 +24,8 @@ from drake_auv.mission.diagram import MissionHandles, build_mission_diagram
 from drake_auv.mission.plan import MissionPlan, plan_mission
 from drake_auv.mission.site import Site, load_site, check_against_site
 from drake_auv.mission.supervisor import responses_from_log
-from drake_auv.replanning.replanner import STEP_FIELDS
+from drake_auv.signals import (LegSignal, Profile, ReplanningStep, VehicleState,
+                               annotate_graphviz)
 
 VEHICLE_RADIUS = 1.0  # m, a sphere around the GIRONA 500's hulls for the contact check
 
@@ -51,14 +52,16 @@ class MissionResult:
         phases: the legs grouped by phase, on one time axis; outcomes: per leg ("goal",
             "timed out", "flying" when the time cap stopped it).
         camera_best, multibeam_best: (T,) best viewing angle per target face, rad, NaN unseen.
-        replanning: (k, 5) replanning steps (`replanner.STEP_FIELDS`), planned ones only.
+        replanning: (k, 5) replanning steps (columns `signals.ReplanningStep`), planned ones
+            only.
         scan_log: the returns recorded by the mapper; online_map: its final octree.
-        profile: (n, 7) the profile-following controller's `profile` output (NaN rows
-            without a controller; see `following.controller`), sampled with the state.
-        reference: (n, 8) the tracker's reference.
+        profile: (n, 7) the profile-following controller's `profile` output (columns
+            `signals.Profile`; NaN rows without a controller), sampled with the state.
+        reference: (n, 8) the tracker's reference (columns `signals.Reference`); `state` and
+            `estimated` have the columns of `signals.VehicleState`.
         completed: whether the supervisor ended the dive (False: the time cap did).
         wall_s: wall time of the simulation, s.
-        diagram_dot: the Diagram's Graphviz text.
+        diagram_dot: the Diagram's Graphviz text, each vector port labelled with its fields.
         diagram, handles, context: the simulated Diagram, its `MissionHandles` and the root
             Context at the end, for inspection.
         responses: the supervisor's answers to faults ({response, cause, start_s, end_s}).
@@ -102,8 +105,8 @@ class MissionResult:
 
 def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndarray]:
     """Phases from the supervisor's `leg` log; also the (index, start) of every leg begun."""
-    index = leg_log.data()[0].astype(int)
-    start = leg_log.data()[1]
+    leg = LegSignal(leg_log.data().T)
+    index, start = leg.index.astype(int), leg.start_s
     first = np.flatnonzero(np.r_[True, np.diff(index) != 0])
     begun, starts = index[first], start[first]
     phases: list[Phase] = []
@@ -164,16 +167,17 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
     end = float(context.get_time())
     phases, begun, starts = _phases(logs["leg"], plan.legs, end)
     leg_at = begun[np.maximum(np.searchsorted(starts, times, side="right") - 1, 0)]
-    distance = mesh_distance(site.target_mesh, state[:, :3])
-    clearance = mesh_distance(site.world, state[:, :3])
-    replanning = np.zeros((0, len(STEP_FIELDS)))
+    position = VehicleState(state).position
+    distance = mesh_distance(site.target_mesh, position)
+    clearance = mesh_distance(site.world, position)
+    replanning = np.zeros((0, ReplanningStep.size()))
     if "replanning" in logs:
-        steps = logs["replanning"].data().T
+        table = logs["replanning"].data().T
+        steps = ReplanningStep(table)
         # one row per step: the log samples the last step at every period
-        steps = steps[np.r_[True, np.diff(steps[:, 0]) != 0] & (steps[:, -1] > 0)]
-        replanning = steps
+        replanning = table[np.r_[True, np.diff(steps.time) != 0] & (steps.planned > 0)]
     mapper_context = handles.mapper.GetMyContextFromRoot(context)
-    profile = np.full((len(times), 7), np.nan)
+    profile = np.full((len(times), Profile.size()), np.nan)
     if "profile" in logs:
         profile = logs["profile"].data().T[:len(times)]
     return MissionResult(
@@ -184,5 +188,6 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
             handles.multibeam_coverage.GetMyContextFromRoot(context)),
         replanning, handles.mapper.scan_log(mapper_context),
         handles.mapper.map_output.Eval(mapper_context), completed, profile,
-        logs["reference"].data().T[:len(times)].copy(), wall, diagram.GetGraphvizString(),
+        logs["reference"].data().T[:len(times)].copy(), wall,
+        annotate_graphviz(diagram, diagram.GetGraphvizString()),
         diagram, handles, context, responses_from_log(logs["response"]))

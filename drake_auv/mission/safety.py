@@ -33,11 +33,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_auv.signals import Reference, Response, VehicleState
+
 RESPONSES = ("none", "hold", "back_off", "abort")
 CAUSES = ("none", "sonar_silent", "tracking_error", "navigation_jump")
 SENSORS = ("multibeam", "profiler")
-# the `response` discrete-state group: mode, cause, start time, start pose, target
-RESPONSE_FIELDS = ("mode", "cause", "start_s", "x0", "y0", "z0", "yaw0", "x1", "y1", "z1")
 
 
 @dataclass(frozen=True)
@@ -69,10 +69,13 @@ def relied_sensors(behaviour: str) -> tuple[str, ...]:
 
 
 def response_record(mode: str, cause: str, t: float, x: np.ndarray, target) -> np.ndarray:
-    """The `response` group's value (`RESPONSE_FIELDS`) of `mode` for `cause`, begun at `t`
+    """The `response` group's value (`signals.Response`) of `mode` for `cause`, begun at `t`
     from the estimated state `x` (12) towards `target` (3,)."""
-    return np.array([RESPONSES.index(mode), CAUSES.index(cause), t, x[0], x[1], x[2], x[5],
-                     *np.asarray(target, dtype=float)])
+    state, record = VehicleState(x), Response.zeros()
+    record.mode, record.cause, record.start_s = RESPONSES.index(mode), CAUSES.index(cause), t
+    record.start, record.yaw0 = state.position, state.yaw
+    record.target = np.asarray(target, dtype=float)
+    return record[:]
 
 
 def back_off_target(rules: SafetyRules, x: np.ndarray, occupied: np.ndarray):
@@ -80,30 +83,38 @@ def back_off_target(rules: SafetyRules, x: np.ndarray, occupied: np.ndarray):
     None when no voxel lies within `backoff_range_m` of the estimated position."""
     if len(occupied) == 0:
         return None
-    d = np.linalg.norm(occupied - x[:3], axis=1)
+    state = VehicleState(x)
+    d = np.linalg.norm(occupied - state.position, axis=1)
     nearest = occupied[int(np.argmin(d))]
     if d.min() > rules.backoff_range_m:
         return None
-    away = x[:2] - nearest[:2]
+    here = np.array([state.x, state.y])
+    away = here - nearest[:2]
     norm = np.linalg.norm(away)
-    away = away / norm if norm > 1e-6 else np.array([np.cos(x[5] + np.pi), np.sin(x[5] + np.pi)])
-    return np.array([*(x[:2] + rules.backoff_m * away), x[2]])
+    behind = state.yaw + np.pi
+    away = away / norm if norm > 1e-6 else np.array([np.cos(behind), np.sin(behind)])
+    return np.array([*(here + rules.backoff_m * away), state.z])
 
 
 def abort_target(rules: SafetyRules, x: np.ndarray) -> np.ndarray:
     """(3,) straight above the estimated position, at `surface_z`."""
-    return np.array([x[0], x[1], max(rules.surface_z, x[2])])
+    state = VehicleState(x)
+    return np.array([state.x, state.y, max(rules.surface_z, state.z)])
 
 
 def response_reference(rules: SafetyRules, record: np.ndarray, t: float) -> np.ndarray:
-    """The 8-vector reference `[x, y, z, yaw, vx, vy, vz, yaw_rate]` of a response `record`
-    at `t` s: from its start position to its target at `speed`, then held; yaw held."""
-    start, target = record[3:6], record[7:10]
-    step = target - start
+    """The reference (`signals.Reference`) of a response `record` at `t` s: from its start
+    position to its target at `speed`, then held; yaw held."""
+    record = Response(record)
+    reference = Reference.zeros()
+    reference.yaw = record.yaw0
+    step = record.target - record.start
     length = float(np.linalg.norm(step))
-    travelled = rules.speed * max(t - record[2], 0.0)
+    travelled = rules.speed * max(t - record.start_s, 0.0)
     if length < 1e-9 or travelled >= length:
-        return np.array([*target, record[6], 0.0, 0.0, 0.0, 0.0])
+        reference.position = record.target
+        return reference[:]
     direction = step / length
-    return np.array([*(start + travelled * direction), record[6],
-                     *(rules.speed * direction), 0.0])
+    reference.position = record.start + travelled * direction
+    reference.velocity = rules.speed * direction
+    return reference[:]

@@ -13,17 +13,17 @@ that grows (a failed thruster) and a jump of the estimate, and answers by holdin
 from the mapped structure or aborting to the surface. While a response flies, `behaviour`
 selects the switch's `response` input, fed by `response_reference`; an abort ends the dive.
 
-Discrete-state groups: `leg` ([index, start time]), `progress` (of the current leg: see
-`legs.PROGRESS_SIZE`), `outcomes` (per leg: 0 not ended, 1 goal reached, 2 timed out, 3
-aborted), `done` (1 after the last leg or an abort), `watch` (`WATCH_FIELDS`) and `response`
-(`safety.RESPONSE_FIELDS`).
+Discrete-state groups, each with its view in `drake_auv.signals`: `leg` (`LegSignal`),
+`progress` (of the current leg: `LegProgress`), `outcomes` (per leg: 0 not ended, 1 goal
+reached, 2 timed out, 3 aborted), `done` (1 after the last leg or an abort), `watch` (`Watch`)
+and `response` (`Response`).
 
-Ports: inputs `estimated_state` (12), `path_status` (2), `replanner_status` (3),
-`autopilot_status` (3),
-`multibeam_returns`, `profiler_returns` (`SonarReturns`), `reference` (8), `map`
+Ports: inputs `estimated_state` (`VehicleState`), `path_status` (`PathStatus`),
+`replanner_status` (`ReplannerStatus`), `autopilot_status` (`PilotStatus`),
+`multibeam_returns`, `profiler_returns` (`SonarReturns`), `reference` (`Reference`), `map`
 (`OnlineMap`) (all but the first may be left unconnected: the rule that needs one is then
-off); outputs `leg` (2), `behaviour` (`InputPortIndex`), `response` (10: the `response`
-group, for a log) and `response_reference` (8).
+off); outputs `leg` (`LegSignal`), `behaviour` (`InputPortIndex`), `response` (`Response`,
+the group, for a log) and `response_reference` (`Reference`).
 """
 
 from __future__ import annotations
@@ -32,20 +32,16 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, InputPortIndex, LeafSystem
 
-from drake_auv.leg_signal import LEG_SIZE
 from drake_auv.mapping.mapper import OnlineMap
-from drake_auv.mission.legs import (PROGRESS_SIZE, Leg, advance_progress, goal_reached,
-                                    start_progress)
-from drake_auv.mission.safety import (CAUSES, RESPONSE_FIELDS, RESPONSES, SENSORS, SafetyRules,
-                                      abort_target, back_off_target, relied_sensors,
-                                      response_record, response_reference)
+from drake_auv.mission.legs import Leg, advance_progress, goal_reached, start_progress
+from drake_auv.mission.safety import (CAUSES, RESPONSES, SENSORS, SafetyRules, abort_target,
+                                      back_off_target, relied_sensors, response_record,
+                                      response_reference)
+from drake_auv.signals import (LegProgress, LegSignal, PathStatus, PilotStatus, Reference,
+                               ReplannerStatus, Response, VehicleState, Watch)
 from drake_auv.sonar.returns import SonarReturns
-from drake_auv.vehicle.model import STATE_SIZE
 
 OUTCOMES = ("flying", "goal", "timed out", "aborted")
-# last return time of each of `SENSORS` (s), tracking error above threshold since (s, -1: not),
-# previous estimated position (m)
-WATCH_FIELDS = ("multibeam_hit_s", "profiler_hit_s", "tracking_since_s", "x", "y", "z")
 
 
 class MissionSupervisor(LeafSystem):
@@ -72,21 +68,23 @@ class MissionSupervisor(LeafSystem):
         self.legs = tuple(legs)
         self.behaviour_ports = dict(behaviour_ports)
         self.rules = rules if rules is not None else SafetyRules()
-        self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
-        self.path_status_input = self.DeclareVectorInputPort("path_status", 2)
-        self.replanner_status_input = self.DeclareVectorInputPort("replanner_status", 3)
-        self.autopilot_status_input = self.DeclareVectorInputPort("autopilot_status", 3)
+        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
+        self.path_status_input = self.DeclareVectorInputPort("path_status", PathStatus.size())
+        self.replanner_status_input = self.DeclareVectorInputPort("replanner_status",
+                                                                  ReplannerStatus.size())
+        self.autopilot_status_input = self.DeclareVectorInputPort("autopilot_status",
+                                                                  PilotStatus.size())
         empty = AbstractValue.Make(SonarReturns.empty(1.0))
         self.returns_inputs = {name: self.DeclareAbstractInputPort(f"{name}_returns", empty)
                                for name in SENSORS}
-        self.reference_input = self.DeclareVectorInputPort("reference", 8)
+        self.reference_input = self.DeclareVectorInputPort("reference", Reference.size())
         self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
-        self._leg = self.DeclareDiscreteState(LEG_SIZE)
-        self._progress = self.DeclareDiscreteState(PROGRESS_SIZE)
+        self._leg = self.DeclareDiscreteState(LegSignal.size())
+        self._progress = self.DeclareDiscreteState(LegProgress.size())
         self._outcomes = self.DeclareDiscreteState(len(self.legs))
         self._done = self.DeclareDiscreteState(1)
-        self._watch = self.DeclareDiscreteState(len(WATCH_FIELDS))
-        self._response = self.DeclareDiscreteState(len(RESPONSE_FIELDS))
+        self._watch = self.DeclareDiscreteState(Watch.size())
+        self._response = self.DeclareDiscreteState(Response.size())
         self.DeclareInitializationDiscreteUpdateEvent(self._start_mission)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update_leg)
         self.leg_output = self.DeclareStateOutputPort("leg", self._leg)
@@ -96,49 +94,66 @@ class MissionSupervisor(LeafSystem):
                                    self.discrete_state_ticket(self._response)})
         self.response_output = self.DeclareStateOutputPort("response", self._response)
         self.response_reference_output = self.DeclareVectorOutputPort(
-            "response_reference", 8,
+            "response_reference", Reference.size(),
             lambda context, output: output.SetFromVector(response_reference(
                 self.rules, context.get_discrete_state(self._response).get_value(),
                 context.get_time())),
             prerequisites_of_calc={self.discrete_state_ticket(self._response),
                                    self.time_ticket()})
 
-    def _status(self, port, context, size: int) -> np.ndarray:
-        return port.Eval(context) if port.HasValue(context) else np.full(size, -1.0)
+    def _status(self, port, context, view) -> np.ndarray:
+        """A status input's value (laid out as `view`); every field -1 while unconnected."""
+        return port.Eval(context) if port.HasValue(context) else np.full(view.size(), -1.0)
+
+    def _leg_now(self, context):
+        return LegSignal(context.get_discrete_state(self._leg).get_value())
 
     def _start_mission(self, context, discrete_state):
         x = self.state_input.Eval(context)
-        discrete_state.set_value(self._leg, [0.0, context.get_time()])
-        discrete_state.set_value(self._progress, start_progress(self.legs[0], x))
         t = context.get_time()
-        discrete_state.set_value(self._watch, [t, t, -1.0, *x[:3]])
+        leg = LegSignal.zeros()
+        leg.start_s = t
+        discrete_state.set_value(self._leg, leg[:])
+        discrete_state.set_value(self._progress, start_progress(self.legs[0], x))
+        watch = Watch.zeros()
+        watch.multibeam_hit_s = watch.profiler_hit_s = t
+        watch.tracking_since_s = -1.0
+        watch.position = VehicleState(x).position
+        discrete_state.set_value(self._watch, watch[:])
 
     def _watched(self, context, t: float, x: np.ndarray) -> tuple[np.ndarray, bool, bool]:
         """The `watch` group updated at `t` from the returns, the reference and the estimate
         `x`; and whether the estimate jumped and the tracking error lasted too long."""
-        watch = context.get_discrete_state(self._watch).get_value().copy()
-        for k, name in enumerate(SENSORS):
+        watch = Watch(context.get_discrete_state(self._watch).get_value().copy())
+        position = VehicleState(x).position
+        for name in SENSORS:
             port = self.returns_inputs[name]
             if port.HasValue(context):
                 returns = port.Eval(context)
                 if returns.sequence > 0 and len(returns) > 0:  # beams fired, echo or not
-                    watch[k] = max(watch[k], returns.time)
-        jumped = bool(np.linalg.norm(x[:3] - watch[3:6]) > self.rules.jump_m)
-        watch[3:6] = x[:3]
+                    field = f"{name}_hit_s"
+                    setattr(watch, field, max(getattr(watch, field), returns.time))
+        jumped = bool(np.linalg.norm(position - watch.position) > self.rules.jump_m)
+        watch.position = position
         if self.reference_input.HasValue(context):
-            error = np.linalg.norm(x[:3] - self.reference_input.Eval(context)[:3])
-            watch[2] = (watch[2] if watch[2] >= 0 else t) if error > self.rules.tracking_error_m \
-                else -1.0
-        tracking = watch[2] >= 0 and t - watch[2] >= self.rules.tracking_s
-        return watch, jumped, tracking
+            reference = Reference(self.reference_input.Eval(context))
+            error = np.linalg.norm(position - reference.position)
+            since = watch.tracking_since_s
+            watch.tracking_since_s = (since if since >= 0 else t) \
+                if error > self.rules.tracking_error_m else -1.0
+        since = watch.tracking_since_s
+        tracking = since >= 0 and t - since >= self.rules.tracking_s
+        return watch[:], jumped, tracking
 
     def _respond(self, context, t: float, x: np.ndarray, watch: np.ndarray, jumped: bool,
                  tracking: bool, start: float) -> np.ndarray | None:
         """The `response` group after this period's checks, or None to go on with the leg."""
         rules = self.rules
         record = context.get_discrete_state(self._response).get_value()
-        mode, cause = RESPONSES[int(record[0])], CAUSES[int(record[1])]
-        elapsed = t - record[2]
+        response = Response(record)
+        mode, cause = RESPONSES[int(response.mode)], CAUSES[int(response.cause)]
+        elapsed = t - response.start_s
+        position = VehicleState(x).position
         if mode in ("none", "hold"):
             if jumped:
                 return response_record("abort", "navigation_jump", t, x, abort_target(rules, x))
@@ -150,22 +165,22 @@ class MissionSupervisor(LeafSystem):
                     return response_record("abort", "tracking_error", t, x,
                                            abort_target(rules, x))
                 return response_record("back_off", "tracking_error", t, x, target)
-        sensors = relied_sensors(self.legs[int(context.get_discrete_state(self._leg)[0])]
-                                 .behaviour)
-        since = [t - max(watch[SENSORS.index(s)], start) for s in sensors
+        sensors = relied_sensors(self.legs[int(self._leg_now(context).index)].behaviour)
+        watched = Watch(watch)
+        since = [t - max(getattr(watched, f"{s}_hit_s"), start) for s in sensors
                  if self.returns_inputs[s].HasValue(context)]
         if mode == "none":
             if since and max(since) >= rules.silence_s:
-                return response_record("hold", "sonar_silent", t, x, x[:3])
+                return response_record("hold", "sonar_silent", t, x, position)
             return None
         if mode == "hold":
             if since and max(since) < rules.silence_s:
-                return np.zeros(len(RESPONSE_FIELDS))  # the sonar is back: resume the leg
+                return np.zeros(Response.size())  # the sonar is back: resume the leg
             if elapsed >= rules.hold_max_s:
                 return response_record("abort", cause, t, x, abort_target(rules, x))
             return record
         if mode == "back_off":
-            if (np.linalg.norm(x[:3] - record[7:10]) <= rules.surface_tolerance_m
+            if (np.linalg.norm(position - response.target) <= rules.surface_tolerance_m
                     or elapsed >= rules.backoff_max_s):
                 return response_record("abort", cause, t, x, abort_target(rules, x))
             return record
@@ -175,19 +190,20 @@ class MissionSupervisor(LeafSystem):
         if context.get_discrete_state(self._done)[0]:
             return
         t = context.get_time()
-        index, start = context.get_discrete_state(self._leg).get_value()
-        index = int(index)
+        current = self._leg_now(context)
+        index, start = int(current.index), float(current.start_s)
         leg = self.legs[index]
         x = self.state_input.Eval(context)
         watch, jumped, tracking = self._watched(context, t, x)
         discrete_state.set_value(self._watch, watch)
-        response = self._respond(context, t, x, watch, jumped, tracking, start)
-        if response is not None:
-            discrete_state.set_value(self._response, response)
-            if RESPONSES[int(response[0])] != "none":
-                if RESPONSES[int(response[0])] == "abort" and (
-                        x[2] >= response[9] - self.rules.surface_tolerance_m
-                        or t - response[2] >= self.rules.abort_max_s):
+        record = self._respond(context, t, x, watch, jumped, tracking, start)
+        if record is not None:
+            discrete_state.set_value(self._response, record)
+            response = Response(record)
+            if RESPONSES[int(response.mode)] != "none":
+                if RESPONSES[int(response.mode)] == "abort" and (
+                        VehicleState(x).z >= response.z1 - self.rules.surface_tolerance_m
+                        or t - response.start_s >= self.rules.abort_max_s):
                     outcomes = context.get_discrete_state(self._outcomes).get_value().copy()
                     outcomes[index] = OUTCOMES.index("aborted")
                     discrete_state.set_value(self._outcomes, outcomes)
@@ -197,9 +213,9 @@ class MissionSupervisor(LeafSystem):
                                     x)
         outcome = 0
         if goal_reached(leg, index, t, x, progress,
-                        self._status(self.path_status_input, context, 2),
-                        self._status(self.replanner_status_input, context, 3),
-                        self._status(self.autopilot_status_input, context, 3)):
+                        self._status(self.path_status_input, context, PathStatus),
+                        self._status(self.replanner_status_input, context, ReplannerStatus),
+                        self._status(self.autopilot_status_input, context, PilotStatus)):
             outcome = 1
         elif t - start >= leg.max_duration:
             outcome = 2
@@ -211,15 +227,17 @@ class MissionSupervisor(LeafSystem):
                 discrete_state.set_value(self._done, [1.0])
             else:
                 index += 1
-                discrete_state.set_value(self._leg, [index, t])
+                following = LegSignal.zeros()
+                following.index, following.start_s = index, t
+                discrete_state.set_value(self._leg, following[:])
                 progress = start_progress(self.legs[index], x)
         discrete_state.set_value(self._progress, progress)
 
     def _calc_behaviour(self, context, output):
-        if context.get_discrete_state(self._response)[0] > 0:
+        if Response(context.get_discrete_state(self._response).get_value()).mode > 0:
             output.set_value(InputPortIndex(self.behaviour_ports["response"]))
             return
-        index = int(context.get_discrete_state(self._leg)[0])
+        index = int(self._leg_now(context).index)
         output.set_value(InputPortIndex(self.behaviour_ports[self.legs[index].behaviour]))
 
     def monitor(self, root_context) -> EventStatus:
@@ -239,14 +257,16 @@ def responses_from_log(log) -> list[dict]:
     {response, cause, start_s, end_s} (end_s None: still flying when the dive ended)."""
     out = []
     previous = None
-    for t, record in zip(log.sample_times(), log.data().T):
-        current = (int(record[0]), int(record[1]), float(record[2]))
+    records = Response(log.data().T)
+    for t, mode, cause, start in zip(log.sample_times(), records.mode, records.cause,
+                                     records.start_s):
+        current = (int(mode), int(cause), float(start))
         if current == previous:
             continue
         if out and out[-1]["end_s"] is None:
             out[-1]["end_s"] = float(t)
-        if current[0] > 0:
-            out.append(dict(response=RESPONSES[current[0]], cause=CAUSES[current[1]],
-                            start_s=current[2], end_s=None))
+        if mode > 0:  # a response flies
+            out.append(dict(response=RESPONSES[int(mode)], cause=CAUSES[int(cause)],
+                            start_s=float(start), end_s=None))
         previous = current
     return out

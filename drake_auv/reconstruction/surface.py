@@ -62,6 +62,12 @@ def load_open3d():
     return module
 
 
+def retry_open3d() -> None:
+    """Forgets the import attempt, so the next use tries again (for a process whose
+    environment changed since: Open3D installed, removed or repaired)."""
+    _open3d_or_reason.cache_clear()
+
+
 @functools.cache
 def _open3d_or_reason():
     """(open3d, None) or (None, reason), tried once per process. Open3D's Linux wheels link

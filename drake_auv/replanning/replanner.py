@@ -11,15 +11,15 @@ finished.
 
 The nominal plan is an input (`nominal`, a `Path` from a source system), the map another
 (`map`, the mapper's `OnlineMap`). State, all in the Context: the plan and its trajectory
-(abstract, replaced at every step, never modified), the progress (`progress` group: leg,
-next waypoint, steps, finished) and the record of the last step (`last_step` group: time,
-wall time of the step and of its map query, next waypoint, whether a section was planned), which the `step` output exposes for a `LogVectorOutput`.
+(abstract, replaced at every step, never modified), the progress (`progress` group:
+`signals.ReplannerProgress`) and the record of the last step (`last_step` group:
+`signals.ReplanningStep`), which the `step` output exposes for a `LogVectorOutput`.
 
-Ports: inputs `estimated_state` (12), `map` (`OnlineMap`), `nominal` (`Path`), `leg` (2);
-outputs `reference` (8, world: `[x, y, z, yaw, vx, vy, vz, yaw_rate]`), `status` (3:
-`[leg, finished, next_index]`, the leg last flown, -1 before any), `step` (5) and `section`
-((N, 3) the last optimised section's trajectory, navigation frame, m; (0, 3) before any: for
-a viewer).
+Ports (views in `drake_auv.signals`): inputs `estimated_state` (`VehicleState`), `map`
+(`OnlineMap`), `nominal` (`Path`), `leg` (`LegSignal`); outputs `reference` (`Reference`,
+world), `status` (`ReplannerStatus`, the leg last flown, -1 before any), `step`
+(`ReplanningStep`) and `section` ((N, 3) the last optimised section's trajectory, navigation
+frame, m; (0, 3) before any: for a viewer).
 """
 
 from __future__ import annotations
@@ -38,10 +38,9 @@ from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import arc_length, motion_heading
 from drake_auv.replanning.section import (OPTIMIZERS, ReplanningParameters, SectionPlan,
                                           replan_section)
-from drake_auv.vehicle.model import STATE_SIZE
+from drake_auv.signals import (Reference, ReplannerProgress, ReplannerStatus, ReplanningStep,
+                               VehicleState)
 from drake_auv.vehicle.path_reference import trajectory_reference
-
-STEP_FIELDS = ("time", "wall_time", "query_time", "next_index", "planned")
 
 
 @dataclass(frozen=True)
@@ -100,24 +99,25 @@ class Replanner(LeafSystem):
         self.seed = int(seed)
         self.offset_labels = tuple(offset_labels)
         self.legs = frozenset(int(leg) for leg in legs)
-        self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
+        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
         self.nominal_input = self.DeclareAbstractInputPort(
             "nominal", AbstractValue.Make(_placeholder_path()))
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self._plan_index = self.DeclareAbstractState(AbstractValue.Make(_Plan()))
-        # [leg flown (-1: none yet), next waypoint, steps of this leg, finished (0/1)]
-        self._progress = self.DeclareDiscreteState(np.array([-1.0, 0.0, 0.0, 0.0]))
-        self._last_step = self.DeclareDiscreteState(np.zeros(len(STEP_FIELDS)))
+        progress = ReplannerProgress.zeros()
+        progress.leg = -1.0  # none flown yet
+        self._progress = self.DeclareDiscreteState(progress[:])
+        self._last_step = self.DeclareDiscreteState(ReplanningStep.size())
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_plan)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, self.period, self._update_plan)
         self.reference_output = self.DeclareVectorOutputPort(
-            "reference", 8, self._calc_reference,
+            "reference", Reference.size(), self._calc_reference,
             prerequisites_of_calc={self.abstract_state_ticket(self._plan_index),
                                    self.time_ticket(),
                                    self.input_port_ticket(self.state_input.get_index())})
         self.status_output = self.DeclareVectorOutputPort(
-            "status", 3, self._calc_status,
+            "status", ReplannerStatus.size(), self._calc_status,
             prerequisites_of_calc={self.discrete_state_ticket(self._progress)})
         self.step_output = self.DeclareStateOutputPort("step", self._last_step)
         self.section_output = self.DeclareAbstractOutputPort(
@@ -133,14 +133,15 @@ class Replanner(LeafSystem):
         if leg not in self.legs:
             return  # not flying: nothing to do
         t = context.get_time()
-        flown, next_index, steps, finished = context.get_discrete_state(
-            self._progress).get_value()
+        progress = ReplannerProgress(context.get_discrete_state(self._progress).get_value())
+        next_index, steps, finished = progress.next_index, progress.steps, progress.finished
         current = context.get_abstract_state(self._plan_index).get_value()
-        if flown != leg:  # a new leg: from the first waypoint, nothing planned yet
+        if progress.leg != leg:  # a new leg: from the first waypoint, nothing planned yet
             next_index, steps, finished, current = 0, 0, 0.0, _Plan()
         if finished:
             return
         x = self.state_input.Eval(context)
+        position = VehicleState(x).position
         if current.plan is not None:
             samples = current.trajectory.vector_values(current.trajectory.get_segment_times())
             arc = arc_length(samples[:3].T)
@@ -150,7 +151,7 @@ class Replanner(LeafSystem):
         keep_offset = np.isin(nominal.labels, self.offset_labels)
         online = self.map_input.Eval(context) if self.map_input.HasValue(context) else None
         start = time.perf_counter()
-        plan = replan_section(x[:3], nominal.points, int(next_index),
+        plan = replan_section(position, nominal.points, int(next_index),
                               online.map if online is not None else np.zeros((0, 3)),
                               self.params, seed=self.seed + int(steps), keep_offset=keep_offset,
                               optimizer=self.optimizer,
@@ -163,21 +164,26 @@ class Replanner(LeafSystem):
             next_index = int(plan.indices[0])
             new = _Plan(plan, self._timed(plan, x, t))
         state.get_mutable_abstract_state(self._plan_index).set_value(new)
-        state.get_mutable_discrete_state(self._progress).set_value(
-            [leg, next_index, steps + 1, finished])
-        state.get_mutable_discrete_state(self._last_step).set_value(
-            [t, wall, plan.query_time if plan is not None else 0.0, next_index,
-             float(plan is not None)])
+        progress = ReplannerProgress.zeros()
+        progress.leg, progress.next_index, progress.steps, progress.finished = (
+            leg, next_index, steps + 1, finished)
+        state.get_mutable_discrete_state(self._progress).set_value(progress[:])
+        step = ReplanningStep.zeros()
+        step.time, step.wall_time, step.next_index, step.planned = (
+            t, wall, next_index, float(plan is not None))
+        step.query_time = plan.query_time if plan is not None else 0.0
+        state.get_mutable_discrete_state(self._last_step).set_value(step[:])
 
     def _timed(self, plan: SectionPlan, x: np.ndarray, t: float) -> PiecewisePolynomial:
         """The section's trajectory from time `t` at the survey speed, with its yaw: facing the
         mapped structure with the payload sensor where it is seen, along the motion elsewhere."""
         pts = plan.trajectory
-        heading = motion_heading(pts, fallback=x[5]) + self.heading_offset
+        yaw = VehicleState(x).yaw
+        heading = motion_heading(pts, fallback=yaw) + self.heading_offset
         if self.sensor_azimuth is not None:
             facing = plan.facing - self.sensor_azimuth
             heading = np.where(np.isfinite(facing), facing, heading)
-        heading = x[5] + np.angle(np.exp(1j * (heading - x[5])))  # nearest turn first
+        heading = yaw + np.angle(np.exp(1j * (heading - yaw)))  # nearest turn first
         path = Path(pts, heading, np.column_stack([np.cos(heading), np.sin(heading),
                                                    np.zeros(len(pts))]))
         trajectory = path.to_trajectory(self.speed, yaw_rate=self.yaw_rate)
@@ -194,5 +200,8 @@ class Replanner(LeafSystem):
         output.set_value(np.zeros((0, 3)) if plan is None else plan.trajectory)
 
     def _calc_status(self, context, output):
-        progress = context.get_discrete_state(self._progress).get_value()
-        output.SetFromVector([progress[0], progress[3], progress[1]])
+        progress = ReplannerProgress(context.get_discrete_state(self._progress).get_value())
+        status = ReplannerStatus.zeros()
+        status.leg, status.finished, status.next_index = (progress.leg, progress.finished,
+                                                          progress.next_index)
+        output.SetFromVector(status[:])

@@ -26,6 +26,7 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
+from drake_auv.signals import VehicleState
 from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.vehicle.model import STATE_SIZE
 
@@ -78,9 +79,10 @@ def measure_altitude(caster: RayCaster, params: DvlParams, state: np.ndarray,
                      rng: np.random.Generator | None = None) -> float:
     """The DVL's altitude at the true `state` (12), m; NaN without bottom lock. `rng` None:
     no noise."""
-    rot = rotation_world_body(state[3], state[4], state[5])
+    state = VehicleState(np.asarray(state, dtype=float))
+    rot = rotation_world_body(state.roll, state.pitch, state.yaw)
     directions = params.beams_body @ rot.T
-    ranges, _ = caster.cast_unit(np.asarray(state[:3], float), directions, params.max_range)
+    ranges, _ = caster.cast_unit(state.position, directions, params.max_range)
     if rng is not None:
         sigma = params.range_sigma_fraction * np.nan_to_num(ranges) + params.range_sigma_m
         ranges = ranges + sigma * rng.standard_normal(4)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_auv.signals import Reference, VehicleState
 from drake_auv.vehicle.model import Girona500Params
 
 
@@ -92,16 +93,17 @@ class TrackingController:
                dt: float) -> tuple[np.ndarray, np.ndarray]:
         """(wrench (4,), updated position integral (3,)) for one control period dt (s)."""
         g = self.gains
-        rot = rotation_world_body(state[3], state[4], state[5])
-        v_body = state[6:9]
-        e_p = reference[0:3] - state[0:3]
+        state, reference = VehicleState(state), Reference(reference)
+        rot = rotation_world_body(state.roll, state.pitch, state.yaw)
+        v_body = state.linear_velocity
+        e_p = reference.position - state.position
         integral = np.clip(integral + e_p * dt, -g.integral_limit, g.integral_limit)
-        accel = g.kp * e_p + g.kd * (reference[4:7] - rot @ v_body) + g.ki * integral
+        accel = g.kp * e_p + g.kd * (reference.velocity - rot @ v_body) + g.ki * integral
         force = (self.mass_t * (rot.T @ accel) + self.d_lin[:3] * v_body
                  + self.d_quad[:3] * np.abs(v_body) * v_body - self.net_up * rot[2])
-        r = state[11]
-        e_yaw = float(wrap_angle(reference[3] - state[5]))
-        r_ref = reference[7]
+        r = state.r
+        e_yaw = float(wrap_angle(reference.yaw - state.yaw))
+        r_ref = reference.yaw_rate
         yaw_moment = (self.inertia_z * (g.kp_yaw * e_yaw + g.kd_yaw * (r_ref - r))
                       + self.d_lin[5] * r_ref + self.d_quad[5] * abs(r_ref) * r_ref)
         return np.array([force[0], force[1], force[2], yaw_moment]), integral

@@ -13,6 +13,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.framework import LeafSystem
 
+from drake_auv.signals import VehicleState
 from drake_auv.vehicle.model import NUM_THRUSTERS, STATE_SIZE, Girona500Model, Girona500Params
 
 
@@ -51,8 +52,8 @@ class Girona500Dynamics(LeafSystem):
         discrete_state.set_value(self._thrust, x[STATE_SIZE:])
 
     def _calc_pose(self, context, output):
-        x = context.get_discrete_state(self._state).get_value()
-        output.set_value(RigidTransform(RollPitchYaw(x[3:6]), x[:3]))
+        x = VehicleState(context.get_discrete_state(self._state).get_value())
+        output.set_value(RigidTransform(RollPitchYaw(x.attitude), x.position))
 
 
 def _checked_state(state) -> np.ndarray:

@@ -26,19 +26,25 @@ from pydrake.trajectories import PiecewisePolynomial
 from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.planning.path import Path
 from drake_auv.planning.transit import transit
+from drake_auv.signals import Reference, VehicleState
 from drake_auv.vehicle.model import STATE_SIZE
 
 
 def trajectory_reference(trajectory: PiecewisePolynomial | None, t: float, state_input,
                          context) -> np.ndarray:
-    """The 8-vector reference of a timed [x, y, z, yaw] `trajectory` at `t` s: its value and
-    first derivative (Drake's; past the end, the end value, which `value` holds, and zero
-    rates), and with no trajectory the estimated pose from `state_input` held (zero rates)."""
+    """The reference (`signals.Reference`) of a timed [x, y, z, yaw] `trajectory` at `t` s:
+    its value and first derivative (Drake's; past the end, the end value, which `value` holds,
+    and zero rates), and with no trajectory the estimated pose from `state_input` held (zero
+    rates)."""
+    reference = Reference.zeros()
     if trajectory is None:
-        x = state_input.Eval(context)
-        return np.concatenate([x[:3], [x[5]], np.zeros(4)])
-    rate = trajectory.EvalDerivative(t, 1)[:, 0] if t < trajectory.end_time() else np.zeros(4)
-    return np.concatenate([trajectory.value(t)[:, 0], rate])
+        state = VehicleState(state_input.Eval(context))
+        reference.position, reference.yaw = state.position, state.yaw
+        return reference[:]
+    reference.pose = trajectory.value(t)[:, 0]
+    if t < trajectory.end_time():
+        reference.rates = trajectory.EvalDerivative(t, 1)[:, 0]
+    return reference[:]
 
 
 @dataclass(frozen=True)
@@ -109,7 +115,7 @@ class PathReference(LeafSystem):
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_path)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update_path)
         self.reference_output = self.DeclareVectorOutputPort(
-            "reference", 8, self._calc_reference,
+            "reference", Reference.size(), self._calc_reference,
             prerequisites_of_calc={self.abstract_state_ticket(self._timed_index),
                                    self.input_port_ticket(self.state_input.get_index()),
                                    self.time_ticket()})
@@ -120,8 +126,9 @@ class PathReference(LeafSystem):
         for a nominal leg the plan after it."""
         end = np.asarray(leg.target if leg.kind == "goto" else nominal.points[0], dtype=float)
         end_yaw = leg.yaw if leg.kind == "goto" else float(nominal.heading[0])
-        path = transit(x[:3], end, float(x[5]), end_yaw, self.terrain, self.clearance,
-                       self.min_depth)
+        state = VehicleState(x)
+        path = transit(state.position, end, float(state.yaw), end_yaw, self.terrain,
+                       self.clearance, self.min_depth)
         return [path] if leg.kind == "goto" else [path, nominal]
 
     def _update_path(self, context, state):

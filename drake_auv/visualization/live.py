@@ -23,9 +23,9 @@ from pydrake.geometry import Cylinder, Rgba, Sphere
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
-from drake_auv.leg_signal import LEG_SIZE
+from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.mission.legs import Leg
-from drake_auv.vehicle.model import STATE_SIZE
+from drake_auv.signals import Reference, VehicleState
 
 LABEL_PREFIX = "leg "  # the control-panel label's name starts with it
 LEG_RGBA = Rgba(1.0, 0.1, 0.8, 1.0)
@@ -43,8 +43,9 @@ def leg_label(legs: tuple[Leg, ...], index: int, start: float) -> str:
 class MissionView(LeafSystem):
     """Draws the leg, the section and the reference under `root` in `meshcat` every `period` s.
 
-    Ports: inputs `leg` (2, the supervisor's), `estimated_state` (12), `reference` (8) and
-    `section` (abstract (N, 3) array, m; may be left unconnected: no replanner).
+    Ports (views in `drake_auv.signals`): inputs `leg` (`LegSignal`, the supervisor's),
+    `estimated_state` (`VehicleState`), `reference` (`Reference`) and `section` (abstract
+    (N, 3) array, m; may be left unconnected: no replanner).
     """
 
     def __init__(self, meshcat, root: str, legs: tuple[Leg, ...], period: float = 1.0):
@@ -55,8 +56,8 @@ class MissionView(LeafSystem):
             raise ValueError("MissionView needs the mission's legs (at least one)")
         self.meshcat, self.root, self.legs = meshcat, "/" + root.strip("/"), tuple(legs)
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
-        self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
-        self.reference_input = self.DeclareVectorInputPort("reference", 8)
+        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
+        self.reference_input = self.DeclareVectorInputPort("reference", Reference.size())
         self.section_input = self.DeclareAbstractInputPort(
             "section", AbstractValue.Make(np.zeros((0, 3))))
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
@@ -64,10 +65,10 @@ class MissionView(LeafSystem):
         meshcat.SetObject(f"{self.root}/reference", Sphere(0.3), REFERENCE_RGBA)
 
     def _publish(self, context):
-        index, start = self.leg_input.Eval(context)
-        self._draw_leg(int(index), float(start), self.state_input.Eval(context)[:3])
-        self.meshcat.SetTransform(f"{self.root}/reference",
-                                  RigidTransform(self.reference_input.Eval(context)[:3]))
+        index, start = read_leg(self.leg_input, context)
+        self._draw_leg(index, start, VehicleState(self.state_input.Eval(context)).position)
+        reference = Reference(self.reference_input.Eval(context))
+        self.meshcat.SetTransform(f"{self.root}/reference", RigidTransform(reference.position))
         section = (self.section_input.Eval(context) if self.section_input.HasValue(context)
                    else np.zeros((0, 3)))
         if len(section) >= 2:

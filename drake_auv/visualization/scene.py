@@ -19,6 +19,7 @@ from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.planning.path import Path
+from drake_auv.signals import VehicleState
 
 # GIRONA 500 envelope: 1.5 m long, 1.0 m wide, 1.0 m high, two buoyant upper hulls and one
 # lower hull (Ribas et al. 2012); hull radius and spacing picked to match that envelope.
@@ -219,15 +220,16 @@ class VehicleVisualizer(LeafSystem):
         self._publish_pose(context)
 
     def _publish_pose(self, context):
-        x = self.state_input.Eval(context)
+        x = VehicleState(self.state_input.Eval(context))
         t = context.get_time()
         scene = self.scene
         when = scene.recording_time(t) if scene.recording else None
-        scene.meshcat.SetTransform(self.vehicle_path, RigidTransform(RollPitchYaw(x[3:6]), x[:3]),
+        scene.meshcat.SetTransform(self.vehicle_path,
+                                   RigidTransform(RollPitchYaw(x.attitude), x.position),
                                    when)
         if not self.trail:
             return
-        self._trail_points.append(np.array(x[:3]))
+        self._trail_points.append(np.array(x.position))
         if len(self._trail_points) > self.trail_piece:
             path = f"{self.trail_path}/{self._pieces}"
             points = np.asfortranarray(np.array(self._trail_points).T)
