@@ -34,6 +34,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from drake_auv.signals import Reference, VehicleState
 from drake_auv.vehicle.control import wrap_angle
 from drake_auv.perception.local_map import LocalProfileMap
 from drake_auv.perception.profile_estimation import (EstimatorParams, ProfileEstimate,
@@ -204,7 +205,8 @@ class _Follower:
         local_map.add(points_nav, time)
         state = replace(state, map=local_map, time=time,
                         start_time=time if state.start_time is None else state.start_time,
-                        yaw_ref=float(x[5]) if state.yaw_ref is None else state.yaw_ref)
+                        yaw_ref=float(VehicleState(x).yaw) if state.yaw_ref is None
+                        else state.yaw_ref)
         return x, dt, state
 
     def _search_speed(self, state: FollowerState) -> float:
@@ -257,34 +259,34 @@ class HorizontalFollower(_Follower):
         from the estimated state `x` (12); returns the new state and the output."""
         x, dt, state = self._begin(state, time, x, points_nav)
         p = self.params
-        depth_z = float(x[2]) if state.anchor is None else state.anchor
-        position = x[:3]
+        x = VehicleState(x)
+        depth_z = float(x.z) if state.anchor is None else state.anchor
+        position = x.position
         points = state.map.horizontal_slice(position, p.plane_band)
-        facing = x[5] - p.yaw_offset
+        facing = x.yaw - p.yaw_offset
         look = np.array([np.cos(facing), np.sin(facing)]) if state.look is None else state.look
         estimate, rng = self._estimate(state, points, look)
-        reference = np.zeros(8)
+        reference = Reference.zeros()
         if estimate is None:
             ahead = state.yaw_ref - p.yaw_offset
-            reference[:2] = position[:2]
-            reference[4:6] = self._search_speed(state) * np.array([np.cos(ahead), np.sin(ahead)])
+            reference.x, reference.y = position[:2]
+            reference.vx, reference.vy = (self._search_speed(state)
+                                          * np.array([np.cos(ahead), np.sin(ahead)]))
             mode, normal = "search", state.normal
             yaw, yaw_rate = self._steer_yaw(state, state.yaw_ref, dt)
         else:
             correction, velocity = follow_step(estimate, p)
-            reference[:2] = position[:2] + correction
-            reference[4:6] = velocity
+            reference.x, reference.y = position[:2] + correction
+            reference.vx, reference.vy = velocity
             normal = estimate.normal
             yaw, yaw_rate = self._steer_yaw(state, np.arctan2(-normal[1], -normal[0])
                                             + p.yaw_offset, dt)
             look = p.side * np.array([normal[1], -normal[0]])
             mode = "follow"
-        reference[2] = depth_z
-        reference[3] = yaw
-        reference[7] = yaw_rate
+        reference.z, reference.yaw, reference.yaw_rate = depth_z, yaw, yaw_rate
         state = replace(state, rng=rng, yaw_ref=yaw, yaw_rate_ref=yaw_rate, look=look,
                         normal=normal, anchor=depth_z)
-        return state, FollowerOutput(reference, estimate, mode)
+        return state, FollowerOutput(reference[:], estimate, mode)
 
 
 class VerticalFollower(_Follower):
@@ -309,12 +311,13 @@ class VerticalFollower(_Follower):
         from the estimated state `x` (12); returns the new state and the output."""
         x, dt, state = self._begin(state, time, x, points_nav)
         p = self.params
-        plane_yaw = float(x[5]) if state.anchor is None else state.anchor
-        sign = state.heading_sign or (1 if np.cos(x[5] - plane_yaw) >= 0 else -1)
+        x = VehicleState(x)
+        plane_yaw = float(x.yaw) if state.anchor is None else state.anchor
+        sign = state.heading_sign or (1 if np.cos(x.yaw - plane_yaw) >= 0 else -1)
         turns = state.turns
         e = np.array([np.cos(plane_yaw), np.sin(plane_yaw), 0.0])
         up = np.array([0.0, 0.0, 1.0])
-        position = x[:3]
+        position = x.position
         points = state.map.vertical_slice(position, plane_yaw, p.plane_band)
         look = np.array([float(sign), 0.0]) if state.look is None else state.look
         estimate, rng = self._estimate(state, points, look)
@@ -334,18 +337,17 @@ class VerticalFollower(_Follower):
                     sign, turns = -sign, turns + 1  # ceiling: turn, do not back up
             mode = "follow"
         target = plane_yaw + (0.0 if sign > 0 else np.pi)
-        if abs(wrap_angle(target - x[5])) > p.turn_tolerance:
+        if abs(wrap_angle(target - x.yaw)) > p.turn_tolerance:
             velocity = np.zeros(2)  # hold the offset while turning
             mode = "turn"
         yaw, yaw_rate = self._steer_yaw(state, target, dt)
-        reference = np.zeros(8)
-        reference[:3] = position + correction[0] * e + correction[1] * up
-        reference[3] = yaw
-        reference[4:7] = velocity[0] * e + velocity[1] * up
-        reference[7] = yaw_rate
-        if reference[2] >= -p.min_depth:  # depth limit: hold below it
-            reference[2] = -p.min_depth
-            reference[6] = min(reference[6], 0.0)
+        reference = Reference.zeros()
+        reference.position = position + correction[0] * e + correction[1] * up
+        reference.velocity = velocity[0] * e + velocity[1] * up
+        reference.yaw, reference.yaw_rate = yaw, yaw_rate
+        if reference.z >= -p.min_depth:  # depth limit: hold below it
+            reference.z = -p.min_depth
+            reference.vz = min(reference.vz, 0.0)
         state = replace(state, rng=rng, yaw_ref=yaw, yaw_rate_ref=yaw_rate, look=look,
                         normal=normal, anchor=plane_yaw, heading_sign=sign, turns=turns)
-        return state, FollowerOutput(reference, estimate, mode)
+        return state, FollowerOutput(reference[:], estimate, mode)

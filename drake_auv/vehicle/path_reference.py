@@ -27,7 +27,6 @@ from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.planning.path import Path
 from drake_auv.planning.transit import transit
 from drake_auv.signals import Reference, VehicleState
-from drake_auv.vehicle.model import STATE_SIZE
 
 
 def trajectory_reference(trajectory: PiecewisePolynomial | None, t: float, state_input,
@@ -106,7 +105,7 @@ class PathReference(LeafSystem):
         self.legs = {0: legs} if isinstance(legs, PathLeg) else dict(legs)
         self.terrain, self.clearance, self.min_depth = terrain, float(clearance), float(min_depth)
         self.yaw_rate = float(yaw_rate)
-        self.state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
+        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self.nominal_input = self.DeclareAbstractInputPort(
             "nominal", AbstractValue.Make(Path(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))))
