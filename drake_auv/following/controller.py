@@ -27,41 +27,13 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.leg_signal import LEG_SIZE, read_leg
-from drake_auv.following.behaviours import FollowingParams, HorizontalFollower, VerticalFollower
+from drake_auv.following.behaviours import FollowConfig
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.model import STATE_SIZE
 from drake_auv.vehicle.path_reference import trajectory_reference
 
 MODES = ("search", "follow", "turn")
 PROFILE_SIZE = 7
-
-
-@dataclass(frozen=True)
-class FollowConfig:
-    """One profile-following leg.
-
-    Attributes:
-        mode: "horizontal" (constant depth, facing the profile) or "vertical" (in the vertical
-            plane along `plane_yaw`, with the 180 degree turn under ceilings).
-        params: `FollowingParams`.
-        depth_z: horizontal mode, z to hold, m (None: the z where the leg starts).
-        plane_yaw: vertical mode, direction of the plane, rad (None: the yaw at the start).
-    """
-
-    mode: str = "horizontal"
-    params: FollowingParams = FollowingParams()
-    depth_z: float | None = None
-    plane_yaw: float | None = None
-
-    def __post_init__(self):
-        if self.mode not in ("horizontal", "vertical"):
-            raise ValueError(f"profile following mode must be 'horizontal' or 'vertical', "
-                             f"got {self.mode!r}")
-
-    def follower(self, seed: int):
-        if self.mode == "horizontal":
-            return HorizontalFollower(self.params, depth_z=self.depth_z, seed=seed)
-        return VerticalFollower(self.params, plane_yaw=self.plane_yaw, seed=seed)
 
 
 @dataclass(frozen=True)
