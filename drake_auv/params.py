@@ -3,7 +3,8 @@
 A parameter is declared once, where its algorithm is, with `param(default, low=..., high=...,
 unit=...)` (or `choices=...`, `kind="bool"`, ...); the dataclass calls `validate(self)` from
 `__post_init__`, so construction and `dataclasses.replace` both check every field. A bad value
-raises `ParameterError`, one line: `Class.field = value: must be <allowed>`.
+raises `ParameterError`, one line:
+`ReplanningParameters.clearance = -1 is out of range; must be in [0.5, 20] m`.
 
 The mission files read the same classes (`drake_auv.mission.spec`): a field's `key` is its name
 in a mission file when that differs (`R` for the replanner's `radius`) and `scale` converts the
@@ -27,12 +28,13 @@ KINDS = ("number", "choice", "bool", "text", "path", "vector")
 
 
 class ParameterError(ValueError):
-    """A parameter out of its range: `Class.field = value: must be <allowed>`."""
+    """A bad parameter: `Class.field = value is out of range; must be in [low, high] unit`."""
 
     def __init__(self, owner: str, name: str, value, what: str, allowed: str):
         self.owner, self.name, self.value, self.what, self.allowed = (owner, name, value, what,
                                                                       allowed)
-        super().__init__(f"{owner}.{name} = {value!r}: {what}; must be {allowed}")
+        where = "in " if allowed[:1] in "[(" else ""
+        super().__init__(f"{owner}.{name} = {value!r} {what}; must be {where}{allowed}")
 
 
 @dataclass(frozen=True)
