@@ -96,9 +96,9 @@ class _Reader:
                      else list(err.value) if isinstance(err.value, tuple) else err.value)
             self.fail(_join(where, key), f"{value!r} {err.what}", check.allowed(in_file=True))
 
-    def section(self, cls, raw, where: str, required=()):
-        """The section `raw` (a mapping of `mission_keys(cls)`, None: all defaults) as `cls`;
-        `required`: keys that must be given."""
+    def section(self, cls, raw, where: str):
+        """The section `raw` (a mapping of `mission_keys(cls)`, None: all defaults) as `cls`,
+        then its `RULES`."""
         keys = mission_keys(cls)
         raw = self.mapping(raw, where, tuple(keys))
         values = {}
@@ -107,7 +107,7 @@ class _Reader:
                 value = _coerce(check, raw[key], self.base_dir)
                 values[path] = value * check.scale if check.scale != 1.0 and is_number(
                     value) else value
-            elif key in required or not _has_default(cls, path):
+            elif not _has_default(cls, path):
                 self.fail(_join(where, key), "missing (required)", check.allowed(in_file=True))
         obj = self.build(cls, values, keys, where)
         rule = RULES.get(cls)
@@ -235,15 +235,13 @@ def _follow_rule(reader: _Reader, v, where: str):
 
 
 def _fly_rule(reader: _Reader, v, where: str):
-    path = v.file
-    allowed = checks(FlyStep)["file"].allowed()
-    if path is None:
-        reader.fail(f"{where}.file", "missing (required)", allowed)
+    path = v.file  # a Path: `validate` has refused None
     if path.suffix.lower() not in FLY_FORMATS:
         reader.fail(f"{where}.file", f"{path.name}: unknown mission format "
                     f"{path.suffix or '(no extension)'!r}", ", ".join(FLY_FORMATS))
     if not path.is_file():
-        reader.fail(f"{where}.file", f"{path.name} not found ({path})", allowed)
+        reader.fail(f"{where}.file", f"{path.name} not found ({path})",
+                    checks(FlyStep)["file"].allowed())
     if v.heave_in_3d and FLY_FORMATS[path.suffix.lower()] != "cola2":
         reader.fail(f"{where}.heave_in_3d", "only for COLA2 missions (.xml)",
                     "false for a .plan file")
