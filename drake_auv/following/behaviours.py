@@ -28,7 +28,7 @@ Reference: `[x, y, z, yaw, vx, vy, vz, yaw_rate]` in the world frame (architectu
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 

@@ -26,7 +26,7 @@ nominal depth, a progress term the advance along the nominal path.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
