@@ -96,7 +96,7 @@ class Check:
     def problem(self, value) -> str | None:
         """What is wrong with `value` ("is out of range", ...), or None when it is allowed."""
         if value is None:
-            return None if self.nullable else "is missing (None)"
+            return None if self.nullable else "is missing"
         if self.kind == "choice":
             return None if value in self.choices else "is not allowed"
         if self.kind == "bool":
