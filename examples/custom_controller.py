@@ -107,7 +107,8 @@ def build(site, spec, plan, caster, follower=None):
     """The mission Diagram from the builders (`follower`: the survey's behaviour instead of the
     built-in replanner); returns (diagram, supervisor, multibeam and camera coverage, logs)."""
     builder = DiagramBuilder()
-    vehicle = add_girona500(builder, navigation=spec.navigation.to_params(spec.seed),
+    navigation = dataclasses.replace(spec.navigation, seed=spec.seed)
+    vehicle = add_girona500(builder, navigation=navigation,
                             initial_state=plan.start_state)
     estimated = vehicle.navigation.estimated_state_output
     multibeam, profiler, returns = add_sonars(builder, caster, vehicle, spec, plan,

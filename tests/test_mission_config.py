@@ -9,6 +9,7 @@ import yaml
 from drake_auv.mission.config import (REALISTIC_NOISE, FollowStep, MissionFileError, PlanStep,
                                       SurveyStep, apply_overrides, builtin_missions,
                                       load_mission, mission_from_dict, mission_to_dict)
+from drake_auv.replanning.section import ReplanningParameters
 from drake_auv.sonar.noise import SonarNoise
 from drake_auv.vehicle.navigation import NavigationParams
 
@@ -72,13 +73,15 @@ def test_the_issue_schema_validates_with_defaults(tmp_path):
     spec = load_mission(_write(tmp_path, WRECK))
     assert spec.name == "wreck" and spec.seed == 0
     assert [type(s) for s in spec.steps] == [PlanStep, FollowStep, SurveyStep]
-    assert spec.replanner.clearance_m == 4.0 and spec.limits.max_time_s is None
+    assert spec.replanner.params == ReplanningParameters() and spec.limits.max_time_s is None
+    assert spec.replanner.params.clearance == 4.0  # the one default, the missions' own
     assert spec.sonar_noise.to_noise() is None
-    nav = spec.navigation.to_params(seed=7)
-    assert isinstance(nav, NavigationParams) and nav.seed == 7
+    nav = spec.navigation  # the algorithm's class, the file's degrees in radians
+    assert isinstance(nav, NavigationParams) and nav.seed == 0 and nav.period == 0.1
     assert nav.heading_bias == pytest.approx(0.017453, abs=1e-6) and nav.random_walk == 0.02
     params = spec.replanner.to_params(omega=6.0, plan_method="coverage")
     assert (params.radius, params.max_waypoints, params.offset_metric) == (5.0, 10, "3d")
+    assert (params.stomp.num_rollouts, params.stomp.max_iterations) == (10, 40)
 
 
 def test_sonar_noise_presets_and_mapping(tmp_path):
@@ -87,7 +90,7 @@ def test_sonar_noise_presets_and_mapping(tmp_path):
     custom = load_mission(_write(tmp_path, _with(sonar_noise=dict(range_sigma=0.2))))
     assert custom.sonar_noise.preset == "custom"
     assert custom.sonar_noise.to_noise() == SonarNoise(range_sigma=0.2)
-    assert "sonar_noise.range_sigma: -1 is out of range; allowed: >= 0 m" in _error(
+    assert "sonar_noise.range_sigma: -1.0 is out of range; allowed: >= 0 m" in _error(
         tmp_path, _with(sonar_noise=dict(range_sigma=-1)))
     assert "sonar_noise.range_noise: unknown key; allowed: range_sigma" in _error(
         tmp_path, _with(sonar_noise=dict(range_noise=0.1)))

@@ -1,6 +1,5 @@
 """OctreeMap: OctoMap insertion with free-space clearing, occupied voxels against the truth."""
 
-import copy
 
 import numpy as np
 import pytest

@@ -1,7 +1,6 @@
 """IHO S-44 survey orders: the lane spacing follows the order's coverage and the report
 states the order, the coverage achieved and the feature size the footprint supports."""
 
-import numpy as np
 import pytest
 
 from drake_auv.cli import main

@@ -30,10 +30,11 @@ Reference: `[x, y, z, yaw, vx, vy, vz, yaw_rate]` in the world frame (architectu
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from drake_auv.params import nested, param, validate
 from drake_auv.signals import Reference, VehicleState
 from drake_auv.vehicle.control import wrap_angle
 from drake_auv.perception.local_map import LocalProfileMap
@@ -43,7 +44,7 @@ from drake_auv.perception.profile_estimation import (EstimatorParams, ProfileEst
 
 @dataclass(frozen=True)
 class FollowingParams:
-    """Behaviour parameters (SI units, radians).
+    """Behaviour parameters (SI units, radians; ranges in the fields' `param` metadata).
 
     offset: desired distance to the profile, m.
     speed: survey speed along the profile, m/s.
@@ -73,50 +74,57 @@ class FollowingParams:
     estimator: `EstimatorParams`.
     """
 
-    offset: float = 2.0
-    speed: float = 0.3
-    side: int = 1
-    yaw_offset: float = 0.0
-    max_correction: float = 1.0
-    slow_band: float = 1.0
-    yaw_rate: float = np.radians(15.0)
-    yaw_accel: float = np.radians(5.0)
-    plane_band: float = 0.5
-    search_speed: float = 0.3
-    warmup: float = 0.0
-    turn_threshold: float = 0.5
-    turn_tolerance: float = np.radians(20.0)
-    corner_weight: float = 0.0
-    min_depth: float = 1.0
-    max_age: float | None = None
-    max_points: int = 4000
-    estimator: EstimatorParams = field(default_factory=EstimatorParams)
+    offset: float = param(2.0, low=0.0, high=20.0, low_open=True, unit="m")
+    speed: float = param(0.3, low=0.05, high=1.4, unit="m/s")
+    side: int = param(1, kind="choice", choices=(1, -1))
+    yaw_offset: float = param(0.0, unit="rad")
+    max_correction: float = param(1.0, low=0.0, low_open=True, unit="m")
+    slow_band: float = param(1.0, low=0.0, low_open=True, unit="m")
+    yaw_rate: float = param(np.radians(15.0), low=0.0, low_open=True, unit="rad/s")
+    yaw_accel: float = param(np.radians(5.0), low=0.0, low_open=True, unit="rad/s^2")
+    plane_band: float = param(0.5, low=0.0, low_open=True, unit="m")
+    search_speed: float = param(0.3, low=0.0, unit="m/s")
+    warmup: float = param(0.0, low=0.0, unit="s")
+    turn_threshold: float = param(0.5, low=0.0, high=1.0, low_open=True, high_open=True)
+    turn_tolerance: float = param(np.radians(20.0), low=0.0, high=np.pi, low_open=True,
+                                  high_open=True, unit="rad")
+    corner_weight: float = param(0.0, low=0.0, high=1.0)
+    min_depth: float = param(1.0, low=0.0, high=100.0, unit="m")
+    max_age: float | None = param(None, low=0.0, low_open=True, nullable=True, unit="s")
+    max_points: int = param(4000, low=1, integer=True)
+    estimator: EstimatorParams = nested(EstimatorParams)
 
     def __post_init__(self):
-        if not (np.isfinite(self.min_depth) and self.min_depth >= 0):
-            raise ValueError(f"FollowingParams.min_depth must be >= 0 m, got {self.min_depth}")
-        if self.max_age is not None and not (np.isfinite(self.max_age) and self.max_age > 0):
-            raise ValueError(f"FollowingParams.max_age must be None or > 0 s, got {self.max_age}")
-        for name in ("offset", "speed", "max_correction", "slow_band", "yaw_rate", "yaw_accel",
-                     "plane_band"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"FollowingParams.{name} must be a finite number > 0, got {value}")
-        if not (np.isfinite(self.warmup) and self.warmup >= 0):
-            raise ValueError(f"FollowingParams.warmup must be >= 0 s, got {self.warmup}")
-        if not (np.isfinite(self.search_speed) and self.search_speed >= 0):
-            raise ValueError(f"FollowingParams.search_speed must be >= 0 m/s, got {self.search_speed}")
-        if self.side not in (1, -1):
-            raise ValueError(f"FollowingParams.side must be +1 (profile on the right) or -1, got {self.side}")
-        if not 0 < self.turn_threshold < 1:
-            raise ValueError(f"FollowingParams.turn_threshold must be in (0, 1), got {self.turn_threshold}")
-        if not 0 < self.turn_tolerance < np.pi:
-            raise ValueError(f"FollowingParams.turn_tolerance must be in (0, pi) rad, got {self.turn_tolerance}")
-        if not 0 <= self.corner_weight <= 1:
-            raise ValueError(f"FollowingParams.corner_weight must be in [0, 1], got {self.corner_weight}")
+        validate(self)
         if self.estimator.window <= self.offset:
             raise ValueError(f"FollowingParams.estimator.window ({self.estimator.window} m) must "
                              f"exceed the offset ({self.offset} m)")
+
+
+@dataclass(frozen=True)
+class FollowConfig:
+    """One profile-following leg (what `ProfileFollowingController` flies).
+
+    Attributes:
+        mode: "horizontal" (constant depth, facing the profile) or "vertical" (in the vertical
+            plane along `plane_yaw`, with the 180 degree turn under ceilings).
+        params: `FollowingParams`.
+        depth_z: horizontal mode, z to hold, m (None: the z where the leg starts).
+        plane_yaw: vertical mode, direction of the plane, rad (None: the yaw at the start).
+    """
+
+    mode: str = param("horizontal", kind="choice", choices=("horizontal", "vertical"))
+    params: FollowingParams = nested(FollowingParams)
+    depth_z: float | None = param(None, nullable=True, unit="m")
+    plane_yaw: float | None = param(None, nullable=True, unit="rad")
+
+    def __post_init__(self):
+        validate(self)
+
+    def follower(self, seed: int):
+        if self.mode == "horizontal":
+            return HorizontalFollower(self.params, depth_z=self.depth_z, seed=seed)
+        return VerticalFollower(self.params, plane_yaw=self.plane_yaw, seed=seed)
 
 
 def follow_step(estimate: ProfileEstimate, params: FollowingParams):

@@ -20,15 +20,13 @@ while no profile is seen).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.leg_signal import LEG_SIZE, read_leg
-from drake_auv.following.behaviours import (FollowerState, FollowingParams, HorizontalFollower,
-                                            VerticalFollower)
+from drake_auv.following.behaviours import FollowConfig, FollowerState
 from drake_auv.signals import Consumed, Profile, Reference, VehicleState
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.path_reference import trajectory_reference
@@ -41,34 +39,6 @@ def _no_profile(mode: str = "search") -> np.ndarray:
     profile = Profile(np.full(Profile.size(), np.nan))
     profile.valid, profile.mode = 0.0, MODES.index(mode)
     return profile[:]
-
-
-@dataclass(frozen=True)
-class FollowConfig:
-    """One profile-following leg.
-
-    Attributes:
-        mode: "horizontal" (constant depth, facing the profile) or "vertical" (in the vertical
-            plane along `plane_yaw`, with the 180 degree turn under ceilings).
-        params: `FollowingParams`.
-        depth_z: horizontal mode, z to hold, m (None: the z where the leg starts).
-        plane_yaw: vertical mode, direction of the plane, rad (None: the yaw at the start).
-    """
-
-    mode: str = "horizontal"
-    params: FollowingParams = FollowingParams()
-    depth_z: float | None = None
-    plane_yaw: float | None = None
-
-    def __post_init__(self):
-        if self.mode not in ("horizontal", "vertical"):
-            raise ValueError(f"profile following mode must be 'horizontal' or 'vertical', "
-                             f"got {self.mode!r}")
-
-    def follower(self, seed: int):
-        if self.mode == "horizontal":
-            return HorizontalFollower(self.params, depth_z=self.depth_z, seed=seed)
-        return VerticalFollower(self.params, plane_yaw=self.plane_yaw, seed=seed)
 
 
 class ProfileFollowingController(LeafSystem):

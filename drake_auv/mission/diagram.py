@@ -26,7 +26,7 @@ the selected reference.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -168,7 +168,8 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
                                         MissionSupervisor(plan.legs, ports,
                                                           SUPERVISOR_PERIOD))
     path_reference = builder.AddNamedSystem("path_reference", PathReference(
-        plan.path_legs, terrain=terrain_elevation(site), clearance=spec.replanner.clearance_m))
+        plan.path_legs, terrain=terrain_elevation(site),
+        clearance=spec.replanner.params.clearance))
     if source is not None:
         builder.Connect(source.get_output_port(), path_reference.nominal_input)
     behaviours = {"path": path_reference}
@@ -252,7 +253,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     caster = caster if caster is not None else RayCaster(site.world)
     max_range = site.max_range
     builder = DiagramBuilder()
-    vehicle = add_girona500(builder, navigation=spec.navigation.to_params(spec.seed),
+    vehicle = add_girona500(builder, navigation=replace(spec.navigation, seed=spec.seed),
                             initial_state=plan.start_state)
     faults, estimated = add_faults(builder, vehicle, spec)
     multibeam, profiler, returns = add_sonars(builder, caster, vehicle, spec, plan, max_range,

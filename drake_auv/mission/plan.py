@@ -5,7 +5,8 @@ the offset contour of the structure at one depth), then turns every simulated st
 (`drake_auv.mission.legs`): a transit to where the step begins, then the step's behaviour,
 each with the parameters its LeafSystem needs and a time budget. A `fly` step reads its
 exported file and places its items in the local frame (`flown_mission`); it needs no transit,
-its first item (a COLA2 goto, ArduSub's first waypoint) is one.
+its first item (a COLA2 goto, ArduSub's first waypoint) is one. Pure: no Drake is loaded (the
+legs' parameters are plain data classes), so a mission plans where pydrake is missing.
 
 Where a follow step begins, unless the file says: on the line from the vehicle's previous
 position to the structure's charted centre, `offset` + 4 m outside the structure's cross-
@@ -21,15 +22,14 @@ import numpy as np
 
 from drake_auv.autopilot.items import FlownMission, localise
 from drake_auv.autopilot.semantics import mission_duration
-from drake_auv.mission.config import (FlyStep, FollowStep, MissionFileError, MissionSpec,
-                                      PlanStep, SurveyStep)
+from drake_auv.following.behaviours import EstimatorParams, FollowConfig, FollowingParams
 from drake_auv.mission.legs import Leg
 from drake_auv.mission.site import Site
-from drake_auv.following.behaviours import EstimatorParams, FollowingParams
-from drake_auv.following.controller import FollowConfig
+from drake_auv.mission.spec import (FlyStep, FollowStep, MissionFileError, MissionSpec, PlanStep,
+                                    SurveyStep)
 from drake_auv.planning.path import Path
 from drake_auv.planning.surface import TerrainSurface
-from drake_auv.vehicle.path_reference import PathLeg
+from drake_auv.vehicle.path_leg import PathLeg
 
 TIME_SLACK = 120.0  # s a leg may last beyond `limits.time_margin` times its nominal duration
 TRANSIT_SPEED = 0.5  # m/s
@@ -254,7 +254,7 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             # sample (placed on the shifted prior map, it may lie near the real structure):
             # the replanner flies the rest against the on-line map.
             add_transit(k, nominal.points[0], float(nominal.heading[0]), TRANSIT_SPEED,
-                        handover=spec.replanner.R if step.replanning else None)
+                        handover=spec.replanner.params.radius if step.replanning else None)
             duration = step.max_time_s or (margin * nominal.times(survey_speed)[-1]
                                            + TIME_SLACK)
             if step.replanning:

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_auv.params import param, validate
 from drake_auv.signals import Reference, Response, VehicleState
 
 RESPONSES = ("none", "hold", "back_off", "abort")
@@ -40,27 +41,28 @@ CAUSES = ("none", "sonar_silent", "tracking_error", "navigation_jump")
 SENSORS = ("multibeam", "profiler")
 
 
+_POSITIVE = dict(low=0.0, low_open=True)
+
+
 @dataclass(frozen=True)
 class SafetyRules:
     """Thresholds of the detection and the answers (m, s, m/s); see the module docstring."""
 
-    silence_s: float = 5.0
-    hold_max_s: float = 60.0
-    tracking_error_m: float = 2.0
-    tracking_s: float = 5.0
-    jump_m: float = 1.5
-    backoff_m: float = 5.0
-    backoff_range_m: float = 15.0
-    backoff_max_s: float = 60.0
-    surface_z: float = -1.0
-    surface_tolerance_m: float = 0.5
-    abort_max_s: float = 300.0
-    speed: float = 0.3
+    silence_s: float = param(5.0, **_POSITIVE)
+    hold_max_s: float = param(60.0, **_POSITIVE)
+    tracking_error_m: float = param(2.0, **_POSITIVE)
+    tracking_s: float = param(5.0, **_POSITIVE)
+    jump_m: float = param(1.5, **_POSITIVE)
+    backoff_m: float = param(5.0, **_POSITIVE)
+    backoff_range_m: float = param(15.0, **_POSITIVE)
+    backoff_max_s: float = param(60.0, **_POSITIVE)
+    surface_z: float = param(-1.0, unit="m")
+    surface_tolerance_m: float = param(0.5, **_POSITIVE)
+    abort_max_s: float = param(300.0, **_POSITIVE)
+    speed: float = param(0.3, **_POSITIVE)
 
     def __post_init__(self):
-        for name, value in vars(self).items():
-            if name != "surface_z" and not (np.isfinite(value) and value > 0):
-                raise ValueError(f"SafetyRules.{name} must be > 0, got {value!r}")
+        validate(self)
 
 
 def relied_sensors(behaviour: str) -> tuple[str, ...]:

@@ -29,6 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from drake_auv.params import param, validate
+
 
 @dataclass(frozen=True)
 class EstimatorParams:
@@ -44,30 +46,19 @@ class EstimatorParams:
     blend: softness of the normal blend between segments, m.
     """
 
-    window: float = 6.0
-    sector: float = np.radians(135.0)
-    density_radius: float = 0.4
-    min_neighbours: int = 2
-    ransac_iterations: int = 80
-    inlier_tolerance: float = 0.12
-    min_inliers: int = 8
-    gap: float = 0.8
-    max_lines: int = 3
-    blend: float = 0.4
+    window: float = param(6.0, low=0.0, low_open=True, unit="m")
+    sector: float = param(np.radians(135.0), low=0.0, high=np.pi, low_open=True, unit="rad")
+    density_radius: float = param(0.4, low=0.0, low_open=True, unit="m")
+    min_neighbours: int = param(2, low=0, integer=True)
+    ransac_iterations: int = param(80, low=1, integer=True)
+    inlier_tolerance: float = param(0.12, low=0.0, low_open=True, unit="m")
+    min_inliers: int = param(8, low=3, integer=True)
+    gap: float = param(0.8, low=0.0, low_open=True, unit="m")
+    max_lines: int = param(3, low=1, integer=True)
+    blend: float = param(0.4, low=0.0, low_open=True, unit="m")
 
     def __post_init__(self):
-        positive = ("window", "density_radius", "inlier_tolerance", "gap", "blend")
-        for name in positive:
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"EstimatorParams.{name} must be a finite number > 0, got {value}")
-        if not (0 < self.sector <= np.pi):
-            raise ValueError(f"EstimatorParams.sector must be in (0, pi] rad, got {self.sector}")
-        for name, low in (("min_neighbours", 0), ("ransac_iterations", 1), ("min_inliers", 3),
-                          ("max_lines", 1)):
-            value = getattr(self, name)
-            if int(value) != value or value < low:
-                raise ValueError(f"EstimatorParams.{name} must be an integer >= {low}, got {value}")
+        validate(self)
 
 
 @dataclass(frozen=True)

@@ -29,11 +29,12 @@ nominal depth, a progress term the advance along the nominal path.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
+from drake_auv.params import nested, param, validate
 from drake_auv.planning.polyline import Polyline, arc_length, length, project, resample
 from drake_auv.replanning.cost import ReplanningCost
 from drake_auv.replanning.fields import DEPTH_MARGIN, SliceMap
@@ -44,13 +45,14 @@ OPTIMIZERS = ("stomp", "none")
 
 @dataclass(frozen=True)
 class ReplanningParameters:
-    """Parameters of the replanning loop (cost weights: docs/replanning.md, "Cost").
+    """Parameters of the replanning loop (cost weights: docs/replanning.md, "Cost"); ranges
+    in the fields' `param` metadata, `key`: the mission file's name of a field.
 
     Attributes:
-        radius: R, waypoints closer than this to the vehicle form the section, m (> 0).
-        max_waypoints: K, most waypoints in one section (>= 1).
+        radius: R, waypoints closer than this to the vehicle form the section, m.
+        max_waypoints: K, most waypoints in one section.
         omega: offset to keep from the mapped structure, m (> 0).
-        clearance: distance to any occupied voxel under which the obstacle cost rises, m (> 0).
+        clearance: distance to any occupied voxel under which the obstacle cost rises, m.
         depth_band: half-height of the band of voxels the offset is measured against, m (> 0).
         offset_metric: "horizontal": the offset is the horizontal distance to the band's
             voxels (walls with the seabed closer than Omega below, as at the breakwater);
@@ -67,43 +69,29 @@ class ReplanningParameters:
         stomp: `StompParameters` (rollouts, iterations, noise, smoothness weight).
     """
 
-    radius: float = 5.0
-    max_waypoints: int = 10
-    omega: float = 6.0
-    clearance: float = 3.0
-    depth_band: float = 1.5
-    offset_metric: str = "horizontal"
-    spacing: float = 0.5
-    margin: float = 6.0
-    min_log_odds: float = 1.5
-    huber: float = 1.0
-    offset_weight: float = 3.0
-    obstacle_weight: float = 50.0
-    depth_weight: float = 1.0
-    route_weight: float = 1.0
-    progress_weight: float = 0.1
-    terminal_weight: float = 3.0
-    spacing_weight: float = 10.0
-    stomp: StompParameters = field(default_factory=lambda: StompParameters(
+    radius: float = param(5.0, low=0.5, high=50.0, unit="m", key="R")
+    max_waypoints: int = param(10, low=1, high=200, integer=True, key="K")
+    omega: float = param(6.0, low=0.0, low_open=True, unit="m")
+    clearance: float = param(4.0, low=0.5, high=20.0, unit="m", key="clearance_m")
+    depth_band: float = param(1.5, low=0.0, low_open=True, unit="m")
+    offset_metric: str = param("horizontal", kind="choice", choices=("horizontal", "3d"))
+    spacing: float = param(0.5, low=0.0, low_open=True, unit="m")
+    margin: float = param(6.0, low=0.0, low_open=True, unit="m")
+    min_log_odds: float = param(1.5, low=0.0)
+    huber: float = param(1.0, low=0.0, low_open=True, unit="m")
+    offset_weight: float = param(3.0, low=0.0)
+    obstacle_weight: float = param(50.0, low=0.0)
+    depth_weight: float = param(1.0, low=0.0)
+    route_weight: float = param(1.0, low=0.0)
+    progress_weight: float = param(0.1, low=0.0)
+    terminal_weight: float = param(3.0, low=0.0)
+    spacing_weight: float = param(10.0, low=0.0)
+    stomp: StompParameters = nested(StompParameters, lambda: StompParameters(
         num_rollouts=10, max_iterations=40, noise_std=0.5, smoothness_weight=50.0,
         patience=8))
 
     def __post_init__(self):
-        for name in ("radius", "omega", "clearance", "depth_band", "spacing", "margin",
-                     "huber"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be > 0 m, got {value}")
-        for name in ("min_log_odds", "offset_weight", "obstacle_weight", "depth_weight",
-                     "route_weight", "progress_weight", "terminal_weight", "spacing_weight"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0):
-                raise ValueError(f"{name} must be >= 0, got {value}")
-        if self.offset_metric not in ("horizontal", "3d"):
-            raise ValueError(f"offset_metric must be 'horizontal' or '3d', got "
-                             f"{self.offset_metric!r}")
-        if int(self.max_waypoints) != self.max_waypoints or self.max_waypoints < 1:
-            raise ValueError(f"max_waypoints must be an integer >= 1, got {self.max_waypoints}")
+        validate(self)
 
 
 def _check_position(position) -> np.ndarray:

@@ -28,6 +28,8 @@ from typing import Callable
 
 import numpy as np
 
+from drake_auv.params import param, validate
+
 
 @dataclass(frozen=True)
 class StompParameters:
@@ -45,30 +47,16 @@ class StompParameters:
         patience: stalled iterations in a row that end the optimisation, >= 1.
     """
 
-    num_rollouts: int = 10
-    max_iterations: int = 50
-    noise_std: float | tuple = 0.5
-    h: float = 10.0
-    smoothness_weight: float = 1.0
-    tolerance: float = 1e-4
-    patience: int = 10
+    num_rollouts: int = param(10, low=2, high=100, integer=True, key="rollouts")
+    max_iterations: int = param(50, low=1, high=500, integer=True, key="iterations")
+    noise_std: float | tuple = param(0.5, low=0.0, low_open=True, unit="m")
+    h: float = param(10.0, low=0.0, low_open=True)
+    smoothness_weight: float = param(1.0, low=0.0)
+    tolerance: float = param(1e-4, low=0.0)
+    patience: int = param(10, low=1, integer=True)
 
     def __post_init__(self):
-        if int(self.num_rollouts) != self.num_rollouts or self.num_rollouts < 2:
-            raise ValueError(f"num_rollouts must be an integer >= 2, got {self.num_rollouts}")
-        if int(self.max_iterations) != self.max_iterations or self.max_iterations < 1:
-            raise ValueError(f"max_iterations must be an integer >= 1, got {self.max_iterations}")
-        std = np.asarray(self.noise_std, dtype=float)
-        if not (np.all(np.isfinite(std)) and np.all(std > 0)):
-            raise ValueError(f"noise_std must be > 0 m, got {self.noise_std}")
-        if not (np.isfinite(self.h) and self.h > 0):
-            raise ValueError(f"h must be > 0, got {self.h}")
-        if not (np.isfinite(self.smoothness_weight) and self.smoothness_weight >= 0):
-            raise ValueError(f"smoothness_weight must be >= 0, got {self.smoothness_weight}")
-        if not (np.isfinite(self.tolerance) and self.tolerance >= 0):
-            raise ValueError(f"tolerance must be >= 0, got {self.tolerance}")
-        if int(self.patience) != self.patience or self.patience < 1:
-            raise ValueError(f"patience must be an integer >= 1, got {self.patience}")
+        validate(self)
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
+from drake_auv.params import param, validate
 from drake_auv.signals import VehicleState
 from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.vehicle.model import STATE_SIZE
@@ -44,26 +45,16 @@ class DvlParams:
         min_beams: valid beams needed for bottom lock, in 1..4.
     """
 
-    beam_deg: float = 30.0
-    max_range: float = 80.0
-    rate: float = 5.0
-    range_sigma_fraction: float = 0.01
-    range_sigma_m: float = 0.02
-    dropout_prob: float = 0.02
-    min_beams: int = 3
+    beam_deg: float = param(30.0, low=0.0, high=60.0, unit="deg")
+    max_range: float = param(80.0, low=0.0, low_open=True, unit="m")
+    rate: float = param(5.0, low=0.0, high=50.0, low_open=True, unit="Hz")
+    range_sigma_fraction: float = param(0.01, low=0.0)
+    range_sigma_m: float = param(0.02, low=0.0, unit="m")
+    dropout_prob: float = param(0.02, low=0.0, high=1.0)
+    min_beams: int = param(3, low=1, high=4, integer=True)
 
     def __post_init__(self):
-        checks = (("beam_deg", 0.0 <= self.beam_deg <= 60.0, "[0, 60] deg"),
-                  ("max_range", self.max_range > 0, "> 0 m"),
-                  ("rate", 0 < self.rate <= 50.0, "(0, 50] Hz"),
-                  ("range_sigma_fraction", self.range_sigma_fraction >= 0, ">= 0"),
-                  ("range_sigma_m", self.range_sigma_m >= 0, ">= 0 m"),
-                  ("dropout_prob", 0 <= self.dropout_prob <= 1, "[0, 1]"),
-                  ("min_beams", self.min_beams in (1, 2, 3, 4), "1, 2, 3 or 4"))
-        for name, ok, allowed in checks:
-            if not (np.isfinite(getattr(self, name)) and ok):
-                raise ValueError(f"DvlParams.{name} must be in {allowed}, got "
-                                 f"{getattr(self, name)}")
+        validate(self)
 
     @functools.cached_property
     def beams_body(self) -> np.ndarray:

@@ -22,6 +22,7 @@ import numpy as np
 
 from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.geometry.raycast import RayCaster
+from drake_auv.params import nested, param, validate
 from drake_auv.sonar.noise import SonarNoise, apply_noise
 from drake_auv.sonar.returns import SonarReturns
 
@@ -86,20 +87,14 @@ class SonarModel:
     """
 
     mount: SonarMount = field(default_factory=SonarMount)
-    max_range: float = 20.0
-    beam_width: float = 0.0
-    max_incidence: float = np.radians(85.0)
-    noise: SonarNoise = field(default_factory=SonarNoise)
+    max_range: float = param(20.0, low=0.0, low_open=True, unit="m")
+    beam_width: float = param(0.0, low=0.0, high=np.pi / 6, unit="rad")
+    max_incidence: float = param(np.radians(85.0), low=0.0, high=np.pi / 2, low_open=True,
+                                 unit="rad")
+    noise: SonarNoise = nested(SonarNoise)
 
     def __post_init__(self):
-        if not (np.isfinite(self.max_range) and self.max_range > 0):
-            raise ValueError(f"max_range must be > 0 m, got {self.max_range}")
-        if not (np.isfinite(self.beam_width) and 0 <= self.beam_width <= np.pi / 6):
-            raise ValueError(f"beam_width must be in [0, 30] deg, got "
-                             f"{np.degrees(self.beam_width)} deg")
-        if not (np.isfinite(self.max_incidence) and 0 < self.max_incidence <= np.pi / 2):
-            raise ValueError(f"max_incidence must be in (0, 90] deg, got "
-                             f"{np.degrees(self.max_incidence)} deg")
+        validate(self)
 
 
 def fan_angles(num_beams: int, fan: float) -> np.ndarray:

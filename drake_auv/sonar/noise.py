@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_auv.params import param, validate
+
 
 @dataclass(frozen=True)
 class SonarNoise:
@@ -38,27 +40,16 @@ class SonarNoise:
             beam reports the first detected echo. 0: every echo is detected.
     """
 
-    range_sigma: float = 0.0
-    dropout_prob: float = 0.0
-    spurious_prob: float = 0.0
-    surface_prob: float = 0.0
-    side_lobe_deg: float = 0.0
-    side_lobe_gain: float = 0.0
-    echo_threshold: float = 0.0
+    range_sigma: float = param(0.0, low=0.0, unit="m")
+    dropout_prob: float = param(0.0, low=0.0, high=1.0)
+    spurious_prob: float = param(0.0, low=0.0, high=1.0)
+    surface_prob: float = param(0.0, low=0.0, high=1.0)
+    side_lobe_deg: float = param(0.0, low=0.0, high=90.0, unit="deg")
+    side_lobe_gain: float = param(0.0, low=0.0, high=1.0)
+    echo_threshold: float = param(0.0, low=0.0, high=1.0, high_open=True)
 
     def __post_init__(self):
-        if not (np.isfinite(self.range_sigma) and self.range_sigma >= 0):
-            raise ValueError(f"SonarNoise.range_sigma must be >= 0 m, got {self.range_sigma}")
-        for name in ("dropout_prob", "spurious_prob", "surface_prob", "side_lobe_gain"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and 0.0 <= value <= 1.0):
-                raise ValueError(f"SonarNoise.{name} must be in [0, 1], got {value}")
-        if not (np.isfinite(self.side_lobe_deg) and 0.0 <= self.side_lobe_deg <= 90.0):
-            raise ValueError(f"SonarNoise.side_lobe_deg must be in [0, 90] deg, got "
-                             f"{self.side_lobe_deg}")
-        if not (np.isfinite(self.echo_threshold) and 0.0 <= self.echo_threshold < 1.0):
-            raise ValueError(f"SonarNoise.echo_threshold must be in [0, 1), got "
-                             f"{self.echo_threshold}")
+        validate(self)
 
     @property
     def enabled(self) -> bool:

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_auv.params import param, validate
 from drake_auv.signals import Reference, VehicleState
 from drake_auv.vehicle.model import Girona500Params
 
@@ -43,18 +44,15 @@ class TrackingGains:
         integral_limit: anti-windup bound on each component of the position integral, m s.
     """
 
-    kp: float = 1.0
-    kd: float = 2.0
-    ki: float = 0.0
-    kp_yaw: float = 16.0
-    kd_yaw: float = 0.0
-    integral_limit: float = 5.0
+    kp: float = param(1.0, low=0.0, high=1e3, unit="1/s^2")
+    kd: float = param(2.0, low=0.0, high=1e3, unit="1/s")
+    ki: float = param(0.0, low=0.0, high=1e3, unit="1/s^3")
+    kp_yaw: float = param(16.0, low=0.0, high=1e3, unit="1/s^2")
+    kd_yaw: float = param(0.0, low=0.0, high=1e3, unit="1/s")
+    integral_limit: float = param(5.0, low=0.0, high=1e3, unit="m s")
 
     def __post_init__(self):
-        for name in ("kp", "kd", "ki", "kp_yaw", "kd_yaw", "integral_limit"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 <= value <= 1e3):
-                raise ValueError(f"TrackingGains.{name} must be in [0, 1000], got {value}")
+        validate(self)
         if self.ki > 0 and not self.ki < self.kp * self.kd:
             raise ValueError(f"TrackingGains.ki must be < kp * kd = {self.kp * self.kd:g} for a "
                              f"stable loop, got {self.ki}")

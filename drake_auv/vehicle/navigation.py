@@ -19,13 +19,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_auv.params import param, validate
+
 # Layout of the error vector kept by the Navigation system.
 ERROR_SIZE = 10  # drift x, y; noise x, y, z, yaw; last true x, y; update index; started flag
 
 
 @dataclass(frozen=True)
 class NavigationParams:
-    """Attributes (1-sigma where random):
+    """Attributes (1-sigma where random; `key`: the field's name in a mission file):
         heading_bias: compass bias, rad, in [-pi/4, pi/4].
         scale_error: DVL scale-factor error (fraction), in [-0.5, 0.5].
         random_walk: drift random walk, m per sqrt(m travelled), in [0, 1].
@@ -36,27 +38,18 @@ class NavigationParams:
         seed: seed of the random draws (int >= 0).
     """
 
-    heading_bias: float = 0.0
-    scale_error: float = 0.0
-    random_walk: float = 0.0
-    position_noise: float = 0.0
-    depth_noise: float = 0.0
-    heading_noise: float = 0.0
-    period: float = 0.1
-    seed: int = 0
+    heading_bias: float = param(0.0, low=-math.pi / 4, high=math.pi / 4, unit="rad",
+                                key="heading_bias_deg", scale=math.pi / 180, file_unit="deg")
+    scale_error: float = param(0.0, low=-0.5, high=0.5, key="dvl_scale_error")
+    random_walk: float = param(0.0, low=0.0, high=1.0, unit="m/sqrt(m)", key="random_walk")
+    position_noise: float = param(0.0, low=0.0, high=10.0, unit="m")
+    depth_noise: float = param(0.0, low=0.0, high=10.0, unit="m")
+    heading_noise: float = param(0.0, low=0.0, high=1.0, unit="rad")
+    period: float = param(0.1, low=0.01, high=10.0, unit="s")
+    seed: int = param(0, low=0, integer=True)
 
     def __post_init__(self):
-        ranges = {"heading_bias": (-math.pi / 4, math.pi / 4), "scale_error": (-0.5, 0.5),
-                  "random_walk": (0.0, 1.0), "position_noise": (0.0, 10.0),
-                  "depth_noise": (0.0, 10.0), "heading_noise": (0.0, 1.0),
-                  "period": (0.01, 10.0)}
-        for name, (low, high) in ranges.items():
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and low <= value <= high):
-                raise ValueError(f"NavigationParams.{name} must be in [{low:g}, {high:g}], "
-                                 f"got {value!r}")
-        if not (isinstance(self.seed, (int, np.integer)) and self.seed >= 0):
-            raise ValueError(f"NavigationParams.seed must be an int >= 0, got {self.seed!r}")
+        validate(self)
 
     @property
     def exact(self) -> bool:

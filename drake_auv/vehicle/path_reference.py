@@ -27,6 +27,7 @@ from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.planning.path import Path
 from drake_auv.planning.transit import transit
 from drake_auv.signals import Reference, VehicleState
+from drake_auv.vehicle.path_leg import PathLeg
 
 
 def trajectory_reference(trajectory: PiecewisePolynomial | None, t: float, state_input,
@@ -44,31 +45,6 @@ def trajectory_reference(trajectory: PiecewisePolynomial | None, t: float, state
     if t < trajectory.end_time():
         reference.rates = trajectory.EvalDerivative(t, 1)[:, 0]
     return reference[:]
-
-
-@dataclass(frozen=True)
-class PathLeg:
-    """One leg flown along a path.
-
-    Attributes:
-        kind: "goto" (to `target`) or "nominal" (the `nominal` input's path).
-        target: (x, y, z) of a goto, m. yaw: its final heading, rad (None: along the motion).
-        speed: m/s along the path, > 0.
-    """
-
-    kind: str
-    target: tuple | None = None
-    yaw: float | None = None
-    speed: float = 0.5
-
-    def __post_init__(self):
-        if self.kind not in ("goto", "nominal"):
-            raise ValueError(f"PathLeg kind must be 'goto' or 'nominal', got {self.kind!r}")
-        if self.kind == "goto" and (self.target is None or len(self.target) != 3
-                                    or not np.all(np.isfinite(self.target))):
-            raise ValueError(f"a goto leg needs a finite (x, y, z) target, got {self.target}")
-        if not (np.isfinite(self.speed) and self.speed > 0):
-            raise ValueError(f"PathLeg speed must be > 0 m/s, got {self.speed}")
 
 
 @dataclass(frozen=True)
