@@ -246,12 +246,12 @@ def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
         spacing = spec.prior_spacing_m or scenario.params["prior_spacing"]
     else:
         name, world, start = spec.world.stem, load_mesh(spec.world, "site.world", label), None
-        target = None if spec.target is None else load_mesh(spec.target, "site.target", label)
         lo, hi = world.bounds
         if lo[2] >= 0.0:
             raise MissionFileError(label, "site.world", f"{spec.world.name} lies entirely "
                                    f"above the sea surface (lowest z {lo[2]:g} m)",
                                    "a world with its seabed below z = 0 (z up, metres)")
+        target = None if spec.target is None else load_mesh(spec.target, "site.target", label)
         origin = np.round(0.5 * (lo[:2] + hi[:2]))
         spacing = spec.prior_spacing_m or DEFAULT_PRIOR_SPACING
     world.apply_translation([-origin[0], -origin[1], 0.0])
