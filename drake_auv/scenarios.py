@@ -1,12 +1,15 @@
-"""Named inspection sites: the true world, its prior map, a start pose and mission parameters.
+"""Named inspection sites: what a site's files hold, built in.
 
-Each site gives a `Scenario`: `world` is the true environment as a triangle mesh (world frame,
-z up, sea surface at z = 0), what the simulated sensors see; solids (blocks, the C-shaped
-object, the boulder) are closed and watertight, open surfaces (seabeds, the pool) are oriented
-with their normals towards the water. `target_faces` marks the structure to inspect, the faces
-coverage is measured on. `prior_map` is what the off-line planner and the operator hold: a
-coarser bathymetric grid of the world as a survey from above would see it (overhangs hidden),
-shifted horizontally by a seeded error of up to 5 m, the reference's worst case.
+Each site gives a `Scenario`, the same data a user's site files give a mission's `site:` block
+(`drake_auv.mission.site.load_site` builds the mission's `Site` from either, one way): `world`
+is the true environment as a triangle mesh (world frame, z up, sea surface at z = 0, already
+local: the site's coordinates are the mission's), what the simulated sensors see; solids
+(blocks, the C-shaped object, the boulder) are closed and watertight, open surfaces (seabeds,
+the pool) are oriented with their normals towards the water. `target_faces` marks the structure
+to inspect, the faces coverage is measured on. There is no prior raster: the prior is the
+world's top surface sampled at `params["prior_spacing"]` (a survey from above, overhangs hidden),
+as for a user's world given without one. `start` is the start pose in the form of the mission
+file's `site.start`.
 
 Heavy geometry is built once per process (`functools.lru_cache`) and each `get_scenario` call
 gets its own copy of the mesh, so callers may modify it freely.
@@ -23,23 +26,22 @@ import trimesh
 
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.terrain.bathymetry import Bathymetry
-from drake_auv.terrain.mesh import bathymetry_to_mesh, top_surface
+from drake_auv.terrain.mesh import bathymetry_to_mesh
 
 DATA_DIR = FilePath(__file__).resolve().parents[1].parent / "shared" / "data"
 MONTEREY_TILE = "MontereyBay.R_-121.825_-121.815_36.790_36.800.epsg3857.tif"
-MAX_PRIOR_ERROR = 5.0  # m, the reference's largest prior-map error
 
 
 @dataclass(frozen=True)
 class Scenario:
-    """One inspection site.
+    """One built-in site's data.
 
     Attributes:
         name: the site's key in `list_scenarios()`.
         description: one line for the command line.
-        world: true world mesh, world frame, z up, m.
+        world: true world mesh, world frame (= the mission's local frame), z up, m.
         target_faces: (len(world.faces),) bool, the structure to inspect.
-        start_state: (12,) vehicle state `[x, y, z, roll, pitch, yaw, u, v, w, p, q, r]`.
+        start: (x, y, z, yaw_deg) start pose, m and deg (as a mission file's `site.start`).
         params: mission parameters (omega: offset to the surface, m; depth: operating depth, m;
             speed: survey speed, m/s; prior_spacing: cell of the prior map, m; ...).
     """
@@ -48,55 +50,13 @@ class Scenario:
     description: str
     world: trimesh.Trimesh = field(repr=False)
     target_faces: np.ndarray = field(repr=False)
-    start_state: np.ndarray
+    start: tuple[float, float, float, float]
     params: dict
-    _top_surfaces: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def target_area(self) -> float:
         """Area of the target faces, m^2."""
         return float(self.world.area_faces[self.target_faces].sum())
-
-    def prior_map(self, error_m: float = 0.0, seed: int = 0,
-                  spacing: float | None = None) -> Bathymetry:
-        """The bathymetric map the off-line planner holds.
-
-        The world is sampled by vertical rays from above on a grid of `spacing` (default
-        `params["prior_spacing"]`): the top surface, NaN where nothing is below. The grid is then
-        shifted horizontally by `error_m` in a direction drawn from `seed`. The survey is
-        computed once per spacing and kept: change `world` before the first call, not after.
-
-        Args:
-            error_m: horizontal map error, m, in [0, 5].
-            seed: seed of the error's direction.
-            spacing: cell size, m, > 0.
-        """
-        spacing = float(self.params["prior_spacing"] if spacing is None else spacing)
-        if not (np.isfinite(spacing) and spacing > 0):
-            raise ValueError(f"prior_map: spacing must be > 0 m, got {spacing}")
-        bathy = self._top_surfaces.get(spacing)
-        if bathy is None:  # the survey of the world, once per spacing
-            bathy = top_surface(self.world, spacing)
-            self._top_surfaces[spacing] = bathy
-        return shift_prior(bathy, error_m, seed)
-
-
-def shift_prior(bathy: Bathymetry, error_m: float, seed: int) -> Bathymetry:
-    """`bathy` moved horizontally by `error_m` (m, in [0, 5]) in a direction drawn from
-    `seed`: the prior-map error. The grid, CRS and world-to-CRS map are kept (the cells now
-    claim wrong positions)."""
-    if not (np.isfinite(error_m) and 0.0 <= error_m <= MAX_PRIOR_ERROR):
-        raise ValueError(f"prior map: error_m must be in [0, {MAX_PRIOR_ERROR}] m, "
-                         f"got {error_m}")
-    return Bathymetry(bathy.z, bathy.spacing,
-                      tuple(np.add(bathy.origin, prior_offset(error_m, seed))), bathy.crs,
-                      bathy.to_crs)
-
-
-def prior_offset(error_m: float, seed: int) -> np.ndarray:
-    """(2,) the horizontal shift of a prior map with error `error_m` (m) drawn from `seed`."""
-    theta = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi)
-    return error_m * np.array([np.cos(theta), np.sin(theta)])
 
 
 # ---------------------------------------------------------------- geometry builders
@@ -320,38 +280,32 @@ def _monterey_geometry():
 # ---------------------------------------------------------------- the sites
 
 
-def _state(x, y, z, yaw=0.0) -> np.ndarray:
-    state = np.zeros(12)
-    state[[0, 1, 2, 5]] = x, y, z, yaw
-    return state
-
-
 _SITES = {
     "caldera": dict(
         description=("Santorini-like caldera rim ROI, 100 m x 250 m, slopes up to 0.62; "
                      "camera at 2 m"),
         geometry=_caldera_geometry,
-        start=lambda: _state(50.0, 5.0, -317.5, np.pi / 2),  # 2 m above the floor
+        start=(50.0, 5.0, -317.5, 90.0),  # 2 m above the floor
         params=dict(omega=2.0, aperture_deg=60.0, slope_threshold=0.5, speed=0.5,
                     prior_spacing=1.0, max_range=20.0)),
     "pool": dict(
         description=("CIRS-like pool 16 m x 8 m: vertical walls, 90 degree corners, V bottom; "
                      "4 m depth"),
         geometry=_pool_geometry,
-        start=lambda: _state(-4.0, 0.0, -4.0, 0.0),
+        start=(-4.0, 0.0, -4.0, 0.0),
         params=dict(omega=2.0, depth=4.0, speed=0.3, laps=2, prior_spacing=0.25,
                     max_range=20.0)),
     "c_object": dict(
         description=("man-made object with a C-shaped vertical profile: floor, wall, "
                      "ceiling overhang"),
         geometry=_c_object_geometry,
-        start=lambda: _state(-6.0, 0.0, -15.0, 0.0),
+        start=(-6.0, 0.0, -15.0, 0.0),
         params=dict(omega=2.0, speed=0.3, profile_plane="vertical", prior_spacing=0.5,
                     max_range=20.0)),
     "breakwater": dict(
         description="a row of 20 concrete blocks 5 m x 5 m, +2 m to the 10 m seabed, 0.5 m gaps",
         geometry=_breakwater_geometry,
-        start=lambda: _state(0.0, -14.0, -5.0, np.pi / 2),
+        start=(0.0, -14.0, -5.0, 90.0),
         params=dict(omega=6.0, depth=5.0, speed=0.3, target_block=NUM_BLOCKS - 1,
                     block_size=BLOCK_SIZE, block_gap=BLOCK_GAP, prior_spacing=1.0,
                     max_range=20.0, replan_radius=5.0)),
@@ -359,7 +313,7 @@ _SITES = {
         description=("l'Amarrador-like boulder, 40 m to 28 m depth, steep and overhanging; "
                      "0.4 m prior grid"),
         geometry=_boulder_geometry,
-        start=lambda: _state(-25.0, 0.0, -30.0, 0.0),
+        start=(-25.0, 0.0, -30.0, 0.0),
         params=dict(omega=10.0, contours=2, contour_spacing=2.0, speed=0.5,
                     prior_spacing=0.4, max_range=20.0, replan_radius=5.0)),
     "monterey": dict(
@@ -388,12 +342,12 @@ def get_scenario(name: str, **overrides) -> Scenario:
     vertices, faces, target = site["geometry"]()
     world = trimesh.Trimesh(vertices=vertices.copy(), faces=faces.copy(), process=False)
     params = {**site["params"], **overrides}
-    if site["start"] is not None:
-        start = site["start"]()
-    else:  # above the centre of the tile at the survey offset omega
+    start = site["start"]
+    if start is None:  # above the centre of the tile at the survey offset omega
         lo, hi = world.bounds
         centre = 0.5 * (lo + hi)
         top = np.array([centre[0], centre[1], hi[2] + 1.0])
         seabed = RayCaster(world).cast(top, [[0.0, 0.0, -1.0]], hi[2] - lo[2] + 2.0)
-        start = _state(centre[0], centre[1], seabed.points[0, 2] + params["omega"])
+        start = (float(centre[0]), float(centre[1]),
+                 float(seabed.points[0, 2] + params["omega"]), 0.0)
     return Scenario(name, site["description"], world, target.copy(), start, params)

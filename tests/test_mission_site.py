@@ -5,9 +5,12 @@ import pytest
 import trimesh
 import yaml
 
-from drake_auv.mission.config import MissionFileError, load_mission
-from drake_auv.mission.site import check_against_site, load_site
-from drake_auv.scenarios import get_scenario, shift_prior
+from drake_auv.mission.config import MissionFileError, SiteSpec, load_mission
+from drake_auv.geometry.distance import mesh_distance
+from drake_auv.mission.site import (TARGET_TOLERANCE, check_against_site, load_site,
+                                    prior_offset, shift_prior)
+from drake_auv.scenarios import get_scenario
+from drake_auv.terrain.mesh import top_surface
 from sites import BOX_CENTRE, BOX_SIZE, CRS, LOCAL_ORIGIN, SEABED_Z, utm_prior, write_utm_site
 
 
@@ -22,23 +25,57 @@ def test_builtin_site_is_the_scenario():
     spec = load_mission("boulder")
     site = load_site(spec.site, spec.seed)
     scenario = get_scenario("boulder")
-    assert site.name == "boulder" and site.scenario is not None and site.crs is None
+    assert site.name == "boulder" and site.crs is None
     np.testing.assert_array_equal(site.origin, [0.0, 0.0])
+    np.testing.assert_array_equal(site.world.vertices, scenario.world.vertices)
     np.testing.assert_array_equal(site.target_faces, scenario.target_faces)
-    np.testing.assert_array_equal(site.start_state, scenario.start_state)
-    expected = scenario.prior_map(3.0, spec.seed)
-    assert site.prior.origin == expected.origin and site.max_range == 20.0
+    np.testing.assert_array_equal(site.start_state, [-25.0, 0, -30.0] + [0.0] * 9)
+    # the prior: the world's top surface on the scenario's 0.4 m grid, moved by the seeded 3 m
+    unshifted = top_surface(scenario.world, 0.4)
+    shift = prior_offset(3.0, spec.seed)
+    assert np.hypot(*shift) == pytest.approx(3.0)
+    np.testing.assert_array_equal(site.prior_shift, shift)
+    np.testing.assert_array_equal(site.prior.origin, np.add(unshifted.origin, shift))
+    np.testing.assert_array_equal(site.prior.z, unshifted.z)
+    assert site.max_range == 20.0
     check_against_site(spec, site)  # the built-in missions fit their sites
     for name in ("breakwater", "pool", "c_object"):
         other = load_mission(name)
         check_against_site(other, load_site(other.site, other.seed))
 
 
+def test_builtin_site_loads_as_its_files_would(tmp_path):
+    """A scenario is a site like a user's files: the pool written as world and target meshes
+    loads into the same Site (frame, faces, prior, start) as the built-in pool (PLY keeps
+    float32 coordinates: equal to 1e-6 m)."""
+    scenario = get_scenario("pool")
+    scenario.world.export(tmp_path / "world.ply")
+    scenario.world.submesh([np.flatnonzero(scenario.target_faces)], append=True).export(
+        tmp_path / "target.ply")
+    builtin = load_site(SiteSpec(scenario="pool", prior_error_m=1.5), seed=3)
+    files = load_site(SiteSpec(world=tmp_path / "world.ply", target=tmp_path / "target.ply",
+                               prior_error_m=1.5, prior_spacing_m=0.25, start=scenario.start),
+                      seed=3)
+    assert (files.name, builtin.name) == ("world", "pool")
+    np.testing.assert_array_equal(files.origin, builtin.origin)
+    np.testing.assert_allclose(files.world.vertices, builtin.world.vertices, atol=1e-6, rtol=0)
+    # A target mesh picks the world's faces within 5 cm of it: the pool's, and two faces
+    # straddling the surface whose centroid is that close to the submerged half of their cell.
+    extra = files.target_faces & ~builtin.target_faces
+    assert files.target_faces[builtin.target_faces].all() and extra.sum() == 2
+    near = mesh_distance(builtin.target_mesh, files.world.triangles_center[extra])
+    assert np.all(near <= TARGET_TOLERANCE)
+    assert files.prior.origin == builtin.prior.origin and files.prior.spacing == (0.25, 0.25)
+    np.testing.assert_allclose(files.prior.z, builtin.prior.z, atol=1e-6, rtol=0)
+    np.testing.assert_array_equal(files.start_state, builtin.start_state)
+    np.testing.assert_array_equal(files.prior_shift, builtin.prior_shift)
+
+
 def test_user_site_in_utm(tmp_path):
     spec = load_mission(write_utm_site(tmp_path))
     site = load_site(spec.site, seed=spec.seed, label="mission.yaml")
     np.testing.assert_array_equal(site.origin, LOCAL_ORIGIN)
-    assert site.crs == CRS and site.scenario is None and site.start_state is None
+    assert site.crs == CRS and site.start_state is None
     lo, hi = site.world.bounds
     assert np.all(np.abs(lo[:2]) <= 30.0) and np.all(np.abs(hi[:2]) <= 30.0)  # small and local
     assert lo[2] == pytest.approx(-20.5) and hi[2] == pytest.approx(-14.5)  # z unchanged

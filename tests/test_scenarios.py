@@ -1,10 +1,13 @@
-"""The named scenario worlds: geometry, orientation, prior maps, parameters."""
+"""The named scenario worlds: geometry, orientation, prior maps (as the site loader makes
+them), parameters."""
 
 import numpy as np
 import pytest
 import trimesh
 
 from drake_auv.geometry import RayCaster
+from drake_auv.mission.config import SiteSpec
+from drake_auv.mission.site import load_site
 from drake_auv.scenarios import DATA_DIR, MONTEREY_TILE, get_scenario, list_scenarios
 
 NAMES = [name for name, _ in list_scenarios()]
@@ -14,6 +17,12 @@ HAS_MONTEREY = (DATA_DIR / "monterey" / MONTEREY_TILE).exists()
 def _needs_data(name):
     if name == "monterey" and not HAS_MONTEREY:
         pytest.skip(f"shared data not present at {DATA_DIR}")
+
+
+def _prior(name, error_m=0.0, seed=0, spacing=None):
+    """The prior map a mission at the scenario holds."""
+    return load_site(SiteSpec(scenario=name, prior_error_m=error_m, prior_spacing_m=spacing),
+                     seed).prior
 
 
 def _fibonacci_directions(n):
@@ -44,13 +53,12 @@ def test_site_is_consistent_and_start_is_in_open_water(name):
     sc = get_scenario(name)
     assert sc.target_faces.shape == (len(sc.world.faces),) and sc.target_faces.any()
     assert sc.target_area > 0
-    assert sc.start_state.shape == (12,) and np.all(np.isfinite(sc.start_state))
-    assert sc.start_state[2] < 0 and np.all(sc.start_state[6:] == 0)
+    assert len(sc.start) == 4 and np.all(np.isfinite(sc.start)) and sc.start[2] < 0
     # Every surface seen from the start faces the water: rays hit front faces only. That holds
     # only if the start is outside every solid and open surfaces are oriented towards the water.
     caster = RayCaster(sc.world)
     dirs = _fibonacci_directions(2000)
-    hits = caster.cast(sc.start_state[:3], dirs, 2000.0)
+    hits = caster.cast(sc.start[:3], dirs, 2000.0)
     hit = hits.faces >= 0
     assert hit.sum() > 400
     facing = np.einsum("ij,ij->i", caster.face_normals[hits.faces[hit]], dirs[hit])
@@ -129,30 +137,30 @@ def test_boulder_height_steepness_and_overhang():
     overhang = normals[:, 2] < -0.3
     assert area[overhang].sum() > 50.0
     # From above the overhang is hidden: the prior map is on a 0.4 m grid and tops out at -28 m.
-    prior = sc.prior_map()
+    prior = _prior("boulder")
     assert prior.spacing == (0.4, 0.4)
     assert abs(np.nanmax(prior.z) + 28.0) < 0.2 and abs(np.nanmin(prior.z) + 40.0) < 1.0
 
 
 def test_prior_map_is_the_top_surface_shifted_by_a_seeded_error():
-    sc = get_scenario("c_object")
-    exact = sc.prior_map()
+    exact = _prior("c_object")
     assert exact.spacing == (0.5, 0.5)
     # Top surface: the ceiling flange's top at -6 over the object, the seabed elsewhere.
     assert abs(exact.elevation_at(6.0, 0.0) + 6.0) < 1e-4
     assert abs(exact.elevation_at(-10.0, 0.0) + 20.0) < 1e-4
-    shifted = sc.prior_map(error_m=3.0, seed=4)
+    shifted = _prior("c_object", error_m=3.0, seed=4)
     offset = np.subtract(shifted.origin, exact.origin)
     assert abs(np.linalg.norm(offset) - 3.0) < 1e-9
     np.testing.assert_array_equal(shifted.z, exact.z)
-    assert np.subtract(sc.prior_map(3.0, seed=4).origin, shifted.origin).tolist() == [0.0, 0.0]
-    assert np.linalg.norm(np.subtract(sc.prior_map(3.0, seed=5).origin, shifted.origin)) > 1e-3
-    assert sc.prior_map(spacing=1.0).spacing == (1.0, 1.0)
+    assert np.subtract(_prior("c_object", 3.0, seed=4).origin, shifted.origin).tolist() == [0, 0]
+    assert np.linalg.norm(np.subtract(_prior("c_object", 3.0, seed=5).origin,
+                                      shifted.origin)) > 1e-3
+    assert _prior("c_object", spacing=1.0).spacing == (1.0, 1.0)
     for bad in (-0.1, 5.5, np.nan):
         with pytest.raises(ValueError, match="error_m"):
-            sc.prior_map(error_m=bad)
+            _prior("c_object", error_m=bad)
     with pytest.raises(ValueError, match="spacing"):
-        sc.prior_map(spacing=0.0)
+        _prior("c_object", spacing=-1.0)
 
 
 def test_caldera_world_matches_the_synthetic_grid():
@@ -161,7 +169,7 @@ def test_caldera_world_matches_the_synthetic_grid():
     grid = caldera_site()
     lo, hi = sc.world.bounds
     assert np.allclose([hi[0] - lo[0], hi[1] - lo[1]], [100.0, 250.0])
-    prior = sc.prior_map()
+    prior = _prior("caldera")
     rng = np.random.default_rng(0)
     x, y = rng.uniform(1, 99, 200), rng.uniform(1, 249, 200)
     assert np.max(np.abs(prior.elevation_at(x, y) - grid.elevation_at(x, y))) < 0.1
@@ -174,7 +182,7 @@ def test_monterey_is_the_real_tile():
     grid = read_bathymetry(DATA_DIR / "monterey" / MONTEREY_TILE)
     assert len(sc.world.faces) == 2 * np.prod(np.subtract(grid.shape, 1))
     assert abs(sc.world.bounds[0, 2] - np.nanmin(grid.z)) < 1e-6
-    below = RayCaster(sc.world).cast(sc.start_state[:3], [[0.0, 0.0, -1.0]], 500.0)
+    below = RayCaster(sc.world).cast(sc.start[:3], [[0.0, 0.0, -1.0]], 500.0)
     assert below.ranges[0] == pytest.approx(sc.params["omega"], abs=1e-3)  # survey offset
 
 
@@ -208,7 +216,7 @@ def test_scenarios_command_lists_shows_and_exports(tmp_path, capsys):
     assert args.func(args) == 0
     assert "target: " in capsys.readouterr().out
     loaded = read_bathymetry(prior)
-    expected = get_scenario("pool").prior_map(1.5, seed=0)
+    expected = _prior("pool", 1.5, seed=0)
     np.testing.assert_allclose(loaded.origin, expected.origin)
     np.testing.assert_array_equal(loaded.z, expected.z)
     assert len(trimesh.load(tmp_path / "pool.ply").faces) == len(get_scenario("pool").world.faces)

@@ -17,6 +17,8 @@ from drake_auv.sonar.profiler import PencilBeamProfiler
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 
+POOL_START = np.r_[-4.0, 0.0, -4.0, np.zeros(9)]  # the pool scenario's start: facing +x
+
 
 def _state(x=0.0, y=0.0, z=0.0, roll=0.0, pitch=0.0, yaw=0.0):
     s = np.zeros(12)
@@ -45,7 +47,7 @@ def test_profiler_in_the_pool_steps_the_head_and_hits_the_walls():
     profiler = PencilBeamProfiler(caster, scan_plane="horizontal")
     assert profiler.get_input_port(0).get_name() == "true_state"
     assert profiler.get_output_port(0).get_name() == "returns"
-    start = sc.start_state  # (-4, 0, -4), facing +x
+    start = POOL_START
     returns = _run_sensor(profiler, start, t_end=1.0)
     assert isinstance(returns, SonarReturns)
     # Updates at t = 0, 0.1, ..., 0.9 (AdvanceTo leaves the one at t = 1 to the next step).
@@ -66,7 +68,7 @@ def test_profiler_sector_sweep_in_the_vertical_plane_meets_the_v_bottom():
     assert profiler.update_angles(0).shape == (1,)
     sweep = np.concatenate([profiler.update_angles(n) for n in range(300)])
     assert np.degrees(sweep.min()) == pytest.approx(-90) and np.degrees(sweep.max()) <= 1e-9
-    r = _run_sensor(profiler, sc.start_state, t_end=50.5 / 30)
+    r = _run_sensor(profiler, POOL_START, t_end=50.5 / 30)
     # Ping 50 points 45 deg down from (-4, 0, -4) and meets the ramp z = -6 - (x + 4) / 4
     # at x = -4 + 8/3.
     assert r.sequence == 51 and np.degrees(r.angles[0]) == pytest.approx(-45.0)

@@ -44,15 +44,20 @@ def run(args) -> int:
         raise ValueError(f"--world: file must end in .ply, .stl, .obj or .glb, got {args.world}")
     sc = get_scenario(args.name)
     lo, hi = sc.world.bounds
-    x, y, z, _, _, yaw = sc.start_state[:6]
+    x, y, z, yaw = sc.start
     print(f"{sc.name}: {sc.description}")
     print(f"  world: {len(sc.world.faces)} faces, x [{lo[0]:.1f}, {hi[0]:.1f}] "
           f"y [{lo[1]:.1f}, {hi[1]:.1f}] z [{lo[2]:.1f}, {hi[2]:.1f}] m")
     print(f"  target: {int(sc.target_faces.sum())} faces, {sc.target_area:.1f} m^2")
-    print(f"  start: ({x:.1f}, {y:.1f}, {z:.1f}) m, yaw {np.degrees(yaw):.0f} deg")
+    print(f"  start: ({x:.1f}, {y:.1f}, {z:.1f}) m, yaw {yaw:.0f} deg")
     print("  params: " + ", ".join(f"{k}={v}" for k, v in sc.params.items()))
-    if args.prior:
-        _write_prior(sc.prior_map(error_m=args.error, seed=args.seed), FilePath(args.prior))
+    if args.prior:  # the prior a mission at this site holds, loaded as the mission loads it
+        from drake_auv.mission.config import SiteSpec
+        from drake_auv.mission.site import load_site
+
+        site = load_site(SiteSpec(scenario=args.name, prior_error_m=args.error), args.seed,
+                         label=f"scenarios {args.name}")
+        _write_prior(site.prior, FilePath(args.prior))
         print(f"  wrote prior map to {args.prior}")
     if args.world:
         out = FilePath(args.world)

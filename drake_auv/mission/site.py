@@ -4,7 +4,13 @@ A site's files share one horizontal frame, the site's (the prior raster's CRS, o
 eastings near 500 km). The mission works in a LOCAL frame: local = site - origin in x, y (z
 unchanged, z up, sea surface z = 0), `origin` the centre of the world's horizontal bounds
 rounded to 1 m, so float32 ray casting keeps millimetres. `Site.to_site` converts outputs
-back. Built-in scenarios are already local (origin 0). Pure Python, no Drake.
+back. Pure Python, no Drake.
+
+Every site is loaded one way, by `load_site`, from the same data: a world mesh, its target (a
+mesh of part of it, or its faces), a prior raster or the cell at which the world's top surface
+is sampled as one, and a start pose. A user's files give them, so does a built-in scenario
+(`drake_auv.scenarios`, whose world is already local: its origin is 0). The loader moves them to
+the local frame, shifts the prior by the seeded prior-map error and makes the start state.
 
 A site given as `tile` + `roi` (a survey grid and a region of it) is made of files generated
 once by `terrain.site_files.write_site_files` (1 m world, the grid as prior, UTM) into a cache
@@ -29,7 +35,7 @@ import trimesh
 
 from drake_auv.mission.config import (FollowStep, MissionFileError, MissionSpec, PlanStep,
                                       SiteSpec)
-from drake_auv.scenarios import Scenario, get_scenario, prior_offset, shift_prior
+from drake_auv.scenarios import get_scenario
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import top_surface
 
@@ -37,6 +43,7 @@ TARGET_TOLERANCE = 0.05  # m, a world face lies on the target when its centroid 
 DEFAULT_PRIOR_SPACING = 1.0  # m, the prior's cell when sampled from a user's world
 TILE_WORLD_SPACING = 1.0  # m, the world mesh's cell of a site cut from a tile
 TILE_MARGIN = 40.0  # m of world around a tile site's region
+MAX_PRIOR_ERROR = 5.0  # m, the reference's largest prior-map error
 
 
 def cache_dir() -> Path:
@@ -84,7 +91,7 @@ class Site:
     """A loaded site, in the local frame.
 
     Attributes:
-        name: the scenario's name or the world file's stem.
+        name: the built-in scenario's name or the world file's stem.
         world: true world mesh, local frame, m.
         target_faces: (len(world.faces),) bool, the faces whose coverage is scored.
         prior: the prior map the planner holds, local frame, already shifted by the seeded
@@ -94,7 +101,6 @@ class Site:
         start_state: (12,) local start state `[x, y, z, roll, pitch, yaw, u, v, w, p, q, r]`,
             or None (the runner chooses).
         max_range: range of the sonars, m.
-        scenario: the built-in `Scenario`, or None for a user's files.
         prior_shift: (2,) the prior map's horizontal error, m (where the map puts things,
             less where they are).
     """
@@ -107,7 +113,6 @@ class Site:
     crs: str | None = None
     start_state: np.ndarray | None = None
     max_range: float = 20.0
-    scenario: Scenario | None = field(default=None, repr=False)
     prior_shift: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
     def to_local(self, points) -> np.ndarray:
@@ -129,10 +134,30 @@ class Site:
         return self.world.submesh([np.flatnonzero(self.target_faces)], append=True)
 
 
-def _state(xyz, yaw: float) -> np.ndarray:
+def shift_prior(bathy: Bathymetry, error_m: float, seed: int) -> Bathymetry:
+    """`bathy` moved horizontally by `error_m` (m, in [0, 5]) in a direction drawn from
+    `seed`: the prior-map error. The grid, CRS and world-to-CRS map are kept (the cells now
+    claim wrong positions)."""
+    if not (np.isfinite(error_m) and 0.0 <= error_m <= MAX_PRIOR_ERROR):
+        raise ValueError(f"prior map: error_m must be in [0, {MAX_PRIOR_ERROR}] m, "
+                         f"got {error_m}")
+    return Bathymetry(bathy.z, bathy.spacing,
+                      tuple(np.add(bathy.origin, prior_offset(error_m, seed))), bathy.crs,
+                      bathy.to_crs)
+
+
+def prior_offset(error_m: float, seed: int) -> np.ndarray:
+    """(2,) the horizontal shift of a prior map with error `error_m` (m) drawn from `seed`."""
+    theta = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi)
+    return error_m * np.array([np.cos(theta), np.sin(theta)])
+
+
+def start_state(pose, origin) -> np.ndarray:
+    """(12,) local state `[x, y, z, roll, pitch, yaw, u, v, w, p, q, r]` at rest at `pose`
+    (x, y, z, yaw_deg), site coordinates, m and deg; `origin` (2,) the local frame's."""
     state = np.zeros(12)
-    state[:3] = xyz
-    state[5] = yaw
+    state[:3] = pose[0] - origin[0], pose[1] - origin[1], pose[2]
+    state[5] = math.radians(pose[3])
     return state
 
 
@@ -207,34 +232,35 @@ def _local_prior(path, origin: np.ndarray, label: str) -> Bathymetry:
 
 
 def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
-    """The site of `spec`, its prior shifted by `spec.prior_error_m` in a direction drawn from
-    `seed`. Raises MissionFileError (`label`: the mission file's name) naming the field for a
-    missing or unusable file."""
+    """The site of `spec` (a built-in scenario, a user's files or a tile's generated files),
+    its prior shifted by `spec.prior_error_m` in a direction drawn from `seed`. Raises
+    MissionFileError (`label`: the mission file's name) naming the field for a missing or
+    unusable file."""
     if spec.tile is not None:
         spec = tile_site_files(spec, label)
-    if spec.scenario is not None:
+    if spec.scenario is not None:  # the built-in data, in place of the files
         scenario = get_scenario(spec.scenario)
-        prior = scenario.prior_map(spec.prior_error_m, seed, spacing=spec.prior_spacing_m)
-        start = scenario.start_state if spec.start is None else _state(
-            spec.start[:3], math.radians(spec.start[3]))
-        return Site(spec.scenario, scenario.world, scenario.target_faces, prior, np.zeros(2),
-                    None, start, spec.max_range_m, scenario,
-                    prior_offset(spec.prior_error_m, seed))
-    world = load_mesh(spec.world, "site.world", label)
-    lo, hi = world.bounds
-    if lo[2] >= 0.0:
-        raise MissionFileError(label, "site.world", f"{spec.world.name} lies entirely above "
-                               f"the sea surface (lowest z {lo[2]:g} m)",
-                               "a world with its seabed below z = 0 (z up, metres)")
-    origin = np.round(0.5 * (lo[:2] + hi[:2]))
-    world.apply_translation([-origin[0], -origin[1], 0.0])
-    if spec.target is None:
-        target = np.ones(len(world.faces), bool)
+        name, world, target, start = spec.scenario, scenario.world, scenario.target_faces, \
+            scenario.start
+        origin = np.zeros(2)  # already local
+        spacing = spec.prior_spacing_m or scenario.params["prior_spacing"]
     else:
-        target = _target_faces(world, load_mesh(spec.target, "site.target", label), origin,
-                               spec.target.name, label)
+        name, world, start = spec.world.stem, load_mesh(spec.world, "site.world", label), None
+        lo, hi = world.bounds
+        if lo[2] >= 0.0:
+            raise MissionFileError(label, "site.world", f"{spec.world.name} lies entirely "
+                                   f"above the sea surface (lowest z {lo[2]:g} m)",
+                                   "a world with its seabed below z = 0 (z up, metres)")
+        target = None if spec.target is None else load_mesh(spec.target, "site.target", label)
+        origin = np.round(0.5 * (lo[:2] + hi[:2]))
+        spacing = spec.prior_spacing_m or DEFAULT_PRIOR_SPACING
+    world.apply_translation([-origin[0], -origin[1], 0.0])
+    if target is None:
+        target = np.ones(len(world.faces), bool)
+    elif isinstance(target, trimesh.Trimesh):
+        target = _target_faces(world, target, origin, spec.target.name, label)
     if spec.prior is None:
-        prior = top_surface(world, spec.prior_spacing_m or DEFAULT_PRIOR_SPACING)
+        prior = top_surface(world, spacing)
         local_to_crs = np.eye(3)
         local_to_crs[:2, 2] = origin
         prior = Bathymetry(prior.z, prior.spacing, prior.origin, spec.crs, local_to_crs)
@@ -249,12 +275,11 @@ def load_site(spec: SiteSpec, seed: int, label: str = "mission") -> Site:
             raise MissionFileError(label, "site.prior", f"{spec.prior.name} does not overlap "
                                    "the world mesh", "a raster covering the world, in its frame")
     prior = shift_prior(prior, spec.prior_error_m, seed)
-    start = None
     if spec.start is not None:
-        xyz = np.array([spec.start[0] - origin[0], spec.start[1] - origin[1], spec.start[2]])
-        start = _state(xyz, math.radians(spec.start[3]))
-    return Site(spec.world.stem, world, target, prior, origin, prior.crs or spec.crs, start,
-                spec.max_range_m, prior_shift=prior_offset(spec.prior_error_m, seed))
+        start = spec.start
+    return Site(name, world, target, prior, origin, prior.crs or spec.crs,
+                None if start is None else start_state(start, origin), spec.max_range_m,
+                prior_shift=prior_offset(spec.prior_error_m, seed))
 
 
 def _target_faces(world: trimesh.Trimesh, target: trimesh.Trimesh, origin: np.ndarray,
