@@ -16,7 +16,10 @@ Their view direction (from a viewpoint to the frontier, unit): for a surface cel
 occupied cells of its 26-neighbourhood; for a boundary cell, towards its unknown neighbours.
 Cells are clustered in blocks of `cluster` m per kind; a cluster's candidate viewpoints sit
 `omega` m back from its centroid along the view direction (and that direction turned by
-+-`TURN` about z), kept if at least `clearance` m from every occupied or unknown cell, inside
++-`TURN` about z, and tilted `TURN` down, so the viewpoint is higher), kept if at least
+`clearance` m from every occupied cell and `unknown_clearance` m from every unknown one (a
+port-looking fan carves known water in thin sheets: a full clearance from unknown water
+leaves hardly any viewpoint; the path search prices unknown water, `paths`), inside
 the region box widened by `omega`, below z = -1 m and at least `clearance` above the region's
 floor (zmin: the operator's bound on the seabed; the map alone cannot be trusted below it,
 as beams grazing the seabed return nothing and clear free space through it).
@@ -249,18 +252,29 @@ def _turned(d: np.ndarray, angle: float) -> np.ndarray:
     return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], d[:, 2]])
 
 
+def _tilted(d: np.ndarray, angle: float) -> np.ndarray:
+    """`d` (n, 3) tilted by `angle` rad towards -z in its vertical plane (unit)."""
+    h = np.linalg.norm(d[:, :2], axis=1)
+    elevation = np.arctan2(d[:, 2], h) - angle
+    heading = np.arctan2(d[:, 1], d[:, 0])
+    return np.column_stack([np.cos(elevation) * np.cos(heading),
+                            np.cos(elevation) * np.sin(heading), np.sin(elevation)])
+
+
 def candidate_viewpoints(grid: LabelGrid, clusters: Clusters, omega: float,
-                         clearance: float, distance: np.ndarray | None = None) -> Candidates:
-    """Viewpoints `omega` m back from each cluster along its view direction (and turned by
-    +-`TURN`), kept where admissible (see the module). `distance`: `grid.blocked_distance()`
-    if already computed."""
-    distance = grid.blocked_distance() if distance is None else distance
-    directions = np.concatenate([clusters.directions] + [_turned(clusters.directions, a)
-                                                         for a in (TURN, -TURN)])
-    targets = np.tile(clusters.centroids, (3, 1))
-    cluster = np.tile(np.arange(len(clusters.sizes)), 3)
+                         clearance: float, unknown_clearance: float) -> Candidates:
+    """Viewpoints `omega` m back from each cluster along its view direction (turned by
+    +-`TURN` and tilted down by `TURN`), kept where admissible (see the module)."""
+    rock = ndimage.distance_transform_edt(grid.labels != OCCUPIED) * grid.cell
+    unknown = ndimage.distance_transform_edt(grid.labels != UNKNOWN) * grid.cell
+    d = clusters.directions
+    directions = np.concatenate([d, _turned(d, TURN), _turned(d, -TURN), _tilted(d, TURN)])
+    targets = np.tile(clusters.centroids, (4, 1))
+    cluster = np.tile(np.arange(len(clusters.sizes)), 4)
     positions = targets - omega * directions
     idx, inside = grid.index(positions)
-    ok = (inside & (distance[tuple(idx.T)] >= clearance) & grid.in_region(positions, omega)
+    cells = tuple(idx.T)
+    ok = (inside & (rock[cells] >= clearance) & (unknown[cells] >= unknown_clearance)
+          & grid.in_region(positions, omega)
           & (positions[:, 2] < MAX_Z) & (positions[:, 2] >= grid.region[2] + clearance))
     return Candidates(positions[ok], directions[ok], targets[ok], cluster[ok])

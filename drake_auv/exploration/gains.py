@@ -9,8 +9,9 @@ there is not yet known; counting one cell per ray and not every unknown cell it 
 surface measure, not a volume one) or, failing that, the surface frontier cell it stops on.
 The gain is the number of distinct such cells times the cell's face, m^2.
 
-Score (`strategy` "gain"): gain - `travel_weight` * travel time (straight-line distance /
-speed, s); "nearest": minus the distance; "random": a seeded uniform draw.
+Score (`strategy` "gain"): gain - `travel_weight` * travel time (the travel length of the
+grid search, `paths.TravelField`, over the speed, s); "nearest": minus the travel length;
+"random": a seeded uniform draw.
 """
 
 from __future__ import annotations
@@ -77,13 +78,12 @@ def view_gains(grid: LabelGrid, positions, rays, max_range: float,
     return np.bincount(pairs // grid.labels.size, minlength=c) * grid.cell ** 2
 
 
-def scores(strategy: str, gains: np.ndarray, positions, position, speed: float,
+def scores(strategy: str, gains: np.ndarray, distance: np.ndarray, speed: float,
            travel_weight: float, seed: int) -> np.ndarray:
-    """(c,) ranking score of each candidate viewpoint (c, 3), larger is better (see the
-    module)."""
+    """(c,) ranking score of each candidate from its gain (m^2) and travel length (m),
+    larger is better (see the module)."""
     if strategy not in STRATEGIES:
         raise ValueError(f"strategy must be one of {STRATEGIES}, got {strategy!r}")
-    distance = np.linalg.norm(np.asarray(positions) - np.asarray(position)[:3], axis=1)
     if strategy == "gain":
         return gains - travel_weight * distance / speed
     if strategy == "nearest":
