@@ -12,8 +12,10 @@ Two kinds of frontier cells, both inside the region box:
   frontier: that unknown touches no free water and no sonar will ever see it);
 - boundary: free cells next to an unknown cell, the edge of the known water.
 
-Their view direction (from a viewpoint to the frontier, unit): for a surface cell, towards the
-occupied cells of its 26-neighbourhood; for a boundary cell, towards its unknown neighbours.
+Their view direction (from a viewpoint to the frontier, unit): from the free cells of its
+26-neighbourhood towards the occupied ones (surface) or the unknown ones (boundary), the sum of
+the offsets to those less the sum of the offsets to the free ones: at the edge of a seen wall
+it points into the wall and a little along it, past the edge.
 Cells are clustered in blocks of `cluster` m per kind; a cluster's candidate viewpoints sit
 `omega` m back from its centroid along the view direction (and that direction turned by
 +-`TURN` about z, and tilted `TURN` down, so the viewpoint is higher), kept if at least
@@ -31,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 UNKNOWN, FREE, OCCUPIED = -1, 0, 1
 KINDS = ("surface", "boundary")
@@ -140,7 +143,7 @@ class LabelGrid:
     def blocked_distance(self) -> np.ndarray:
         """(nx, ny, nz) distance from each cell centre to the nearest occupied or unknown
         cell centre, m (0 in them): unknown water counts as rock for safety."""
-        return ndimage.distance_transform_edt(self.labels != FREE) * self.cell
+        return ndimage.distance_transform_edt(self.labels == FREE) * self.cell
 
 
 def scan_rays(batches, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -189,8 +192,9 @@ def frontier_cells(grid: LabelGrid) -> Frontiers:
     region = grid.region_mask()
     surface = occupied & ndimage.binary_dilation(open_unknown, _FACE) & region
     boundary = free & ndimage.binary_dilation(unknown, _FACE, border_value=1) & region
-    towards_rock = _neighbour_sum(occupied)
-    towards_unknown = _neighbour_sum(unknown)
+    towards_free = _neighbour_sum(free)
+    towards_rock = _neighbour_sum(occupied) - towards_free
+    towards_unknown = _neighbour_sum(unknown) - towards_free
     parts = [(np.argwhere(surface), towards_rock, 0), (np.argwhere(boundary), towards_unknown, 1)]
     centres, directions, kinds = [], [], []
     for idx, field, kind in parts:
@@ -265,7 +269,6 @@ def candidate_viewpoints(grid: LabelGrid, clusters: Clusters, omega: float,
                          clearance: float, unknown_clearance: float) -> Candidates:
     """Viewpoints `omega` m back from each cluster along its view direction (turned by
     +-`TURN` and tilted down by `TURN`), kept where admissible (see the module)."""
-    rock = ndimage.distance_transform_edt(grid.labels != OCCUPIED) * grid.cell
     unknown = ndimage.distance_transform_edt(grid.labels != UNKNOWN) * grid.cell
     d = clusters.directions
     directions = np.concatenate([d, _turned(d, TURN), _turned(d, -TURN), _tilted(d, TURN)])
@@ -273,8 +276,10 @@ def candidate_viewpoints(grid: LabelGrid, clusters: Clusters, omega: float,
     cluster = np.tile(np.arange(len(clusters.sizes)), 4)
     positions = targets - omega * directions
     idx, inside = grid.index(positions)
-    cells = tuple(idx.T)
-    ok = (inside & (rock[cells] >= clearance) & (unknown[cells] >= unknown_clearance)
+    occupied = grid.centres(np.argwhere(grid.labels == OCCUPIED))
+    rock = (cKDTree(occupied).query(positions)[0] if len(occupied)
+            else np.full(len(positions), np.inf))
+    ok = (inside & (rock >= clearance) & (unknown[tuple(idx.T)] >= unknown_clearance)
           & grid.in_region(positions, omega)
           & (positions[:, 2] < MAX_Z) & (positions[:, 2] >= grid.region[2] + clearance))
     return Candidates(positions[ok], directions[ok], targets[ok], cluster[ok])
