@@ -95,7 +95,7 @@ def test_travel_goes_round_rock_and_keeps_clear():
     grid = LabelGrid(np.array([0.0, 0.0, -20.0]), 1.0, labels,
                      np.array([0.0, 0.0, -20.0, 30.0, 30.0, -8.0]))
     cost = PathCost(grid, clearance=2.0)
-    assert cost.blocked[5, 5, 5] == 5.0 and cost.blocked[14, 5, 5] == 0.0  # m to the rock
+    assert cost.blocked[5, 5, 5] == 9.0 and cost.blocked[14, 5, 5] == 0.0  # m to the rock
     start, goal = np.array([5.5, 5.5, -14.5]), np.array([25.5, 5.5, -14.5])
     travel = TravelField.build(cost, start)
     assert travel.lengths(goal[None])[0] > 2.0 * np.linalg.norm(goal - start)
