@@ -37,6 +37,8 @@ def fan_rays(mount: str, yaws, fan_deg: float = 120.0, beams: int = 13,
     """(c, r, 3) unit rays in the world frame of the multibeam fan on `mount` at each of the
     `yaws` (c,), level vehicle, the fan turned by `sweeps` offsets over +-`sweep_deg`."""
     angles = fan_angles(beams, np.radians(fan_deg))
+    if len(np.atleast_1d(yaws)) == 0:
+        return np.zeros((0, beams * max(sweeps, 1), 3))
     body = MOUNT_ROTATIONS[mount] @ np.stack([np.cos(angles), np.sin(angles),
                                               np.zeros_like(angles)])  # (3, beams)
     offsets = np.radians(np.linspace(-sweep_deg, sweep_deg, sweeps)) if sweeps > 1 else [0.0]

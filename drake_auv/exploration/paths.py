@@ -1,11 +1,12 @@
 """The path to a chosen viewpoint: a grid search, smoothed by STOMP (`replanning.stomp`). Pure.
 
 `TravelField`: Dijkstra (`scipy.sparse.csgraph`) from the vehicle's cell over the 6-connected
-cells of the label grid that keep half the clearance from occupied cells and lie between the
-region's floor (zmin plus half the clearance) and z = -1 m, each metre priced 1 in known
-water with the clearance, `NEAR_FACTOR` in known water closer to rock or unknown, and
-`UNKNOWN_FACTOR` in unknown water (treated as rock within the clearance, but passable at a
-price: the vehicle's own unseen surroundings must not forbid every start). It gives every
+cells of the label grid that keep half the clearance from occupied cells, lie between the
+region's floor (zmin plus half the clearance) and z = -1 m and are known free water or
+unknown water within `LOCAL_UNKNOWN` clearances of the vehicle (its own unseen surroundings
+must not forbid every start; farther, unknown water may be unseen rock: the inside of a
+structure whose shell has holes), each metre priced 1 in known water with the clearance,
+`NEAR_FACTOR` in known water closer to rock or unknown, `UNKNOWN_FACTOR` in unknown water. It gives every
 candidate's travel length (a candidate it cannot reach is dropped) and the grid path to one.
 STOMP alone, from a straight line, cannot find the way round a 20 m boulder; from the grid
 path it only smooths. The grid path, resampled every `spacing` m (at most `MAX_POINTS`),
@@ -29,13 +30,14 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from drake_auv.exploration.frontiers import MAX_Z, OCCUPIED, UNKNOWN, LabelGrid
+from drake_auv.exploration.frontiers import FREE, MAX_Z, OCCUPIED, UNKNOWN, LabelGrid
 from drake_auv.planning.polyline import resample
 from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 
 MAX_POINTS = 60
 NEAR_FACTOR = 2.0
 UNKNOWN_FACTOR = 10.0
+LOCAL_UNKNOWN = 2.0  # clearances around the vehicle where unknown water may be crossed
 
 
 @dataclass(frozen=True)
@@ -90,7 +92,13 @@ class TravelField:
         start = np.asarray(start, float)[:3]
         z = grid.origin[2] + (np.arange(shape[2]) + 0.5) * grid.cell
         depth_ok = (z >= grid.region[2] + 0.5 * cost.clearance) & (z <= MAX_Z)
-        passable = (cost.rock >= 0.5 * cost.clearance) & depth_ok[None, None, :]
+        centres = [grid.origin[k] + (np.arange(shape[k]) + 0.5) * grid.cell for k in range(3)]
+        near = ((centres[0][:, None, None] - start[0]) ** 2
+                + (centres[1][None, :, None] - start[1]) ** 2
+                + (centres[2][None, None, :] - start[2]) ** 2
+                <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
+        passable = ((cost.rock >= 0.5 * cost.clearance) & depth_ok[None, None, :]
+                    & ((grid.labels == FREE) | ((grid.labels == UNKNOWN) & near)))
         factor = np.where(grid.labels == UNKNOWN, UNKNOWN_FACTOR,
                           np.where(cost.blocked >= cost.clearance, 1.0, NEAR_FACTOR))
         idx, inside = grid.index(start)
