@@ -106,7 +106,7 @@ def test_travel_goes_round_rock_and_keeps_clear():
     labels[14:16, 24:, :] = UNKNOWN  # the gap unseen, far from the vehicle: not crossed
     unseen = TravelField.build(PathCost(grid, 2.0), start)
     assert not np.isfinite(unseen.lengths(goal[None])[0])
-    near = TravelField.build(PathCost(grid, 2.0), np.array([13.5, 26.5, -14.5]))
+    near = TravelField.build(PathCost(grid, 2.0), np.array([14.5, 26.5, -14.5]))
     assert np.isfinite(near.lengths(goal[None])[0])  # unseen water next to the vehicle is
     labels[14:16, 24:, :] = OCCUPIED  # closed: unreachable
     closed = TravelField.build(PathCost(grid, 2.0), start)

@@ -1,7 +1,7 @@
 """The path to a chosen viewpoint: a grid search, smoothed by STOMP (`replanning.stomp`). Pure.
 
 `TravelField`: Dijkstra (`scipy.sparse.csgraph`) from the vehicle's cell over the 6-connected
-cells of the label grid that keep half the clearance from occupied cells, lie between the
+cells of the label grid that keep `KEEP` clearances from occupied cells, lie between the
 region's floor (zmin plus half the clearance) and z = -1 m and are known free water or
 unknown water within `LOCAL_UNKNOWN` clearances of the vehicle (its own unseen surroundings
 must not forbid every start; farther, unknown water may be unseen rock: the inside of a
@@ -37,7 +37,8 @@ from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 MAX_POINTS = 60
 NEAR_FACTOR = 2.0
 UNKNOWN_FACTOR = 10.0
-LOCAL_UNKNOWN = 2.0  # clearances around the vehicle where unknown water may be crossed
+KEEP = 0.75  # clearances a path keeps from occupied cell centres
+LOCAL_UNKNOWN = 0.5  # clearances around the vehicle where unknown water may be crossed
 
 
 @dataclass(frozen=True)
@@ -97,7 +98,7 @@ class TravelField:
                 + (centres[1][None, :, None] - start[1]) ** 2
                 + (centres[2][None, None, :] - start[2]) ** 2
                 <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
-        passable = ((cost.rock >= 0.5 * cost.clearance) & depth_ok[None, None, :]
+        passable = ((cost.rock >= KEEP * cost.clearance) & depth_ok[None, None, :]
                     & ((grid.labels == FREE) | ((grid.labels == UNKNOWN) & near)))
         factor = np.where(grid.labels == UNKNOWN, UNKNOWN_FACTOR,
                           np.where(cost.blocked >= cost.clearance, 1.0, NEAR_FACTOR))
@@ -154,7 +155,7 @@ def plan_path(travel: TravelField, goal, spacing: float = 1.0,
               seed: int = 0) -> np.ndarray | None:
     """(N, 3) path from the vehicle to `goal` (m): the grid search's, smoothed by STOMP
     against its cost; None when the goal is unreachable or the path (smoothed or not) comes
-    within half the clearance of an occupied cell or of the floor."""
+    within `KEEP` clearances of an occupied cell centre or half a clearance of the floor."""
     goal = np.asarray(goal, float)[:3]
     if not np.isfinite(travel.lengths(goal[None])[0]):
         return None
@@ -168,7 +169,7 @@ def plan_path(travel: TravelField, goal, spacing: float = 1.0,
                      matrices=_matrices(len(initial))).trajectory
     for path in (smoothed, initial):
         rock, _ = cost.distances(path[1:])
-        if np.all(rock >= 0.5 * cost.clearance) and np.all(
+        if np.all(rock >= KEEP * cost.clearance) and np.all(
                 path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance):
             return path
     return None
