@@ -2,10 +2,12 @@
 
 `TravelField`: Dijkstra (`scipy.sparse.csgraph`) from the vehicle's cell over the 6-connected
 cells of the label grid that keep `KEEP` clearances from occupied cells, lie between the
-region's floor (zmin plus half the clearance) and z = -1 m and are known free water or
-unknown water within `LOCAL_UNKNOWN` clearances of the vehicle (its own unseen surroundings
-must not forbid every start; farther, unknown water may be unseen rock: the inside of a
-structure whose shell has holes), each metre priced 1 in known water with the clearance,
+region's floor (zmin plus half the clearance) and z = -1 m and are known free water, unknown
+water next to known free water (26-neighbours: the sonar carves known water in sheets thinner
+than a cell, sampled with holes) or within `LOCAL_UNKNOWN` clearances of the vehicle (its own
+unseen surroundings must not forbid every start); unknown water away from known water may be
+unseen rock (the inside of a structure whose shell has holes) and is not crossed. Each metre
+is priced 1 in known water with the clearance,
 `NEAR_FACTOR` in known water closer to rock or unknown, `UNKNOWN_FACTOR` in unknown water. It gives every
 candidate's travel length (a candidate it cannot reach is dropped) and the grid path to one.
 STOMP alone, from a straight line, cannot find the way round a 20 m boulder; from the grid
@@ -98,8 +100,10 @@ class TravelField:
                 + (centres[1][None, :, None] - start[1]) ** 2
                 + (centres[2][None, None, :] - start[2]) ** 2
                 <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
-        passable = ((cost.rock >= KEEP * cost.clearance) & depth_ok[None, None, :]
-                    & ((grid.labels == FREE) | ((grid.labels == UNKNOWN) & near)))
+        free = grid.labels == FREE
+        open_water = free | ((grid.labels == UNKNOWN) & (
+            near | ndimage.binary_dilation(free, np.ones((3, 3, 3), bool))))
+        passable = (cost.rock >= KEEP * cost.clearance) & depth_ok[None, None, :] & open_water
         factor = np.where(grid.labels == UNKNOWN, UNKNOWN_FACTOR,
                           np.where(cost.blocked >= cost.clearance, 1.0, NEAR_FACTOR))
         idx, inside = grid.index(start)
