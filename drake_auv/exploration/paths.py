@@ -3,11 +3,12 @@
 `TravelField`: Dijkstra (`scipy.sparse.csgraph`) from the vehicle's cell over the 6-connected
 cells of the label grid that keep `KEEP` clearances from occupied cells, lie between the
 region's floor (zmin plus half the clearance) and z = -1 m and are known free water, unknown
-water next to known free water (26-neighbours: the sonar carves known water in sheets thinner
-than a cell, sampled with holes) or within `LOCAL_UNKNOWN` clearances of the vehicle (its own
-unseen surroundings must not forbid every start); unknown water away from known water may be
-unseen rock (the inside of a structure whose shell has holes) and is not crossed. Each metre
-is priced 1 in known water with the clearance,
+cells between known free water (free on both sides along an axis: the sonar carves known water
+in sheets thinner than a cell, sampled with holes) or within `LOCAL_UNKNOWN` clearances of the
+vehicle (its own unseen surroundings must not forbid every start). Other unknown water may be
+unseen rock: the edge of the known water next to an unseen face (in the first runs paths along
+it led under the boulder's overhang into rock), the inside of a structure whose shell has
+holes; it is not crossed. Each metre is priced 1 in known water with the clearance,
 `NEAR_FACTOR` in known water closer to rock or unknown, `UNKNOWN_FACTOR` in unknown water. It gives every
 candidate's travel length (a candidate it cannot reach is dropped) and the grid path to one.
 STOMP alone, from a straight line, cannot find the way round a 20 m boulder; from the grid
@@ -81,12 +82,14 @@ class TravelField:
 
     Attributes: cost: the `PathCost` (its grid and fields); start: (3,) the vehicle, m;
     length: (nx * ny * nz,) priced travel length to each cell, m (inf: unreachable);
-    previous: (nx * ny * nz,) the cell before each on its path (-9999 at the start)."""
+    previous: (nx * ny * nz,) the cell before each on its path (-9999 at the start);
+    passable: (nx * ny * nz,) the cells a path may cross."""
 
     cost: PathCost
     start: np.ndarray
     length: np.ndarray
     previous: np.ndarray
+    passable: np.ndarray
 
     @classmethod
     def build(cls, cost: PathCost, start) -> "TravelField":
@@ -101,8 +104,14 @@ class TravelField:
                 + (centres[2][None, None, :] - start[2]) ** 2
                 <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
         free = grid.labels == FREE
-        open_water = free | ((grid.labels == UNKNOWN) & (
-            near | ndimage.binary_dilation(free, np.ones((3, 3, 3), bool))))
+        between = np.zeros_like(free)
+        for axis in range(3):
+            pad = [(0, 0)] * 3
+            pad[axis] = (1, 1)
+            f = np.pad(free, pad)
+            lo, hi = (np.take(f, np.arange(k, k + shape[axis]), axis=axis) for k in (0, 2))
+            between |= lo & hi
+        open_water = free | ((grid.labels == UNKNOWN) & (near | between))
         passable = (cost.rock >= KEEP * cost.clearance) & depth_ok[None, None, :] & open_water
         factor = np.where(grid.labels == UNKNOWN, UNKNOWN_FACTOR,
                           np.where(cost.blocked >= cost.clearance, 1.0, NEAR_FACTOR))
@@ -123,10 +132,10 @@ class TravelField:
         graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows),
                                                       np.concatenate(cols))), shape=(n, n))
         if first < 0:
-            return cls(cost, start, np.full(n, np.inf), np.full(n, -9999))
+            return cls(cost, start, np.full(n, np.inf), np.full(n, -9999), flat_pass)
         length, previous = dijkstra(graph.tocsr(), directed=False, indices=first,
                                     return_predecessors=True)
-        return cls(cost, start, length, previous)
+        return cls(cost, start, length, previous, flat_pass)
 
     def lengths(self, points) -> np.ndarray:
         """(m,) priced travel length to `points` (m, 3), m (inf: unreachable)."""
@@ -159,7 +168,8 @@ def plan_path(travel: TravelField, goal, spacing: float = 1.0,
               seed: int = 0) -> np.ndarray | None:
     """(N, 3) path from the vehicle to `goal` (m): the grid search's, smoothed by STOMP
     against its cost; None when the goal is unreachable or the path (smoothed or not) comes
-    within `KEEP` clearances of an occupied cell centre or half a clearance of the floor."""
+    within `KEEP` clearances of an occupied cell centre or half a clearance of the floor, or
+    leaves the passable cells."""
     goal = np.asarray(goal, float)[:3]
     if not np.isfinite(travel.lengths(goal[None])[0]):
         return None
@@ -173,7 +183,9 @@ def plan_path(travel: TravelField, goal, spacing: float = 1.0,
                      matrices=_matrices(len(initial))).trajectory
     for path in (smoothed, initial):
         rock, _ = cost.distances(path[1:])
-        if np.all(rock >= KEEP * cost.clearance) and np.all(
+        idx, inside = cost.grid.index(path[1:-1])
+        crossed = travel.passable[np.ravel_multi_index(tuple(idx.T), cost.grid.labels.shape)]
+        if np.all(crossed & inside) and np.all(rock >= KEEP * cost.clearance) and np.all(
                 path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance):
             return path
     return None
