@@ -94,7 +94,8 @@ def test_omega_below_the_clearance_is_one_line():
 ])
 def test_regions_the_vehicle_cannot_explore(region, what):
     spec = mission_from_dict(explore_mission(region=region), ".", "m.yaml")
-    with pytest.raises(MissionFileError, match=r"explore_test: steps\[0\].explore.region: .*" + what):
+    with pytest.raises(MissionFileError,
+                       match=r"explore_test: steps\[0\].explore.region: .*" + what):
         plan_mission(spec, load_site(spec.site, 0))
 
 

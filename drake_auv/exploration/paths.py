@@ -9,18 +9,20 @@ vehicle (its own unseen surroundings must not forbid every start). Other unknown
 unseen rock: the edge of the known water next to an unseen face (in the first runs paths along
 it led under the boulder's overhang into rock), the inside of a structure whose shell has
 holes; it is not crossed. Each metre is priced 1 in known water with the clearance,
-`NEAR_FACTOR` in known water closer to rock or unknown, `UNKNOWN_FACTOR` in unknown water. It gives every
-candidate's travel length (a candidate it cannot reach is dropped) and the grid path to one.
-STOMP alone, from a straight line, cannot find the way round a 20 m boulder; from the grid
-path it only smooths. The grid path, resampled every `spacing` m (at most `MAX_POINTS`),
-is STOMP's initial trajectory; its interior moves against a cost per point of
-    rock_weight * max(0, clearance - d_rock)^2 + unknown_weight * max(0, clearance - d_blocked)^2
+`NEAR_FACTOR` in known water closer to rock or unknown, `UNKNOWN_FACTOR` in unknown water. It
+gives every candidate's travel length (a candidate it cannot reach is dropped) and the grid
+path to one. STOMP alone, from a straight line, cannot find the way round a 20 m boulder; from
+the grid path it only smooths. The grid path, resampled every `spacing` m (at most
+`MAX_POINTS`), is STOMP's initial trajectory; its interior moves against a cost per point of
+    rock_weight * max(0, clearance - d_rock)^2
+    + unknown_weight * max(0, clearance - d_blocked)^2
 with d_rock the distance to the nearest occupied cell and d_blocked to the nearest occupied or
-unknown one (unknown water is treated as rock within the clearance, softly: the vehicle's own
-unseen surroundings must not forbid every start), plus a depth term that keeps the path
-below z = -1 m and the clearance above the region's floor (zmin). A path is accepted if no
-point comes closer than half the clearance to an occupied cell or to the floor. Fields are read at the nearest cell; outside the grid the distances are
-taken as the clearance (no cost: the grid spans the region widened by Omega and the clearance).
+unknown one (unknown water is treated as rock within the clearance, softly), plus a depth term
+that keeps the path below z = -1 m and the clearance above the region's floor (zmin). Fields
+are read at the nearest cell; outside the grid the distances are taken as the clearance (no
+cost: the grid spans the region widened by Omega and the clearance). The smoothed path (or,
+failing it, the grid path) is accepted if it stays on the search's passable cells, keeps
+`KEEP` clearances from occupied cell centres and half a clearance above the floor.
 """
 
 from __future__ import annotations
