@@ -43,7 +43,7 @@ MAX_POINTS = 60
 NEAR_FACTOR = 2.0
 UNKNOWN_FACTOR = 10.0
 KEEP = 0.75  # clearances a path keeps from occupied cell centres
-LOCAL_UNKNOWN = 0.5  # clearances around the vehicle where unknown water may be crossed
+LOCAL_UNKNOWN = 1.0  # clearances around the vehicle where unknown water may be crossed
 
 
 @dataclass(frozen=True)
@@ -180,14 +180,21 @@ def plan_path(travel: TravelField, goal, spacing: float = 1.0,
         initial = resample(initial, spacing * len(initial) / (MAX_POINTS - 1))
     if len(initial) < 3:
         initial = travel.start + np.linspace(0.0, 1.0, 3)[:, None] * (goal - travel.start)
-    cost = travel.cost
-    smoothed = stomp(initial, cost, params, seed=seed,
+    smoothed = stomp(initial, travel.cost, params, seed=seed,
                      matrices=_matrices(len(initial))).trajectory
     for path in (smoothed, initial):
-        rock, _ = cost.distances(path[1:])
-        idx, inside = cost.grid.index(path[1:-1])
-        crossed = travel.passable[np.ravel_multi_index(tuple(idx.T), cost.grid.labels.shape)]
-        if np.all(crossed & inside) and np.all(rock >= KEEP * cost.clearance) and np.all(
-                path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance):
+        if path_clear(travel, path):
             return path
     return None
+
+
+def path_clear(travel: TravelField, path) -> bool:
+    """Whether `path` (N, 3) after its first point stays on the passable cells (its last
+    point excepted), keeps `KEEP` clearances from occupied cell centres and half a clearance
+    above the floor."""
+    cost, path = travel.cost, np.asarray(path, float)
+    rock, _ = cost.distances(path[1:])
+    idx, inside = cost.grid.index(path[1:-1])
+    crossed = travel.passable[np.ravel_multi_index(tuple(idx.T), cost.grid.labels.shape)]
+    return bool(np.all(crossed & inside) and np.all(rock >= KEEP * cost.clearance)
+                and np.all(path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance))
