@@ -5,7 +5,9 @@ cells of the label grid that keep `KEEP` clearances from occupied cells, lie bet
 region's floor (zmin plus half the clearance) and z = -1 m and are known free water, unknown
 cells between known free water (free on both sides along an axis: the sonar carves known water
 in sheets thinner than a cell, sampled with holes) or within `LOCAL_UNKNOWN` clearances of the
-vehicle (its own unseen surroundings must not forbid every start). Other unknown water may be
+vehicle horizontally and a cell vertically (its own unseen surroundings must not forbid every
+start; the horizontal profiler scans that layer, nothing scans straight below or above: in seed
+0 a descent through unknown water met the boulder's bulge). Other unknown water may be
 unseen rock: the edge of the known water next to an unseen face (in the first runs paths along
 it led under the boulder's overhang into rock), the inside of a structure whose shell has
 holes; it is not crossed. Each metre is priced 1 in known water with the clearance,
@@ -101,10 +103,10 @@ class TravelField:
         z = grid.origin[2] + (np.arange(shape[2]) + 0.5) * grid.cell
         depth_ok = (z >= grid.region[2] + 0.5 * cost.clearance) & (z <= MAX_Z)
         centres = [grid.origin[k] + (np.arange(shape[k]) + 0.5) * grid.cell for k in range(3)]
-        near = ((centres[0][:, None, None] - start[0]) ** 2
-                + (centres[1][None, :, None] - start[1]) ** 2
-                + (centres[2][None, None, :] - start[2]) ** 2
-                <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
+        near = (((centres[0][:, None, None] - start[0]) ** 2
+                 + (centres[1][None, :, None] - start[1]) ** 2
+                 <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
+                & (np.abs(centres[2][None, None, :] - start[2]) <= grid.cell))
         free = grid.labels == FREE
         between = np.zeros_like(free)
         for axis in range(3):

@@ -62,7 +62,7 @@ class ExploreParameters:
     clearance: float = 3.0
     unknown_clearance: float = 1.5
     strategy: str = "gain"
-    min_gain_m2: float = 4.0
+    min_gain_m2: float = 1.0
     cell_m: float = 1.0
     cluster_m: float = 4.0
     speed: float = 0.5
@@ -71,7 +71,7 @@ class ExploreParameters:
     arrive_m: float = 1.5
     max_range: float = 20.0
     mount: str = "port"
-    patience: int = 2
+    patience: int = 3
     max_candidates: int = 200
 
     def __post_init__(self):
@@ -137,7 +137,8 @@ class ViewStep:
         candidates: admissible viewpoints scored.
         frontier_cells: frontier cells found.
         believed_coverage: share of the implied surface seen (see the module), in [0, 1].
-        no_gain: True when no candidate would newly see `min_gain_m2`.
+        no_gain: True when no candidate would newly see `min_gain_m2` or none has a clear
+            path (a turn in place).
         grid: the step's `LabelGrid` (for the next step).
         visited: (v, 3) the targets reached so far, m (for the next step).
     """
@@ -259,5 +260,5 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
         axis = turn + params.sensor_azimuth
         look = position + 10.0 * np.array([np.cos(axis), np.sin(axis), 0.0])
         return ViewStep(Target(position, float(turn), look, True), np.vstack([position] * 2),
-                        best, n, len(frontiers.kinds), coverage, False, grid, visited)
+                        best, n, len(frontiers.kinds), coverage, True, grid, visited)
     return ViewStep(None, None, best, n, len(frontiers.kinds), coverage, True, grid, visited)
