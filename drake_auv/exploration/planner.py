@@ -141,6 +141,7 @@ class ViewStep:
             path (a turn in place).
         grid: the step's `LabelGrid` (for the next step).
         visited: (v, 3) the targets reached so far, m (for the next step).
+        turning: the target is a turn in place.
     """
 
     target: Target | None
@@ -152,6 +153,7 @@ class ViewStep:
     no_gain: bool
     grid: LabelGrid
     visited: np.ndarray
+    turning: bool = False
 
 
 def believed_coverage(grid: LabelGrid, surface_frontier: np.ndarray) -> float:
@@ -260,5 +262,5 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
         axis = turn + params.sensor_azimuth
         look = position + 10.0 * np.array([np.cos(axis), np.sin(axis), 0.0])
         return ViewStep(Target(position, float(turn), look, True), np.vstack([position] * 2),
-                        best, n, len(frontiers.kinds), coverage, True, grid, visited)
+                        best, n, len(frontiers.kinds), coverage, True, grid, visited, True)
     return ViewStep(None, None, best, n, len(frontiers.kinds), coverage, True, grid, visited)

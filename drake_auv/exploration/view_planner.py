@@ -6,7 +6,8 @@ inserted since the last step passed (`frontiers.scan_rays`, from the map's `Scan
 target is kept or replaced, and a new target's STOMP path is timed at the planner's speed as
 a `PiecewisePolynomial` of [x, y, z, yaw] (the yaw turns the multibeam towards the frontier
 the target looks at), which the `reference` output evaluates. When no viewpoint would newly
-see `min_gain_m2` for `patience` steps the leg is reported finished.
+see `min_gain_m2` for `patience` steps (a turn in place counting half) the leg is reported
+finished.
 
 State, all in the Context: the current view (abstract, immutable, replaced at each step:
 target, trajectory, the planning grid and the map version it reflects), the `progress` group
@@ -126,7 +127,8 @@ class ViewPlanner(LeafSystem):
         if step.path is not None:
             trajectory = self._timed(step.path, step.target, params, x, t)
             progress["viewpoints"] += 1
-        progress["no_gain_steps"] = progress["no_gain_steps"] + 1 if step.no_gain else 0
+        progress["no_gain_steps"] = (progress["no_gain_steps"] + (0.5 if step.turning else 1.0)
+                                     if step.no_gain else 0)
         progress["finished"] = float(progress["no_gain_steps"] >= params.patience)
         progress["steps"] += 1
         state.get_mutable_abstract_state(self._view_index).set_value(
