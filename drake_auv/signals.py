@@ -123,6 +123,20 @@ ReplanningStep = _signal(
 PilotStatus = _signal(
     "PilotStatus", ("leg", "finished", "item"),
     "`AutopilotPilot.status` (3): leg (-1 before any), finished (0/1), current item.")
+ExplorerStatus = _signal(
+    "ExplorerStatus", ("leg", "finished", "viewpoints"),
+    "`ViewPlanner.status` (3): leg (-1 before any), finished (0/1), viewpoints reached.")
+ExplorerProgress = _signal(
+    "ExplorerProgress", ("leg", "steps", "finished", "viewpoints", "no_gain_steps"),
+    "The view planner's `progress` group (5): leg flown (-1 none yet), planning steps of this "
+    "leg, finished (0/1), viewpoints chosen, steps without a worthwhile view (a turn counts "
+    "half).")
+ExplorerStep = _signal(
+    "ExplorerStep", ("time", "wall_time", "gain_m2", "candidates", "frontier_cells",
+                     "believed_coverage", "viewpoints"),
+    "`ViewPlanner.step` (7): sim time of the last planning step (s), its wall time (s), the "
+    "chosen view's gain (m^2), candidates scored, frontier cells, the share of the map's "
+    "surface believed covered, viewpoints chosen.")
 Profile = _signal(
     "Profile", ("distance", "normal_distance", "normal_a", "normal_b", "orientation", "valid",
                 "mode"),
@@ -162,9 +176,10 @@ PORT_SIGNALS = {
     "response": Response, "profile": Profile, "step": ReplanningStep, "wrench": Wrench,
     "thrust": Thrust, "thrust_command": Thrust,
     "path_status": PathStatus, "replanner_status": ReplannerStatus,
-    "autopilot_status": PilotStatus,
+    "autopilot_status": PilotStatus, "explorer_status": ExplorerStatus,
     ("PathReference", "status"): PathStatus, ("Replanner", "status"): ReplannerStatus,
-    ("AutopilotPilot", "status"): PilotStatus,
+    ("AutopilotPilot", "status"): PilotStatus, ("ViewPlanner", "status"): ExplorerStatus,
+    ("ViewPlanner", "step"): ExplorerStep,
 }
 
 

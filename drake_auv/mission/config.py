@@ -23,7 +23,7 @@ import yaml
 
 from drake_auv.mission.overrides import apply_overrides, one_line
 from drake_auv.mission.spec import (FAULT_CLASSES, FLY_FORMATS, REALISTIC_NOISE, SECTIONS,
-                                    STEP_KINDS, TOP_KEYS, FaultsSpec, FlyStep, FollowStep,
+                                    STEP_KINDS, TOP_KEYS, ExploreStep, FaultsSpec, FlyStep, FollowStep,
                                     LimitsSpec, MissionFileError, MissionSpec,
                                     NavigationJumpFault, PayloadSpec, PlanStep, ReplannerSpec,
                                     SiteSpec, SonarNoiseSpec, SonarSilentFault, Step, SurveyStep,
@@ -247,8 +247,22 @@ def _fly_rule(reader: _Reader, v, where: str):
                     "false for a .plan file")
 
 
+def _explore_rule(reader: _Reader, v, where: str):
+    region = v.region
+    if not all(region[k] < region[k + 3] for k in range(3)):
+        reader.fail(f"{where}.region", f"{list(region)} has min >= max on an axis",
+                    "xmin < xmax, ymin < ymax, zmin < zmax")
+    if region[2] >= 0.0:
+        reader.fail(f"{where}.region", f"zmin {region[2]:g} is not below the sea surface",
+                    "zmin < 0 m (z up, sea surface z = 0)")
+    if v.omega <= v.clearance_m:
+        reader.fail(f"{where}.omega", f"{v.omega:g} m is not above clearance_m "
+                    f"{v.clearance_m:g} m (a viewpoint at omega would break the clearance)",
+                    f"omega > clearance_m ({v.clearance_m:g} m)")
+
+
 RULES = {SiteSpec: _site_rule, PlanStep: _plan_rule, FollowStep: _follow_rule,
-          FlyStep: _fly_rule}
+         FlyStep: _fly_rule, ExploreStep: _explore_rule}
 
 
 def mission_from_dict(raw: dict, base_dir, label: str, source: Path | None = None

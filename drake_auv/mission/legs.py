@@ -13,10 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_auv.signals import LegProgress, PathStatus, PilotStatus, ReplannerStatus, VehicleState
+from drake_auv.signals import (ExplorerStatus, LegProgress, PathStatus, PilotStatus,
+                               ReplannerStatus, VehicleState)
 
-BEHAVIOURS = ("path", "follow", "replan", "autopilot")
-GOALS = ("arrive", "loops", "distance", "path_end", "replanner", "autopilot")
+BEHAVIOURS = ("path", "follow", "replan", "autopilot", "explore")
+GOALS = ("arrive", "loops", "distance", "path_end", "replanner", "autopilot", "explorer")
 
 
 @dataclass(frozen=True)
@@ -31,7 +32,8 @@ class Leg:
             turns around `centre` (x, y); "distance" m along `direction` (x, y) from where the
             leg began, and shallower than `end_depth` m if given; "path_end" past the end of
             the path reference's path; "replanner" when the replanner has visited every
-            waypoint; "autopilot" when the autopilot pilot has flown the file's last item.
+            waypoint; "autopilot" when the autopilot pilot has flown the file's last item;
+            "explorer" when the view planner finds nothing more worth seeing.
         max_duration: the leg ends anyway after this, s (a timed-out leg is reported).
         handover: an "arrive" leg ends as soon as the vehicle is within this distance of
             `target`, m (the next behaviour flies the rest; None: it ends on arrival).
@@ -89,11 +91,12 @@ def advance_progress(leg: Leg, progress: np.ndarray, x: np.ndarray) -> np.ndarra
 
 def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.ndarray,
                  path_status: np.ndarray, replanner_status: np.ndarray,
-                 autopilot_status: np.ndarray | None = None) -> bool:
+                 autopilot_status: np.ndarray | None = None,
+                 explorer_status: np.ndarray | None = None) -> bool:
     """Whether leg number `index` has reached its goal at time `t` s, from the estimated state
     `x` (`signals.VehicleState`), its progress record (`LegProgress`), the path reference's
-    status (`PathStatus`), the replanner's (`ReplannerStatus`) and the autopilot pilot's
-    (`PilotStatus`)."""
+    status (`PathStatus`), the replanner's (`ReplannerStatus`), the autopilot pilot's
+    (`PilotStatus`) and the view planner's (`ExplorerStatus`)."""
     state, progress = VehicleState(x), LegProgress(progress)
     path, replanner = PathStatus(path_status), ReplannerStatus(replanner_status)
     if leg.goal == "arrive":
@@ -108,6 +111,9 @@ def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.nda
     if leg.goal == "autopilot":
         pilot = None if autopilot_status is None else PilotStatus(autopilot_status)
         return pilot is not None and pilot.leg == index and pilot.finished > 0
+    if leg.goal == "explorer":
+        explorer = None if explorer_status is None else ExplorerStatus(explorer_status)
+        return explorer is not None and explorer.leg == index and explorer.finished > 0
     if leg.goal == "loops":
         return abs(progress.turned) >= 2.0 * np.pi * leg.loops
     along = ((state.x - progress.start_x) * leg.direction[0]

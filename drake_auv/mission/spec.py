@@ -324,6 +324,34 @@ FLY_FORMATS = {".xml": "cola2", ".plan": "ardusub"}
 
 
 @dataclass(frozen=True)
+class ExploreStep:
+    """On-line view planning from the octree, no prior map (`drake_auv.exploration`).
+
+    Attributes:
+        region: [xmin, ymin, zmin, xmax, ymax, zmax] where the structure is believed to be,
+            site coordinates, m (z up, negative below the sea surface).
+        omega: preferred viewing distance, m, above `clearance_m`.
+        max_time_s: cap on the step's simulated time, s.
+        clearance_m: least distance of a viewpoint to mapped or unknown space, m.
+        strategy: "gain" (surface newly seen against travel), "nearest" (nearest frontier
+            first) or "random" (a random frontier, seeded by the mission seed).
+        min_gain_m2: exploring ends when no viewpoint would newly see this, m^2.
+    """
+
+    KIND: ClassVar[str] = "explore"
+    region: tuple = param(kind="vector", names=("xmin", "ymin", "zmin", "xmax", "ymax", "zmax"),
+                          unit="m, site coordinates")
+    omega: float = param(6.0, low=0.5, high=100.0, unit="m")
+    max_time_s: float = param(1800.0, low=0.0, low_open=True, unit="s")
+    clearance_m: float = param(3.0, low=0.5, high=20.0, unit="m")
+    strategy: str = param("gain", kind="choice", choices=("gain", "nearest", "random"))
+    min_gain_m2: float = param(1.0, low=0.0, unit="m^2")
+
+    def __post_init__(self):
+        validate(self)
+
+
+@dataclass(frozen=True)
 class SonarSilentFault:
     """A sonar that returns nothing from `start_s` for `duration_s` s (None: no fault).
     Attributes: sensor: "multibeam", "profiler" or "both"."""
@@ -382,8 +410,9 @@ class FaultsSpec:
 # The step kinds, in the order error messages list them. A new kind: a frozen dataclass with
 # `KIND` and `param` fields, added to `Step` and `STEP_KINDS` here; a rule tying its fields
 # together goes in `drake_auv.mission.config.RULES`, how it flies in `mission.plan`.
-Step = PlanStep | FollowStep | SurveyStep | FlyStep
-STEP_KINDS = {cls.KIND: cls for cls in (PlanStep, FollowStep, SurveyStep, FlyStep)}
+Step = PlanStep | FollowStep | SurveyStep | FlyStep | ExploreStep
+STEP_KINDS = {cls.KIND: cls
+              for cls in (PlanStep, FollowStep, SurveyStep, FlyStep, ExploreStep)}
 FAULT_CLASSES = {"sonar_silent": SonarSilentFault, "thruster_failure": ThrusterFailureFault,
                  "navigation_jump": NavigationJumpFault}
 

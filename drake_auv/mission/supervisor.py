@@ -20,6 +20,7 @@ and `response` (`Response`).
 
 Ports: inputs `estimated_state` (`VehicleState`), `path_status` (`PathStatus`),
 `replanner_status` (`ReplannerStatus`), `autopilot_status` (`PilotStatus`),
+`explorer_status` (`ExplorerStatus`),
 `multibeam_returns`, `profiler_returns` (`SonarReturns`), `reference` (`Reference`), `map`
 (`OnlineMap`) (all but the first may be left unconnected: the rule that needs one is then
 off); outputs `leg` (`LegSignal`), `behaviour` (`InputPortIndex`), `response` (`Response`,
@@ -37,8 +38,8 @@ from drake_auv.mission.legs import Leg, advance_progress, goal_reached, start_pr
 from drake_auv.mission.safety import (CAUSES, RESPONSES, SENSORS, SafetyRules, abort_target,
                                       back_off_target, relied_sensors, response_record,
                                       response_reference)
-from drake_auv.signals import (LegProgress, LegSignal, PathStatus, PilotStatus, Reference,
-                               ReplannerStatus, Response, VehicleState, Watch)
+from drake_auv.signals import (ExplorerStatus, LegProgress, LegSignal, PathStatus, PilotStatus,
+                               Reference, ReplannerStatus, Response, VehicleState, Watch)
 from drake_auv.sonar.returns import SonarReturns
 
 OUTCOMES = ("flying", "goal", "timed out", "aborted")
@@ -74,6 +75,8 @@ class MissionSupervisor(LeafSystem):
                                                                   ReplannerStatus.size())
         self.autopilot_status_input = self.DeclareVectorInputPort("autopilot_status",
                                                                   PilotStatus.size())
+        self.explorer_status_input = self.DeclareVectorInputPort("explorer_status",
+                                                                 ExplorerStatus.size())
         empty = AbstractValue.Make(SonarReturns.empty(1.0))
         self.returns_inputs = {name: self.DeclareAbstractInputPort(f"{name}_returns", empty)
                                for name in SENSORS}
@@ -215,7 +218,8 @@ class MissionSupervisor(LeafSystem):
         if goal_reached(leg, index, t, x, progress,
                         self._status(self.path_status_input, context, PathStatus),
                         self._status(self.replanner_status_input, context, ReplannerStatus),
-                        self._status(self.autopilot_status_input, context, PilotStatus)):
+                        self._status(self.autopilot_status_input, context, PilotStatus),
+                        self._status(self.explorer_status_input, context, ExplorerStatus)):
             outcome = 1
         elif t - start >= leg.max_duration:
             outcome = 2
