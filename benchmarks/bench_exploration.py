@@ -12,15 +12,17 @@ it counts as infinitely late), median and worst final coverage, contacts, median
 coverage. The checks (issue 23, on the gain strategy): no contact in any seed; >= 90 %
 multibeam coverage in every seed; median time to 90 % within 1.5x of plan + survey's; gain
 reaches 80 % sooner than nearest on the median. Writes `--markdown` (the tables, the checks,
-the machine) and `--figure` (median coverage against time per strategy); exit status 1 when a
-check fails.
+the machine), `--figure` (coverage against time per strategy) and, with `--json`, the per-dive
+rows; exit status 1 when a check fails.
 
     .venv/bin/python benchmarks/bench_exploration.py [--seeds 0:10] [--jobs 2] [--reuse]
+        [--json docs/exploration_ablation.json]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path as FilePath
 
@@ -73,6 +75,8 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=FilePath, default=FilePath("out/exploration"))
     parser.add_argument("--markdown", type=FilePath, default=None,
                         help="default: --out/bench_exploration_<mission>.md")
+    parser.add_argument("--json", type=FilePath, default=None,
+                        help="also write the per-dive rows, by mode, to this file")
     parser.add_argument("--figure", type=FilePath,
                         default=FilePath("docs/exploration_ablation.png"))
     args = parser.parse_args(argv)
@@ -80,7 +84,9 @@ def main(argv=None) -> int:
     if args.jobs < 1:
         raise ValueError(f"--jobs must be >= 1, got {args.jobs}")
     markdown = args.markdown or args.out / f"bench_exploration_{args.mission}.md"
-    for folder in (args.out, markdown.parent, args.figure.parent):  # before any dive
+    outputs = (args.out, markdown.parent, args.figure.parent) + \
+        ((args.json.parent,) if args.json is not None else ())
+    for folder in outputs:  # before any dive
         folder.mkdir(parents=True, exist_ok=True)
     plan_mission = PLAN_MISSION[args.mission]
     plan_mode = f"plan + survey ({plan_mission})"
@@ -101,6 +107,8 @@ def main(argv=None) -> int:
                       for what, ok, measured in results)
             + f"\n{machine()}\n")
     markdown.write_text(text)
+    if args.json is not None:
+        args.json.write_text(json.dumps(groups, indent=1) + "\n")
     print(text)
     return 0 if all(ok for _, ok, _ in results) else 1
 
