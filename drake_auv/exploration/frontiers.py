@@ -1,0 +1,264 @@
+"""Frontiers of the on-line octree and the viewpoints that would look at them. Pure numpy/scipy.
+
+The planner reads the octree (`mapping.OctreeMap`, navigation frame) once per planning step
+into a `LabelGrid`: cells of `cell` m (a multiple of the voxel edge) over the region box
+widened by a margin, each occupied (any occupied voxel inside it, from the map's cached
+occupied voxels), free or unknown (the octree's label at the cell centre). Everything after
+that is array work on the grid, so a step costs what the region holds, never the dive's length.
+
+Two kinds of frontier cells, both inside the region box:
+- surface: occupied cells next to (6-connected) an unknown cell that touches free water, the
+  edge of the seen surface (an occupied cell next to the rock's own unseen interior is not a
+  frontier: that unknown touches no free water and no sonar will ever see it);
+- boundary: free cells next to an unknown cell, the edge of the known water.
+
+Their view direction (from a viewpoint to the frontier, unit): for a surface cell, towards the
+occupied cells of its 26-neighbourhood; for a boundary cell, towards its unknown neighbours.
+Cells are clustered in blocks of `cluster` m per kind; a cluster's candidate viewpoints sit
+`omega` m back from its centroid along the view direction (and that direction turned by
++-`TURN` about z), kept if at least `clearance` m from every occupied or unknown cell, inside
+the region box widened by `omega` and below z = -1 m.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+UNKNOWN, FREE, OCCUPIED = -1, 0, 1
+KINDS = ("surface", "boundary")
+TURN = np.radians(35.0)  # the side candidates' turn of the view direction about z
+MAX_Z = -1.0  # m, viewpoints stay deeper than this
+_FACE = ndimage.generate_binary_structure(3, 1)
+_OFFSETS = np.stack(np.meshgrid(*(np.arange(-1, 2),) * 3, indexing="ij"), axis=-1).astype(float)
+
+
+def check_region(region) -> np.ndarray:
+    """(6,) region [xmin, ymin, zmin, xmax, ymax, zmax] as floats, min < max on each axis."""
+    region = np.asarray(region, dtype=float).reshape(-1)
+    if region.shape != (6,) or not np.all(np.isfinite(region)):
+        raise ValueError(f"region must be 6 finite numbers [xmin, ymin, zmin, xmax, ymax, "
+                         f"zmax] (m), got {region.tolist()}")
+    if not np.all(region[:3] < region[3:]):
+        raise ValueError(f"region {region.tolist()} has min >= max on an axis; "
+                         "allowed: xmin < xmax, ymin < ymax, zmin < zmax")
+    return region
+
+
+@dataclass(frozen=True)
+class LabelGrid:
+    """Occupancy labels on a regular grid (navigation frame).
+
+    Attributes:
+        origin: (3,) corner of cell (0, 0, 0), m. cell: edge, m.
+        labels: (nx, ny, nz) int8 of UNKNOWN, FREE, OCCUPIED.
+        region: (6,) the region box the frontiers are sought in.
+    """
+
+    origin: np.ndarray
+    cell: float
+    labels: np.ndarray
+    region: np.ndarray
+
+    @classmethod
+    def from_map(cls, octree_map, region, margin: float, cell: float,
+                 previous: "LabelGrid | None" = None, rays=None) -> "LabelGrid":
+        """The grid of `octree_map` (an `OctreeMap`) over `region` widened by `margin` m
+        (clipped at the sea surface). With the `previous` grid of the same box and the `rays`
+        inserted into the map since it (`scan_rays`), only the cells those rays touch (and
+        the previous occupied ones) are read again: no other cell can have changed."""
+        region = check_region(region)
+        lo = np.floor((region[:3] - margin) / cell) * cell
+        hi = region[3:] + margin
+        hi[2] = min(hi[2], 0.0)
+        shape = np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)
+        grid = cls(lo, float(cell), np.empty(shape, np.int8), region)
+        if (rays is not None and previous is not None and previous.cell == cell
+                and previous.labels.shape == tuple(shape)
+                and np.allclose(previous.origin, lo)):
+            grid.labels[:] = previous.labels
+            flat = np.union1d(grid.touched(*rays),
+                              np.flatnonzero(previous.labels == OCCUPIED))
+            idx = np.column_stack(np.unravel_index(flat, shape))
+        else:
+            idx = np.indices(shape).reshape(3, -1).T
+        read = octree_map.labels(grid.centres(idx)).astype(np.int8)
+        grid.labels[tuple(idx.T)] = np.minimum(read, FREE)  # occupancy from every voxel:
+        occupied = octree_map.occupied_points(lo, lo + shape * cell)
+        cells, inside = grid.index(occupied)
+        grid.labels[tuple(cells[inside].T)] = OCCUPIED
+        return grid
+
+    def touched(self, origins, directions, lengths) -> np.ndarray:
+        """(k,) flat indices of the cells that rays from `origins` (n, 3) along unit
+        `directions` (n, 3) over `lengths` (n,) m pass through, and their 26 neighbours: the
+        rays are sampled every half cell, and `scan_rays` keeps beams less than a cell
+        apart, so every cell a beam crossed is next to a sampled one."""
+        step = 0.5 * self.cell
+        seen = np.zeros(self.labels.size, bool)
+        for chunk in range(0, len(lengths), 4096):  # bounded memory per block of rays
+            o, d, ln = (np.asarray(a[chunk:chunk + 4096], float)
+                        for a in (origins, directions, lengths))
+            t = np.minimum(np.arange(int(np.ceil(ln.max() / step)) + 1)[None, :] * step,
+                           ln[:, None])  # (n, s), the end sampled last
+            cells = np.floor((o[:, None, :] + d[:, None, :] * t[..., None] - self.origin)
+                             / self.cell).astype(np.int64)
+            inside = np.all((cells >= 0) & (cells < self.labels.shape), axis=-1)
+            seen[np.ravel_multi_index(tuple(cells[inside].T), self.labels.shape)] = True
+        seen = ndimage.binary_dilation(seen.reshape(self.labels.shape),
+                                       np.ones((3, 3, 3), bool))
+        return np.flatnonzero(seen)
+
+    def index(self, points) -> tuple[np.ndarray, np.ndarray]:
+        """((..., 3) cell indices, (...) inside the grid) of `points` (..., 3), m."""
+        idx = np.floor((np.asarray(points) - self.origin) / self.cell).astype(np.int64)
+        inside = np.all((idx >= 0) & (idx < self.labels.shape), axis=-1)
+        return np.where(inside[..., None], idx, 0), inside
+
+    def centres(self, idx) -> np.ndarray:
+        return self.origin + (np.asarray(idx) + 0.5) * self.cell
+
+    def in_region(self, points, widen: float = 0.0) -> np.ndarray:
+        points = np.asarray(points)
+        return np.all((points >= self.region[:3] - widen) & (points <= self.region[3:] + widen),
+                      axis=-1)
+
+    def region_mask(self) -> np.ndarray:
+        """(nx, ny, nz) cells whose centre lies in the region box."""
+        axes = [(self.origin[k] + (np.arange(n) + 0.5) * self.cell >= self.region[k])
+                & (self.origin[k] + (np.arange(n) + 0.5) * self.cell <= self.region[k + 3])
+                for k, n in enumerate(self.labels.shape)]
+        return axes[0][:, None, None] & axes[1][None, :, None] & axes[2][None, None, :]
+
+    def blocked_distance(self) -> np.ndarray:
+        """(nx, ny, nz) distance from each cell centre to the nearest occupied or unknown
+        cell centre, m (0 in them): unknown water counts as rock for safety."""
+        return ndimage.distance_transform_edt(self.labels != FREE) * self.cell
+
+
+def scan_rays(batches, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(origins, directions, lengths) of the beams of `ScanBatch`es as the octree inserted
+    them (to the return plus a cell, or to the maximum range without one), thinned so that
+    neighbouring kept beams of a fan are at most half a cell apart at its range."""
+    if not batches:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)
+    parts = []
+    for b in batches:
+        d = np.asarray(b.directions, float)
+        if len(d) > 2:  # the angle between neighbouring beams of the fan
+            gap = float(np.arccos(np.clip(d[0] @ d[1], -1.0, 1.0)))
+            d_keep = slice(None, None, max(1, int(0.5 * cell / max(gap * b.max_range, 1e-9))))
+        else:
+            d_keep = slice(None)
+        r = np.asarray(b.ranges, float)[d_keep]
+        hit = np.isfinite(r) & (r <= b.max_range)
+        parts.append((np.broadcast_to(b.origin, (len(r), 3)), d[d_keep],
+                      np.where(hit, r + cell, b.max_range)))
+    return tuple(np.concatenate(a) for a in zip(*parts))
+
+
+def _neighbour_sum(mask: np.ndarray) -> np.ndarray:
+    """(nx, ny, nz, 3) sum of the offsets (cells) to the 26 neighbours in `mask`."""
+    m = mask.astype(float)
+    return np.stack([ndimage.correlate(m, _OFFSETS[..., k], mode="constant")
+                     for k in range(3)], axis=-1)
+
+
+@dataclass(frozen=True)
+class Frontiers:
+    """Frontier cells: (m, 3) centres, m; (m, 3) unit view directions; (m,) kind index into
+    `KINDS`."""
+
+    centres: np.ndarray
+    directions: np.ndarray
+    kinds: np.ndarray
+
+
+def frontier_cells(grid: LabelGrid) -> Frontiers:
+    """The surface and boundary frontier cells of `grid` inside its region (see the module)."""
+    labels = grid.labels
+    unknown, free, occupied = labels == UNKNOWN, labels == FREE, labels == OCCUPIED
+    open_unknown = unknown & ndimage.binary_dilation(free, _FACE)
+    region = grid.region_mask()
+    surface = occupied & ndimage.binary_dilation(open_unknown, _FACE) & region
+    boundary = free & ndimage.binary_dilation(unknown, _FACE, border_value=1) & region
+    towards_rock = _neighbour_sum(occupied)
+    towards_unknown = _neighbour_sum(unknown)
+    parts = [(np.argwhere(surface), towards_rock, 0), (np.argwhere(boundary), towards_unknown, 1)]
+    centres, directions, kinds = [], [], []
+    for idx, field, kind in parts:
+        d = field[tuple(idx.T)]
+        norm = np.linalg.norm(d, axis=1)
+        keep = norm > 1e-9
+        centres.append(grid.centres(idx[keep]))
+        directions.append(d[keep] / norm[keep, None])
+        kinds.append(np.full(int(keep.sum()), kind))
+    return Frontiers(np.concatenate(centres).reshape(-1, 3),
+                     np.concatenate(directions).reshape(-1, 3), np.concatenate(kinds))
+
+
+@dataclass(frozen=True)
+class Clusters:
+    """Frontier clusters: (k, 3) centroids, m; (k, 3) unit mean view directions; (k,) kinds;
+    (k,) cell counts."""
+
+    centroids: np.ndarray
+    directions: np.ndarray
+    kinds: np.ndarray
+    sizes: np.ndarray
+
+
+def cluster_frontiers(frontiers: Frontiers, size: float, min_cells: int = 2) -> Clusters:
+    """Frontier cells grouped per kind in cubic blocks of `size` m (blocks of fewer than
+    `min_cells` cells dropped: a lone cell is often one stray return)."""
+    if len(frontiers.kinds) == 0:
+        return Clusters(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, int), np.zeros(0, int))
+    block = np.floor(frontiers.centres / size).astype(np.int64)
+    keys = np.column_stack([frontiers.kinds, block])
+    _, inverse, sizes = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    k = len(sizes)
+    centroids = np.stack([np.bincount(inverse, frontiers.centres[:, i], k) for i in range(3)],
+                         axis=1) / sizes[:, None]
+    directions = np.stack([np.bincount(inverse, frontiers.directions[:, i], k)
+                           for i in range(3)], axis=1)
+    norm = np.linalg.norm(directions, axis=1)
+    kinds = np.bincount(inverse, frontiers.kinds, k) // sizes
+    keep = (sizes >= min_cells) & (norm > 1e-9)
+    return Clusters(centroids[keep], directions[keep] / norm[keep, None], kinds[keep].astype(int),
+                    sizes[keep])
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """Admissible viewpoints: (c, 3) positions, m; (c, 3) unit view directions; (c, 3) the
+    frontier centroid each looks at; (c,) index of its cluster."""
+
+    positions: np.ndarray
+    directions: np.ndarray
+    targets: np.ndarray
+    cluster: np.ndarray
+
+
+def _turned(d: np.ndarray, angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], d[:, 2]])
+
+
+def candidate_viewpoints(grid: LabelGrid, clusters: Clusters, omega: float,
+                         clearance: float, distance: np.ndarray | None = None) -> Candidates:
+    """Viewpoints `omega` m back from each cluster along its view direction (and turned by
+    +-`TURN`), kept where admissible (see the module). `distance`: `grid.blocked_distance()`
+    if already computed."""
+    distance = grid.blocked_distance() if distance is None else distance
+    directions = np.concatenate([clusters.directions] + [_turned(clusters.directions, a)
+                                                         for a in (TURN, -TURN)])
+    targets = np.tile(clusters.centroids, (3, 1))
+    cluster = np.tile(np.arange(len(clusters.sizes)), 3)
+    positions = targets - omega * directions
+    idx, inside = grid.index(positions)
+    ok = (inside & (distance[tuple(idx.T)] >= clearance) & grid.in_region(positions, omega)
+          & (positions[:, 2] < MAX_Z))
+    return Candidates(positions[ok], directions[ok], targets[ok], cluster[ok])

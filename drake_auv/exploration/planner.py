@@ -1,0 +1,222 @@
+"""One step of on-line view planning: frontiers -> candidates -> gains -> choice -> path. Pure.
+
+`plan_view` reads the octree into a `LabelGrid` over the region, finds the frontier clusters
+and their admissible viewpoints, scores them (`gains.scores`) and keeps the current target
+unless it was reached, became inadmissible, lost its gain, or another candidate outscores it
+by `switch_margin_m2`; a new target gets a STOMP path (`paths.plan_path`; a candidate whose
+path stays too close to rock is passed over for the next). The step reports `done` when no
+candidate would newly see `min_gain_m2` (for `patience` steps in a row). While the region
+holds nothing known, the target is the edge of the region widened by Omega nearest the
+vehicle (an approach).
+
+Believed coverage: of the surface the map implies inside the region, the share seen: seen
+occupied cells that are not surface frontiers over all occupied cells plus the unknown
+water cells touching them (each one a cell of surface not yet seen).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from drake_auv.exploration.frontiers import (FREE, MAX_Z, OCCUPIED, UNKNOWN, LabelGrid,
+                                             candidate_viewpoints, check_region,
+                                             cluster_frontiers, frontier_cells)
+from drake_auv.exploration.gains import STRATEGIES, fan_rays, scores, view_gains, view_yaw
+from drake_auv.exploration.paths import PathCost, plan_path
+
+_FACE = ndimage.generate_binary_structure(3, 1)
+
+
+@dataclass(frozen=True)
+class ExploreParameters:
+    """Parameters of the view planner (units in the names; ranges checked here).
+
+    Attributes:
+        region: (6,) [xmin, ymin, zmin, xmax, ymax, zmax] where the structure is believed to
+            be, navigation frame, m.
+        omega: preferred viewing distance, m, > clearance.
+        clearance: least distance of a viewpoint to occupied or unknown cells, m, > 0.
+        strategy: "gain", "nearest" or "random" (`gains.STRATEGIES`).
+        min_gain_m2: exploration is done when no viewpoint would newly see this, m^2, >= 0.
+        cell_m: planning grid cell, m, in [0.25, 4].
+        cluster_m: frontier block edge, m, >= cell_m.
+        speed: speed along the paths, m/s, > 0.
+        travel_weight: m^2 of gain one second of travel is worth (strategy "gain"), >= 0.
+        switch_margin_m2: score a candidate needs above the current target's to replace it.
+        arrive_m: a target within this of the vehicle is reached, m, > 0.
+        max_range: the multibeam's range, m, > 0.
+        mount: the multibeam's mount ("port", "starboard", "down", "forward").
+        patience: planning steps in a row without gain that end exploration, >= 1.
+        max_candidates: the best this many by straight-line score are gain-scored, >= 1.
+    """
+
+    region: tuple
+    omega: float = 6.0
+    clearance: float = 3.0
+    strategy: str = "gain"
+    min_gain_m2: float = 4.0
+    cell_m: float = 1.0
+    cluster_m: float = 4.0
+    speed: float = 0.5
+    travel_weight: float = 0.5
+    switch_margin_m2: float = 10.0
+    arrive_m: float = 1.5
+    max_range: float = 20.0
+    mount: str = "port"
+    patience: int = 2
+    max_candidates: int = 200
+
+    def __post_init__(self):
+        object.__setattr__(self, "region", tuple(check_region(self.region).tolist()))
+        if not (np.isfinite(self.clearance) and self.clearance > 0):
+            raise ValueError(f"clearance must be > 0 m, got {self.clearance}")
+        if not (np.isfinite(self.omega) and self.omega > self.clearance):
+            raise ValueError(f"omega ({self.omega} m) must be above the clearance "
+                             f"({self.clearance} m): a viewpoint at omega from the surface "
+                             "would be inside the clearance")
+        if self.strategy not in STRATEGIES:
+            raise ValueError(f"strategy must be one of {STRATEGIES}, got {self.strategy!r}")
+        if self.mount not in ("port", "starboard", "down", "forward"):
+            raise ValueError(f"mount must be port, starboard, down or forward, got "
+                             f"{self.mount!r}")
+        for name, lo in (("min_gain_m2", 0.0), ("travel_weight", 0.0),
+                         ("switch_margin_m2", 0.0)):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= lo):
+                raise ValueError(f"{name} must be >= {lo}, got {value}")
+        for name in ("speed", "arrive_m", "max_range"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be > 0, got {value}")
+        if not 0.25 <= self.cell_m <= 4.0:
+            raise ValueError(f"cell_m must be in [0.25, 4] m, got {self.cell_m}")
+        if not self.cluster_m >= self.cell_m:
+            raise ValueError(f"cluster_m must be >= cell_m ({self.cell_m} m), got "
+                             f"{self.cluster_m}")
+        for name in ("patience", "max_candidates"):
+            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)}")
+
+    @property
+    def sensor_azimuth(self) -> float:
+        """Azimuth of the multibeam's axis in the body frame, rad."""
+        return {"port": np.pi / 2, "starboard": -np.pi / 2}.get(self.mount, 0.0)
+
+
+@dataclass(frozen=True)
+class Target:
+    """A chosen viewpoint: position (3,), yaw (rad), the frontier point it looks at (3,)."""
+
+    position: np.ndarray
+    yaw: float
+    looks_at: np.ndarray
+
+
+@dataclass(frozen=True)
+class ViewStep:
+    """What one planning step decided.
+
+    Attributes:
+        target: the viewpoint to fly to (None: none, hold).
+        path: (N, 3) a new path to it from the vehicle (None: keep the current one).
+        gain_m2: the target's gain (the best candidate's when none is admissible).
+        candidates: admissible viewpoints scored.
+        frontier_cells: frontier cells found.
+        believed_coverage: share of the implied surface seen (see the module), in [0, 1].
+        no_gain: True when no candidate would newly see `min_gain_m2`.
+        grid: the step's `LabelGrid` (for the next step).
+    """
+
+    target: Target | None
+    path: np.ndarray | None
+    gain_m2: float
+    candidates: int
+    frontier_cells: int
+    believed_coverage: float
+    no_gain: bool
+    grid: LabelGrid
+
+
+def believed_coverage(grid: LabelGrid, surface_frontier: np.ndarray) -> float:
+    """Seen over implied surface in the region (see the module)."""
+    region = grid.region_mask()
+    occupied = (grid.labels == OCCUPIED) & region
+    open_unknown = ((grid.labels == UNKNOWN) & region
+                    & ndimage.binary_dilation(grid.labels == FREE, _FACE)
+                    & ndimage.binary_dilation(occupied, _FACE))
+    seen = int((occupied & ~surface_frontier).sum())
+    total = int(occupied.sum() + open_unknown.sum())
+    return seen / total if total else 0.0
+
+
+def approach_point(params: ExploreParameters, position) -> np.ndarray:
+    """(3,) the point of the region box widened by Omega nearest `position`, below z = -1 m."""
+    region = np.asarray(params.region)
+    point = np.clip(np.asarray(position, float)[:3], region[:3] - params.omega,
+                    region[3:] + params.omega)
+    point[2] = min(point[2], MAX_Z - 1.0)
+    return point
+
+
+def plan_view(octree_map, position, params: ExploreParameters, current: Target | None,
+              seed: int = 0, previous: LabelGrid | None = None, rays=None) -> ViewStep:
+    """One planning step from the vehicle at `position` (3,) towards `current` (see the
+    module); `seed` draws the random strategy and STOMP's rollouts; `previous`: the last
+    step's grid (`ViewStep.grid`) and `rays` the beams inserted since (`scan_rays`), so
+    only the cells they touched are read again."""
+    position = np.asarray(position, float)[:3]
+    grid = LabelGrid.from_map(octree_map, params.region,
+                              params.omega + params.clearance + params.cell_m,
+                              params.cell_m, previous, rays)
+    cost = PathCost(grid, params.clearance)
+    frontiers = frontier_cells(grid)
+    surface_mask = np.zeros(grid.labels.shape, bool)
+    surface = frontiers.kinds == 0
+    surface_mask[tuple(grid.index(frontiers.centres[surface])[0].T)] = True
+    coverage = believed_coverage(grid, surface_mask)
+    if not np.any(grid.labels[grid.region_mask()] != UNKNOWN):
+        goal = approach_point(params, position)
+        looks_at = 0.5 * (np.asarray(params.region[:3]) + params.region[3:])
+        yaw = float(view_yaw((looks_at - goal)[None], params.sensor_azimuth)[0])
+        target = Target(goal, yaw, looks_at)
+        path = plan_path(position, goal, cost, seed=seed) if current is None else None
+        return ViewStep(target, path, 0.0, 0, 0, coverage, False, grid)
+    clusters = cluster_frontiers(frontiers, params.cluster_m)
+    cands = candidate_viewpoints(grid, clusters, params.omega, params.clearance,
+                                 cost.blocked)
+    yaws = view_yaw(cands.directions, params.sensor_azimuth)
+    # Gain-score only the nearest `max_candidates` (the far ones cost travel anyway).
+    distance = np.linalg.norm(cands.positions - position, axis=1)
+    keep = np.argsort(distance, kind="stable")[:params.max_candidates]
+    positions, yaws, looks_at = cands.positions[keep], yaws[keep], cands.targets[keep]
+    if current is not None:  # the current target, re-scored on the new map
+        positions = np.vstack([positions, current.position])
+        yaws = np.append(yaws, current.yaw)
+        looks_at = np.vstack([looks_at, current.looks_at])
+    rays = fan_rays(params.mount, yaws)
+    gains = view_gains(grid, positions, rays, params.max_range, surface_mask)
+    score = scores(params.strategy, gains, positions, position, params.speed,
+                   params.travel_weight, seed)
+    useful = gains >= max(params.min_gain_m2, 1e-9)
+    n = len(keep)
+    if current is not None:
+        idx, inside = grid.index(current.position)
+        reached = np.linalg.norm(current.position - position) <= params.arrive_m
+        admissible = bool(inside and cost.blocked[tuple(idx)] >= 0.5 * params.clearance)
+        if not reached and admissible and useful[n] and not (
+                useful[:n].any() and score[:n][useful[:n]].max()
+                > score[n] + params.switch_margin_m2):
+            return ViewStep(current, None, float(gains[n]), n, len(frontiers.kinds),
+                            coverage, False, grid)
+    order = [k for k in np.argsort(-score[:n], kind="stable") if useful[k]]
+    for k in order[:5]:  # the best few whose path is clear
+        path = plan_path(position, positions[k], cost, seed=seed)
+        if path is not None:
+            target = Target(positions[k], float(yaws[k]), looks_at[k])
+            return ViewStep(target, path, float(gains[k]), n, len(frontiers.kinds),
+                            coverage, False, grid)
+    best = float(gains[:n].max()) if n else 0.0
+    return ViewStep(None, None, best, n, len(frontiers.kinds), coverage, not order, grid)
