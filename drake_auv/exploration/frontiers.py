@@ -17,7 +17,9 @@ occupied cells of its 26-neighbourhood; for a boundary cell, towards its unknown
 Cells are clustered in blocks of `cluster` m per kind; a cluster's candidate viewpoints sit
 `omega` m back from its centroid along the view direction (and that direction turned by
 +-`TURN` about z), kept if at least `clearance` m from every occupied or unknown cell, inside
-the region box widened by `omega` and below z = -1 m.
+the region box widened by `omega`, below z = -1 m and at least `clearance` above the region's
+floor (zmin: the operator's bound on the seabed; the map alone cannot be trusted below it,
+as beams grazing the seabed return nothing and clear free space through it).
 """
 
 from __future__ import annotations
@@ -260,5 +262,5 @@ def candidate_viewpoints(grid: LabelGrid, clusters: Clusters, omega: float,
     positions = targets - omega * directions
     idx, inside = grid.index(positions)
     ok = (inside & (distance[tuple(idx.T)] >= clearance) & grid.in_region(positions, omega)
-          & (positions[:, 2] < MAX_Z))
+          & (positions[:, 2] < MAX_Z) & (positions[:, 2] >= grid.region[2] + clearance))
     return Candidates(positions[ok], directions[ok], targets[ok], cluster[ok])

@@ -6,8 +6,8 @@ The initial path is the straight line from the vehicle to the viewpoint, points 
 with d_rock the distance to the nearest occupied cell and d_blocked to the nearest occupied or
 unknown one (unknown water is treated as rock within the clearance, softly: the vehicle's own
 unseen surroundings must not forbid every start), plus a depth term that keeps the path
-below z = -1 m. A path is accepted if no point comes closer than half the clearance to an
-occupied cell. Fields are read at the nearest cell; outside the grid the distances are
+below z = -1 m and the clearance above the region's floor (zmin). A path is accepted if no
+point comes closer than half the clearance to an occupied cell or to the floor. Fields are read at the nearest cell; outside the grid the distances are
 taken as the clearance (no cost: the grid spans the region widened by Omega and the clearance).
 """
 
@@ -49,10 +49,12 @@ class PathCost:
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
         rock, blocked = self.distances(trajectories)
-        above = np.maximum(0.0, trajectories[..., 2] - MAX_Z)
+        z = trajectories[..., 2]
+        outside = (np.maximum(0.0, z - MAX_Z)
+                   + np.maximum(0.0, self.grid.region[2] + self.clearance - z))
         return (self.rock_weight * np.maximum(0.0, self.clearance - rock) ** 2
                 + self.unknown_weight * np.maximum(0.0, self.clearance - blocked) ** 2
-                + self.depth_weight * above ** 2)
+                + self.depth_weight * outside ** 2)
 
 
 @lru_cache(maxsize=64)
@@ -71,4 +73,6 @@ def plan_path(start, goal, cost: PathCost, spacing: float = 1.0,
     initial = start + np.linspace(0.0, 1.0, n)[:, None] * (goal - start)
     path = stomp(initial, cost, params, seed=seed, matrices=_matrices(n)).trajectory
     rock, _ = cost.distances(path[1:])
-    return path if np.all(rock >= 0.5 * cost.clearance) else None
+    clear = np.all(rock >= 0.5 * cost.clearance) and np.all(
+        path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance)
+    return path if clear else None

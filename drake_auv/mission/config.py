@@ -424,6 +424,30 @@ FLY_FORMATS = {".xml": "cola2", ".plan": "ardusub"}
 
 
 @dataclass(frozen=True)
+class ExploreStep:
+    """On-line view planning from the octree, no prior map (`drake_auv.exploration`).
+
+    Attributes:
+        region: [xmin, ymin, zmin, xmax, ymax, zmax] where the structure is believed to be,
+            site coordinates, m (z up, negative below the sea surface).
+        omega: preferred viewing distance, m, above `clearance_m`.
+        max_time_s: cap on the step's simulated time, s.
+        clearance_m: least distance of a viewpoint to mapped or unknown space, m.
+        strategy: "gain" (surface newly seen against travel), "nearest" (nearest frontier
+            first) or "random" (a random frontier, seeded by the mission seed).
+        min_gain_m2: exploring ends when no viewpoint would newly see this, m^2.
+    """
+
+    KIND: ClassVar[str] = "explore"
+    region: tuple
+    omega: float = 6.0
+    max_time_s: float = 1800.0
+    clearance_m: float = 3.0
+    strategy: str = "gain"
+    min_gain_m2: float = 4.0
+
+
+@dataclass(frozen=True)
 class SonarSilentFault:
     """A sonar that returns nothing from `start_s` for `duration_s` s (None: no fault).
     Attributes: sensor: "multibeam", "profiler" or "both"."""
@@ -470,8 +494,8 @@ class FaultsSpec:
                 if (f.time_s if name == "navigation_jump" else f.start_s) is not None}
 
 
-Step = PlanStep | FollowStep | SurveyStep | FlyStep
-STEP_KINDS = {cls.KIND: cls for cls in (PlanStep, FollowStep, SurveyStep, FlyStep)}
+Step = PlanStep | FollowStep | SurveyStep | FlyStep | ExploreStep
+STEP_KINDS = {cls.KIND: cls for cls in (PlanStep, FollowStep, SurveyStep, FlyStep, ExploreStep)}
 
 
 @dataclass(frozen=True)
@@ -741,6 +765,31 @@ def _fly_rule(reader: _Reader, v: dict, where: str):
 
 _RULES = {SiteSpec: _site_rule, PlanStep: _plan_rule, FollowStep: _follow_rule,
           FlyStep: _fly_rule}
+
+
+def _explore_rule(reader: _Reader, v: dict, where: str):
+    region = v["region"]
+    if region is None:
+        reader.fail(f"{where}.region", "missing (required)",
+                    _CHECKS[ExploreStep]["region"].allowed)
+    if not all(region[k] < region[k + 3] for k in range(3)):
+        reader.fail(f"{where}.region", f"{list(region)} has min >= max on an axis",
+                    "xmin < xmax, ymin < ymax, zmin < zmax")
+    if region[2] >= 0.0:
+        reader.fail(f"{where}.region", f"zmin {region[2]:g} is not below the sea surface",
+                    "zmin < 0 m (z up, sea surface z = 0)")
+    if v["omega"] <= v["clearance_m"]:
+        reader.fail(f"{where}.omega", f"{v['omega']:g} m is not above clearance_m "
+                    f"{v['clearance_m']:g} m (a viewpoint at omega would break the clearance)",
+                    f"omega > clearance_m ({v['clearance_m']:g} m)")
+
+
+_CHECKS[ExploreStep] = dict(
+    region=_Vector(("xmin", "ymin", "zmin", "xmax", "ymax", "zmax"), "m, site coordinates"),
+    omega=_Number(0.5, 100.0, "m"), max_time_s=_Number(0.0, unit="s", low_open=True),
+    clearance_m=_Number(0.5, 20.0, "m"), strategy=_Choice(("gain", "nearest", "random")),
+    min_gain_m2=_Number(0.0, unit="m^2"))
+_RULES[ExploreStep] = _explore_rule
 
 
 def mission_from_dict(raw: dict, base_dir, label: str, source: Path | None = None

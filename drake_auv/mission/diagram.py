@@ -35,6 +35,7 @@ from pydrake.systems.primitives import ConstantValueSource, LogVectorOutput, Por
 
 from drake_auv.autopilot.pilot import AutopilotPilot
 from drake_auv.coverage.recorder import CoverageRecorder
+from drake_auv.exploration.view_planner import ViewPlanner
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.mapping.mapper import OctreeMapper
 from drake_auv.mission.config import MissionSpec
@@ -54,7 +55,8 @@ LOG_PERIOD = 0.1  # s, of the state logs
 SUPERVISOR_PERIOD = 0.5  # s
 CAMERA_SIDE = {"port": (0.0, 1.0, 0.0), "starboard": (0.0, -1.0, 0.0),
                "down": (0.0, 0.0, -1.0), "forward": (1.0, 0.0, 0.0)}
-BEHAVIOURS = ("path", "follow", "replan", "autopilot", "response")  # the switch's inputs
+BEHAVIOURS = ("path", "follow", "replan", "autopilot", "explore", "response")  # switch inputs
+EXPLORE_PERIOD = 5.0  # s, of the view planner's planning steps
 
 
 @dataclass
@@ -78,6 +80,7 @@ class MissionHandles:
     faults: dict  # fault name -> the system injecting it (only the mission's faults)
     autopilot: AutopilotPilot | None = None  # with a fly step: the pilot and its DVL
     dvl: DvlAltimeter | None = None
+    explorer: ViewPlanner | None = None  # with an explore step: the view planner
 
 
 def add_faults(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec):
@@ -197,6 +200,12 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
     if pilot is not None:
         builder.Connect(pilot.status_output, supervisor.autopilot_status_input)
         behaviours["autopilot"] = pilot
+    if plan.explore_legs:
+        explorer = builder.AddNamedSystem("view_planner", ViewPlanner(
+            plan.explore_legs, period=EXPLORE_PERIOD, seed=spec.seed))
+        builder.Connect(mapper.map_output, explorer.map_input)
+        builder.Connect(explorer.status_output, supervisor.explorer_status_input)
+        behaviours["explore"] = explorer
     for name, system in behaviours.items():
         builder.Connect(estimated, system.GetInputPort("estimated_state"))
         builder.Connect(supervisor.leg_output, system.GetInputPort("leg"))
@@ -264,6 +273,8 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     pilot, dvl = add_autopilot(builder, caster, vehicle, spec, plan, estimated)
     path_reference, controller, replanner, supervisor, switch = add_behaviours(
         builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns, pilot)
+    explorer = (builder.GetMutableSubsystemByName("view_planner") if plan.explore_legs
+                else None)
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
                                                         max_range, multibeam)
     logs = {
@@ -277,6 +288,8 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
         logs["profile"] = LogVectorOutput(controller.profile_output, builder, LOG_PERIOD)
     if replanner is not None:
         logs["replanning"] = LogVectorOutput(replanner.step_output, builder, replanner.period)
+    if explorer is not None:
+        logs["exploration"] = LogVectorOutput(explorer.step_output, builder, explorer.period)
     for name, log in logs.items():
         log.set_name(f"{name}_log")
     builder.ExportOutput(vehicle.dynamics.state_output, "state")
@@ -301,5 +314,5 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,
                              controller, replanner, supervisor, camera, multibeam_coverage, logs,
-                             faults, pilot, dvl)
+                             faults, pilot, dvl, explorer)
     return diagram, handles

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BEHAVIOURS = ("path", "follow", "replan", "autopilot")
-GOALS = ("arrive", "loops", "distance", "path_end", "replanner", "autopilot")
+BEHAVIOURS = ("path", "follow", "replan", "autopilot", "explore")
+GOALS = ("arrive", "loops", "distance", "path_end", "replanner", "autopilot", "explorer")
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,8 @@ class Leg:
             turns around `centre` (x, y); "distance" m along `direction` (x, y) from where the
             leg began, and shallower than `end_depth` m if given; "path_end" past the end of
             the path reference's path; "replanner" when the replanner has visited every
-            waypoint; "autopilot" when the autopilot pilot has flown the file's last item.
+            waypoint; "autopilot" when the autopilot pilot has flown the file's last item;
+            "explorer" when the view planner finds nothing more worth seeing.
         max_duration: the leg ends anyway after this, s (a timed-out leg is reported).
         handover: an "arrive" leg ends as soon as the vehicle is within this distance of
             `target`, m (the next behaviour flies the rest; None: it ends on arrival).
@@ -81,11 +82,12 @@ def advance_progress(leg: Leg, progress: np.ndarray, x: np.ndarray) -> np.ndarra
 
 def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.ndarray,
                  path_status: np.ndarray, replanner_status: np.ndarray,
-                 autopilot_status: np.ndarray | None = None) -> bool:
+                 autopilot_status: np.ndarray | None = None,
+                 explorer_status: np.ndarray | None = None) -> bool:
     """Whether leg number `index` has reached its goal at time `t` s, from the estimated state
     `x` (12), its progress record, the path reference's status `[leg, end_time]`, the
-    replanner's `[leg, finished, next_index]` and the autopilot pilot's `[leg, finished,
-    item]`."""
+    replanner's `[leg, finished, next_index]`, the autopilot pilot's `[leg, finished,
+    item]` and the view planner's `[leg, finished, viewpoints]`."""
     if leg.goal == "arrive":
         distance = np.linalg.norm(x[:3] - np.asarray(leg.target))
         if leg.handover is not None and path_status[0] == index and distance <= leg.handover:
@@ -98,6 +100,9 @@ def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.nda
     if leg.goal == "autopilot":
         return (autopilot_status is not None and autopilot_status[0] == index
                 and autopilot_status[1] > 0)
+    if leg.goal == "explorer":
+        return (explorer_status is not None and explorer_status[0] == index
+                and explorer_status[1] > 0)
     if leg.goal == "loops":
         return abs(progress[1]) >= 2.0 * np.pi * leg.loops
     along = (x[0] - progress[2]) * leg.direction[0] + (x[1] - progress[3]) * leg.direction[1]

@@ -21,8 +21,8 @@ import numpy as np
 
 from drake_auv.autopilot.items import FlownMission, localise
 from drake_auv.autopilot.semantics import mission_duration
-from drake_auv.mission.config import (FlyStep, FollowStep, MissionFileError, MissionSpec,
-                                      PlanStep, SurveyStep)
+from drake_auv.mission.config import (ExploreStep, FlyStep, FollowStep, MissionFileError,
+                                      MissionSpec, PlanStep, SurveyStep)
 from drake_auv.mission.legs import Leg
 from drake_auv.mission.site import Site
 from drake_auv.following.behaviours import EstimatorParams, FollowingParams
@@ -69,6 +69,7 @@ class MissionPlan:
     start_state: np.ndarray
     budget: float
     autopilot_legs: dict[int, FlownMission] = field(default_factory=dict)
+    explore_legs: dict = field(default_factory=dict)  # leg -> ExploreParameters
 
 
 def _plan_step(step: PlanStep, site: Site):
@@ -183,11 +184,14 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             start[:3] = _first_position(flown[spec.steps.index(first)], site)
         elif isinstance(first, SurveyStep):
             start[:3], start[5] = nominal.points[0], nominal.heading[0]
+        elif isinstance(first, ExploreStep):
+            start[:3] = explore_start(first, site)
         else:
             xy = (site.to_local(np.asarray(first.start[:2], dtype=float))
                   if first.start is not None else charted_centre(site) + [-30.0, 0.0])
             start[:3] = (xy[0], xy[1], -(first.depth or 5.0))
     legs, path_legs, follow_legs, replan_legs, planes, autopilot_legs = [], {}, {}, [], {}, {}
+    explore_legs = {}
     position, yaw = np.asarray(start[:3], float), float(start[5])
     budget = 0.0
 
@@ -273,11 +277,65 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             last = mission.legs[-1]
             position = np.array([*last.end, -last.z if last.z_mode == "depth" else
                                  float(site.prior.elevation_at(*last.end)) + last.z])
+        elif isinstance(step, ExploreStep):
+            params = explore_parameters(step, site, spec, label, f"steps[{k}].explore")
+            index = add(Leg("explore", k, "explore", "explorer", step.max_time_s))
+            explore_legs[index] = params
+            position = 0.5 * (np.asarray(params.region[:3]) + params.region[3:])
     if not legs:
         raise ValueError(f"mission {spec.name!r} has no simulated step (follow or survey)")
     return MissionPlan(nominal, coverage, omega, method, tuple(legs), path_legs,
                        follow_legs, tuple(replan_legs), planes, survey_speed,
-                       np.asarray(start, float), budget, autopilot_legs)
+                       np.asarray(start, float), budget, autopilot_legs, explore_legs)
+
+
+def explore_region(step: ExploreStep, site: Site) -> np.ndarray:
+    """(6,) the step's region in the local frame."""
+    region = np.asarray(step.region, dtype=float)
+    return np.concatenate([site.to_local(region[:3]), site.to_local(region[3:])])
+
+
+def explore_start(step: ExploreStep, site: Site) -> np.ndarray:
+    """(3,) where an explore step begins when the site gives no start: Omega plus the
+    clearance west (-x) of the region, at its mid-height (below z = -2 m)."""
+    region = explore_region(step, site)
+    return np.array([region[0] - step.omega - step.clearance_m,
+                     0.5 * (region[1] + region[4]), min(0.5 * (region[2] + region[5]), -2.0)])
+
+
+def explore_parameters(step: ExploreStep, site: Site, spec: MissionSpec, label: str,
+                       where: str):
+    """The step's `ExploreParameters` (local frame). Raises MissionFileError (one line
+    naming `where`) for a region that holds no part of the world, or whose water the
+    vehicle cannot reach (every point of it below the seabed or inside the structure: a
+    vertical ray up from it meets the world)."""
+    from drake_auv.exploration.planner import ExploreParameters
+    from drake_auv.geometry.raycast import RayCaster
+
+    region = explore_region(step, site)
+    (sx0, sy0, sz0), (sx1, sy1, sz1) = site.to_site(site.world.bounds)
+    triangles = site.world.vertices[site.world.faces]
+    lo, hi = triangles.min(axis=1), triangles.max(axis=1)
+    if not np.any(np.all((hi >= region[:3]) & (lo <= region[3:]), axis=1)):
+        raise MissionFileError(label, f"{where}.region", f"{list(step.region)} holds no part "
+                               "of the world", f"a box meeting the world, which spans x "
+                               f"[{sx0:.1f}, {sx1:.1f}], y [{sy0:.1f}, {sy1:.1f}], z "
+                               f"[{sz0:.1f}, {sz1:.1f}] m")
+    axes = [np.linspace(region[k] + 0.25, region[k + 3] - 0.25,
+                        int(np.clip((region[k + 3] - region[k]) / 1.0, 2, 24)))
+            for k in range(3)]
+    points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    points = points[points[:, 2] < -1.0]
+    up = np.tile([0.0, 0.0, 1.0], (len(points), 1))
+    blocked = (RayCaster(site.world).cast(points, up, 1e4).faces >= 0) if len(points) else []
+    if np.all(blocked):
+        raise MissionFileError(label, f"{where}.region", f"{list(step.region)} holds no water "
+                               "the vehicle can reach (all of it below the seabed or inside "
+                               "the structure)", "a box that holds open water below z = -1 m")
+    return ExploreParameters(
+        region=tuple(region), omega=step.omega, clearance=step.clearance_m,
+        strategy=step.strategy, min_gain_m2=step.min_gain_m2, max_range=site.max_range,
+        mount=spec.payload.multibeam_mount)
 
 
 def terrain_elevation(site: Site):

@@ -33,6 +33,7 @@ from matplotlib.figure import Figure
 
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.visibility import coverage_share
+from drake_auv.exploration.view_planner import exploration_summary
 from drake_auv.mapping.mapper import map_memory
 from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
@@ -222,6 +223,9 @@ def summarise(result: MissionResult) -> dict:
                       replan_p95_ms=float(np.percentile(wall, 95) * 1e3))
     summary["timing"] = timing
     summary["map"] = map_memory(result.online_map, result.scan_log)
+    if result.handles is not None and result.handles.explorer is not None:
+        summary["exploration"] = exploration_summary(result.handles, result.context,
+                                                     result.outcomes)
     return _rounded(summary)
 
 

@@ -19,7 +19,7 @@ aborted), `done` (1 after the last leg or an abort), `watch` (`WATCH_FIELDS`) an
 (`safety.RESPONSE_FIELDS`).
 
 Ports: inputs `estimated_state` (12), `path_status` (2), `replanner_status` (3),
-`autopilot_status` (3),
+`autopilot_status` (3), `explorer_status` (3),
 `multibeam_returns`, `profiler_returns` (`SonarReturns`), `reference` (8), `map`
 (`OnlineMap`) (all but the first may be left unconnected: the rule that needs one is then
 off); outputs `leg` (2), `behaviour` (`InputPortIndex`), `response` (10: the `response`
@@ -76,6 +76,7 @@ class MissionSupervisor(LeafSystem):
         self.path_status_input = self.DeclareVectorInputPort("path_status", 2)
         self.replanner_status_input = self.DeclareVectorInputPort("replanner_status", 3)
         self.autopilot_status_input = self.DeclareVectorInputPort("autopilot_status", 3)
+        self.explorer_status_input = self.DeclareVectorInputPort("explorer_status", 3)
         empty = AbstractValue.Make(SonarReturns.empty(1.0))
         self.returns_inputs = {name: self.DeclareAbstractInputPort(f"{name}_returns", empty)
                                for name in SENSORS}
@@ -199,7 +200,8 @@ class MissionSupervisor(LeafSystem):
         if goal_reached(leg, index, t, x, progress,
                         self._status(self.path_status_input, context, 2),
                         self._status(self.replanner_status_input, context, 3),
-                        self._status(self.autopilot_status_input, context, 3)):
+                        self._status(self.autopilot_status_input, context, 3),
+                        self._status(self.explorer_status_input, context, 3)):
             outcome = 1
         elif t - start >= leg.max_duration:
             outcome = 2
