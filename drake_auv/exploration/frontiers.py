@@ -12,11 +12,16 @@ Two kinds of frontier cells, both inside the region box:
   frontier: that unknown touches no free water and no sonar will ever see it);
 - boundary: free cells next to an unknown cell, the edge of the known water.
 
-Their view direction (from a viewpoint to the frontier, unit): for a surface cell, towards the
-occupied cells of its 26-neighbourhood; for a boundary cell, towards its unknown neighbours.
+Their view direction (from a viewpoint to the frontier, unit): from the free cells of its
+26-neighbourhood towards the occupied ones (surface) or the unknown ones (boundary), the sum of
+the offsets to those less the sum of the offsets to the free ones: at the edge of a seen wall
+it points into the wall and a little along it, past the edge.
 Cells are clustered in blocks of `cluster` m per kind; a cluster's candidate viewpoints sit
 `omega` m back from its centroid along the view direction (and that direction turned by
-+-`TURN` about z), kept if at least `clearance` m from every occupied or unknown cell, inside
++-`TURN` about z, and tilted `TURN` down, so the viewpoint is higher), kept if at least
+`clearance` m from every occupied cell and `unknown_clearance` m from every unknown one (a
+port-looking fan carves known water in thin sheets: a full clearance from unknown water
+leaves hardly any viewpoint; the path search prices unknown water, `paths`), inside
 the region box widened by `omega`, below z = -1 m and at least `clearance` above the region's
 floor (zmin: the operator's bound on the seabed; the map alone cannot be trusted below it,
 as beams grazing the seabed return nothing and clear free space through it).
@@ -28,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
+from scipy.spatial import cKDTree
 
 UNKNOWN, FREE, OCCUPIED = -1, 0, 1
 KINDS = ("surface", "boundary")
@@ -137,7 +143,7 @@ class LabelGrid:
     def blocked_distance(self) -> np.ndarray:
         """(nx, ny, nz) distance from each cell centre to the nearest occupied or unknown
         cell centre, m (0 in them): unknown water counts as rock for safety."""
-        return ndimage.distance_transform_edt(self.labels != FREE) * self.cell
+        return ndimage.distance_transform_edt(self.labels == FREE) * self.cell
 
 
 def scan_rays(batches, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -186,8 +192,9 @@ def frontier_cells(grid: LabelGrid) -> Frontiers:
     region = grid.region_mask()
     surface = occupied & ndimage.binary_dilation(open_unknown, _FACE) & region
     boundary = free & ndimage.binary_dilation(unknown, _FACE, border_value=1) & region
-    towards_rock = _neighbour_sum(occupied)
-    towards_unknown = _neighbour_sum(unknown)
+    towards_free = _neighbour_sum(free)
+    towards_rock = _neighbour_sum(occupied) - towards_free
+    towards_unknown = _neighbour_sum(unknown) - towards_free
     parts = [(np.argwhere(surface), towards_rock, 0), (np.argwhere(boundary), towards_unknown, 1)]
     centres, directions, kinds = [], [], []
     for idx, field, kind in parts:
@@ -249,18 +256,30 @@ def _turned(d: np.ndarray, angle: float) -> np.ndarray:
     return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], d[:, 2]])
 
 
+def _tilted(d: np.ndarray, angle: float) -> np.ndarray:
+    """`d` (n, 3) tilted by `angle` rad towards -z in its vertical plane (unit)."""
+    h = np.linalg.norm(d[:, :2], axis=1)
+    elevation = np.arctan2(d[:, 2], h) - angle
+    heading = np.arctan2(d[:, 1], d[:, 0])
+    return np.column_stack([np.cos(elevation) * np.cos(heading),
+                            np.cos(elevation) * np.sin(heading), np.sin(elevation)])
+
+
 def candidate_viewpoints(grid: LabelGrid, clusters: Clusters, omega: float,
-                         clearance: float, distance: np.ndarray | None = None) -> Candidates:
-    """Viewpoints `omega` m back from each cluster along its view direction (and turned by
-    +-`TURN`), kept where admissible (see the module). `distance`: `grid.blocked_distance()`
-    if already computed."""
-    distance = grid.blocked_distance() if distance is None else distance
-    directions = np.concatenate([clusters.directions] + [_turned(clusters.directions, a)
-                                                         for a in (TURN, -TURN)])
-    targets = np.tile(clusters.centroids, (3, 1))
-    cluster = np.tile(np.arange(len(clusters.sizes)), 3)
+                         clearance: float, unknown_clearance: float) -> Candidates:
+    """Viewpoints `omega` m back from each cluster along its view direction (turned by
+    +-`TURN` and tilted down by `TURN`), kept where admissible (see the module)."""
+    unknown = ndimage.distance_transform_edt(grid.labels != UNKNOWN) * grid.cell
+    d = clusters.directions
+    directions = np.concatenate([d, _turned(d, TURN), _turned(d, -TURN), _tilted(d, TURN)])
+    targets = np.tile(clusters.centroids, (4, 1))
+    cluster = np.tile(np.arange(len(clusters.sizes)), 4)
     positions = targets - omega * directions
     idx, inside = grid.index(positions)
-    ok = (inside & (distance[tuple(idx.T)] >= clearance) & grid.in_region(positions, omega)
+    occupied = grid.centres(np.argwhere(grid.labels == OCCUPIED))
+    rock = (cKDTree(occupied).query(positions)[0] if len(occupied)
+            else np.full(len(positions), np.inf))
+    ok = (inside & (rock >= clearance) & (unknown[tuple(idx.T)] >= unknown_clearance)
+          & grid.in_region(positions, omega)
           & (positions[:, 2] < MAX_Z) & (positions[:, 2] >= grid.region[2] + clearance))
     return Candidates(positions[ok], directions[ok], targets[ok], cluster[ok])

@@ -9,8 +9,9 @@ there is not yet known; counting one cell per ray and not every unknown cell it 
 surface measure, not a volume one) or, failing that, the surface frontier cell it stops on.
 The gain is the number of distinct such cells times the cell's face, m^2.
 
-Score (`strategy` "gain"): gain - `travel_weight` * travel time (straight-line distance /
-speed, s); "nearest": minus the distance; "random": a seeded uniform draw.
+Score (`strategy` "gain"): gain - `travel_weight` * travel time (the travel length of the
+grid search, `paths.TravelField`, over the speed, s); "nearest": minus the travel length;
+"random": a seeded uniform draw.
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ def fan_rays(mount: str, yaws, fan_deg: float = 120.0, beams: int = 13,
     """(c, r, 3) unit rays in the world frame of the multibeam fan on `mount` at each of the
     `yaws` (c,), level vehicle, the fan turned by `sweeps` offsets over +-`sweep_deg`."""
     angles = fan_angles(beams, np.radians(fan_deg))
+    if len(np.atleast_1d(yaws)) == 0:
+        return np.zeros((0, beams * max(sweeps, 1), 3))
     body = MOUNT_ROTATIONS[mount] @ np.stack([np.cos(angles), np.sin(angles),
                                               np.zeros_like(angles)])  # (3, beams)
     offsets = np.radians(np.linspace(-sweep_deg, sweep_deg, sweeps)) if sweeps > 1 else [0.0]
@@ -77,13 +80,12 @@ def view_gains(grid: LabelGrid, positions, rays, max_range: float,
     return np.bincount(pairs // grid.labels.size, minlength=c) * grid.cell ** 2
 
 
-def scores(strategy: str, gains: np.ndarray, positions, position, speed: float,
+def scores(strategy: str, gains: np.ndarray, distance: np.ndarray, speed: float,
            travel_weight: float, seed: int) -> np.ndarray:
-    """(c,) ranking score of each candidate viewpoint (c, 3), larger is better (see the
-    module)."""
+    """(c,) ranking score of each candidate from its gain (m^2) and travel length (m),
+    larger is better (see the module)."""
     if strategy not in STRATEGIES:
         raise ValueError(f"strategy must be one of {STRATEGIES}, got {strategy!r}")
-    distance = np.linalg.norm(np.asarray(positions) - np.asarray(position)[:3], axis=1)
     if strategy == "gain":
         return gains - travel_weight * distance / speed
     if strategy == "nearest":

@@ -1,7 +1,16 @@
-"""The path to a chosen viewpoint: STOMP (`replanning.stomp`) in the label grid. Pure.
+"""The path to a chosen viewpoint: a grid search, smoothed by STOMP (`replanning.stomp`). Pure.
 
-The initial path is the straight line from the vehicle to the viewpoint, points every
-`spacing` m (at most `MAX_POINTS`); STOMP moves its interior against a cost per point of
+`TravelField`: Dijkstra (`scipy.sparse.csgraph`) from the vehicle's cell over the 6-connected
+cells of the label grid that keep half the clearance from occupied cells, lie between the
+region's floor (zmin plus half the clearance) and z = -1 m and are known free water or
+unknown water within `LOCAL_UNKNOWN` clearances of the vehicle (its own unseen surroundings
+must not forbid every start; farther, unknown water may be unseen rock: the inside of a
+structure whose shell has holes), each metre priced 1 in known water with the clearance,
+`NEAR_FACTOR` in known water closer to rock or unknown, `UNKNOWN_FACTOR` in unknown water. It gives every
+candidate's travel length (a candidate it cannot reach is dropped) and the grid path to one.
+STOMP alone, from a straight line, cannot find the way round a 20 m boulder; from the grid
+path it only smooths. The grid path, resampled every `spacing` m (at most `MAX_POINTS`),
+is STOMP's initial trajectory; its interior moves against a cost per point of
     rock_weight * max(0, clearance - d_rock)^2 + unknown_weight * max(0, clearance - d_blocked)^2
 with d_rock the distance to the nearest occupied cell and d_blocked to the nearest occupied or
 unknown one (unknown water is treated as rock within the clearance, softly: the vehicle's own
@@ -18,11 +27,17 @@ from functools import lru_cache
 
 import numpy as np
 from scipy import ndimage
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 
-from drake_auv.exploration.frontiers import MAX_Z, OCCUPIED, LabelGrid
+from drake_auv.exploration.frontiers import FREE, MAX_Z, OCCUPIED, UNKNOWN, LabelGrid
+from drake_auv.planning.polyline import resample
 from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 
 MAX_POINTS = 60
+NEAR_FACTOR = 2.0
+UNKNOWN_FACTOR = 10.0
+LOCAL_UNKNOWN = 2.0  # clearances around the vehicle where unknown water may be crossed
 
 
 @dataclass(frozen=True)
@@ -57,22 +72,103 @@ class PathCost:
                 + self.depth_weight * outside ** 2)
 
 
+@dataclass(frozen=True)
+class TravelField:
+    """Travel lengths from the vehicle over the grid (see the module).
+
+    Attributes: cost: the `PathCost` (its grid and fields); start: (3,) the vehicle, m;
+    length: (nx * ny * nz,) priced travel length to each cell, m (inf: unreachable);
+    previous: (nx * ny * nz,) the cell before each on its path (-9999 at the start)."""
+
+    cost: PathCost
+    start: np.ndarray
+    length: np.ndarray
+    previous: np.ndarray
+
+    @classmethod
+    def build(cls, cost: PathCost, start) -> "TravelField":
+        grid = cost.grid
+        shape, n = grid.labels.shape, grid.labels.size
+        start = np.asarray(start, float)[:3]
+        z = grid.origin[2] + (np.arange(shape[2]) + 0.5) * grid.cell
+        depth_ok = (z >= grid.region[2] + 0.5 * cost.clearance) & (z <= MAX_Z)
+        centres = [grid.origin[k] + (np.arange(shape[k]) + 0.5) * grid.cell for k in range(3)]
+        near = ((centres[0][:, None, None] - start[0]) ** 2
+                + (centres[1][None, :, None] - start[1]) ** 2
+                + (centres[2][None, None, :] - start[2]) ** 2
+                <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
+        passable = ((cost.rock >= 0.5 * cost.clearance) & depth_ok[None, None, :]
+                    & ((grid.labels == FREE) | ((grid.labels == UNKNOWN) & near)))
+        factor = np.where(grid.labels == UNKNOWN, UNKNOWN_FACTOR,
+                          np.where(cost.blocked >= cost.clearance, 1.0, NEAR_FACTOR))
+        idx, inside = grid.index(start)
+        first = int(np.ravel_multi_index(tuple(idx), shape)) if inside else -1
+        flat_pass, flat_factor = passable.reshape(-1), factor.reshape(-1)
+        if first >= 0:
+            flat_pass[first] = True
+        cells = np.arange(n).reshape(shape)
+        rows, cols, weights = [], [], []
+        for axis in range(3):
+            a = np.take(cells, np.arange(shape[axis] - 1), axis=axis).reshape(-1)
+            b = np.take(cells, np.arange(1, shape[axis]), axis=axis).reshape(-1)
+            ok = flat_pass[a] & flat_pass[b]
+            rows.append(a[ok])
+            cols.append(b[ok])
+            weights.append(0.5 * grid.cell * (flat_factor[a[ok]] + flat_factor[b[ok]]))
+        graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows),
+                                                      np.concatenate(cols))), shape=(n, n))
+        if first < 0:
+            return cls(cost, start, np.full(n, np.inf), np.full(n, -9999))
+        length, previous = dijkstra(graph.tocsr(), directed=False, indices=first,
+                                    return_predecessors=True)
+        return cls(cost, start, length, previous)
+
+    def lengths(self, points) -> np.ndarray:
+        """(m,) priced travel length to `points` (m, 3), m (inf: unreachable)."""
+        idx, inside = self.cost.grid.index(points)
+        flat = np.ravel_multi_index(tuple(idx.T), self.cost.grid.labels.shape)
+        return np.where(inside, self.length[flat], np.inf)
+
+    def grid_path(self, goal) -> np.ndarray:
+        """(N, 3) the start, the cell centres of the search's path, and `goal`, m."""
+        grid = self.cost.grid
+        idx, _ = grid.index(goal)
+        cell = int(np.ravel_multi_index(tuple(idx), grid.labels.shape))
+        chain = []
+        while cell >= 0:
+            chain.append(cell)
+            cell = int(self.previous[cell])
+        centres = grid.centres(np.column_stack(np.unravel_index(chain[::-1],
+                                                                grid.labels.shape)))
+        return np.vstack([self.start, centres[1:-1], goal])
+
+
 @lru_cache(maxsize=64)
 def _matrices(num_points: int) -> StompMatrices:
     return StompMatrices(num_points)
 
 
-def plan_path(start, goal, cost: PathCost, spacing: float = 1.0,
+def plan_path(travel: TravelField, goal, spacing: float = 1.0,
               params: StompParameters = StompParameters(num_rollouts=10, max_iterations=30,
-                                                        noise_std=1.0),
+                                                        noise_std=0.5),
               seed: int = 0) -> np.ndarray | None:
-    """(N, 3) path from `start` to `goal` (m) optimised by STOMP against `cost`, or None when
-    it still comes within half the clearance of an occupied cell."""
-    start, goal = np.asarray(start, float)[:3], np.asarray(goal, float)[:3]
-    n = int(np.clip(np.ceil(np.linalg.norm(goal - start) / spacing) + 1, 3, MAX_POINTS))
-    initial = start + np.linspace(0.0, 1.0, n)[:, None] * (goal - start)
-    path = stomp(initial, cost, params, seed=seed, matrices=_matrices(n)).trajectory
-    rock, _ = cost.distances(path[1:])
-    clear = np.all(rock >= 0.5 * cost.clearance) and np.all(
-        path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance)
-    return path if clear else None
+    """(N, 3) path from the vehicle to `goal` (m): the grid search's, smoothed by STOMP
+    against its cost; None when the goal is unreachable or the path (smoothed or not) comes
+    within half the clearance of an occupied cell or of the floor."""
+    goal = np.asarray(goal, float)[:3]
+    if not np.isfinite(travel.lengths(goal[None])[0]):
+        return None
+    initial = resample(travel.grid_path(goal), spacing)
+    if len(initial) > MAX_POINTS:
+        initial = resample(initial, spacing * len(initial) / (MAX_POINTS - 1))
+    if len(initial) < 3:
+        initial = travel.start + np.linspace(0.0, 1.0, 3)[:, None] * (goal - travel.start)
+    cost = travel.cost
+    smoothed = stomp(initial, cost, params, seed=seed,
+                     matrices=_matrices(len(initial))).trajectory
+    for path in (smoothed, initial):
+        rock, _ = cost.distances(path[1:])
+        if np.all(rock >= 0.5 * cost.clearance) and np.all(
+                path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance):
+            return path
+    return None

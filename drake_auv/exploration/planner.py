@@ -7,7 +7,8 @@ by `switch_margin_m2`; a new target gets a STOMP path (`paths.plan_path`; a cand
 path stays too close to rock is passed over for the next). The step reports `done` when no
 candidate would newly see `min_gain_m2` (for `patience` steps in a row). While the region
 holds nothing known, the target is the edge of the region widened by Omega nearest the
-vehicle (an approach).
+vehicle (an approach, in a straight line: nothing is known to avoid), and so it is while the
+vehicle is outside the planning grid.
 
 Believed coverage: of the surface the map implies inside the region, the share seen: seen
 occupied cells that are not surface frontiers over all occupied cells plus the unknown
@@ -25,9 +26,10 @@ from drake_auv.exploration.frontiers import (FREE, MAX_Z, OCCUPIED, UNKNOWN, Lab
                                              candidate_viewpoints, check_region,
                                              cluster_frontiers, frontier_cells)
 from drake_auv.exploration.gains import STRATEGIES, fan_rays, scores, view_gains, view_yaw
-from drake_auv.exploration.paths import PathCost, plan_path
+from drake_auv.exploration.paths import PathCost, TravelField, plan_path
 
 _FACE = ndimage.generate_binary_structure(3, 1)
+VISITED_RADIUS = 3.0  # m, around a reached target where no candidate is chosen again
 
 
 @dataclass(frozen=True)
@@ -38,7 +40,9 @@ class ExploreParameters:
         region: (6,) [xmin, ymin, zmin, xmax, ymax, zmax] where the structure is believed to
             be, navigation frame, m.
         omega: preferred viewing distance, m, > clearance.
-        clearance: least distance of a viewpoint to occupied or unknown cells, m, > 0.
+        clearance: least distance of a viewpoint to occupied cells, m, > 0.
+        unknown_clearance: least distance of a viewpoint to unknown cells, m, in [0,
+            clearance] (see `frontiers`).
         strategy: "gain", "nearest" or "random" (`gains.STRATEGIES`).
         min_gain_m2: exploration is done when no viewpoint would newly see this, m^2, >= 0.
         cell_m: planning grid cell, m, in [0.25, 4].
@@ -56,6 +60,7 @@ class ExploreParameters:
     region: tuple
     omega: float = 6.0
     clearance: float = 3.0
+    unknown_clearance: float = 1.5
     strategy: str = "gain"
     min_gain_m2: float = 4.0
     cell_m: float = 1.0
@@ -77,6 +82,10 @@ class ExploreParameters:
             raise ValueError(f"omega ({self.omega} m) must be above the clearance "
                              f"({self.clearance} m): a viewpoint at omega from the surface "
                              "would be inside the clearance")
+        if not (np.isfinite(self.unknown_clearance)
+                and 0.0 <= self.unknown_clearance <= self.clearance):
+            raise ValueError(f"unknown_clearance must be in [0, clearance = {self.clearance}] "
+                             f"m, got {self.unknown_clearance}")
         if self.strategy not in STRATEGIES:
             raise ValueError(f"strategy must be one of {STRATEGIES}, got {self.strategy!r}")
         if self.mount not in ("port", "starboard", "down", "forward"):
@@ -128,6 +137,7 @@ class ViewStep:
         believed_coverage: share of the implied surface seen (see the module), in [0, 1].
         no_gain: True when no candidate would newly see `min_gain_m2`.
         grid: the step's `LabelGrid` (for the next step).
+        visited: (v, 3) the targets reached so far, m (for the next step).
     """
 
     target: Target | None
@@ -138,6 +148,7 @@ class ViewStep:
     believed_coverage: float
     no_gain: bool
     grid: LabelGrid
+    visited: np.ndarray
 
 
 def believed_coverage(grid: LabelGrid, surface_frontier: np.ndarray) -> float:
@@ -162,12 +173,18 @@ def approach_point(params: ExploreParameters, position) -> np.ndarray:
 
 
 def plan_view(octree_map, position, params: ExploreParameters, current: Target | None,
-              seed: int = 0, previous: LabelGrid | None = None, rays=None) -> ViewStep:
+              seed: int = 0, previous: LabelGrid | None = None, rays=None,
+              visited=None) -> ViewStep:
     """One planning step from the vehicle at `position` (3,) towards `current` (see the
     module); `seed` draws the random strategy and STOMP's rollouts; `previous`: the last
     step's grid (`ViewStep.grid`) and `rays` the beams inserted since (`scan_rays`), so
-    only the cells they touched are read again."""
+    only the cells they touched are read again; `visited` (v, 3): the targets reached
+    before, m (a candidate within `VISITED_RADIUS` of one is not chosen again: what its view
+    promised and did not give, behind rock or below the floor, it will not give later)."""
     position = np.asarray(position, float)[:3]
+    visited = np.zeros((0, 3)) if visited is None else np.asarray(visited, float)
+    if current is not None and np.linalg.norm(current.position - position) <= params.arrive_m:
+        visited = np.vstack([visited, current.position])
     grid = LabelGrid.from_map(octree_map, params.region,
                               params.omega + params.clearance + params.cell_m,
                               params.cell_m, previous, rays)
@@ -177,20 +194,29 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
     surface = frontiers.kinds == 0
     surface_mask[tuple(grid.index(frontiers.centres[surface])[0].T)] = True
     coverage = believed_coverage(grid, surface_mask)
-    if not np.any(grid.labels[grid.region_mask()] != UNKNOWN):
+    if not (np.any(grid.labels[grid.region_mask()] != UNKNOWN)
+            and grid.index(position)[1]):  # approach: straight to the region
         goal = approach_point(params, position)
         looks_at = 0.5 * (np.asarray(params.region[:3]) + params.region[3:])
         yaw = float(view_yaw((looks_at - goal)[None], params.sensor_azimuth)[0])
         target = Target(goal, yaw, looks_at)
-        path = plan_path(position, goal, cost, seed=seed) if current is None else None
-        return ViewStep(target, path, 0.0, 0, 0, coverage, False, grid)
+        path = None
+        if current is None or np.linalg.norm(current.position - goal) > params.arrive_m:
+            path = np.vstack([position, goal])
+        return ViewStep(target, path, 0.0, 0, 0, coverage, False, grid, visited)
+    travel = TravelField.build(cost, position)
     clusters = cluster_frontiers(frontiers, params.cluster_m)
     cands = candidate_viewpoints(grid, clusters, params.omega, params.clearance,
-                                 cost.blocked)
+                                 params.unknown_clearance)
     yaws = view_yaw(cands.directions, params.sensor_azimuth)
-    # Gain-score only the nearest `max_candidates` (the far ones cost travel anyway).
-    distance = np.linalg.norm(cands.positions - position, axis=1)
-    keep = np.argsort(distance, kind="stable")[:params.max_candidates]
+    # Gain-score only the nearest `max_candidates` the vehicle can reach.
+    distance = travel.lengths(cands.positions)
+    fresh = np.ones(len(distance), bool)
+    if len(visited):
+        near = np.linalg.norm(cands.positions[:, None] - visited[None], axis=2)
+        fresh = near.min(axis=1) > VISITED_RADIUS
+    reachable = np.flatnonzero(np.isfinite(distance) & fresh)
+    keep = reachable[np.argsort(distance[reachable], kind="stable")[:params.max_candidates]]
     positions, yaws, looks_at = cands.positions[keep], yaws[keep], cands.targets[keep]
     if current is not None:  # the current target, re-scored on the new map
         positions = np.vstack([positions, current.position])
@@ -198,8 +224,9 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
         looks_at = np.vstack([looks_at, current.looks_at])
     rays = fan_rays(params.mount, yaws)
     gains = view_gains(grid, positions, rays, params.max_range, surface_mask)
-    score = scores(params.strategy, gains, positions, position, params.speed,
-                   params.travel_weight, seed)
+    lengths = travel.lengths(positions)
+    score = scores(params.strategy, gains, np.where(np.isfinite(lengths), lengths, 1e6),
+                   params.speed, params.travel_weight, seed)
     useful = gains >= max(params.min_gain_m2, 1e-9)
     n = len(keep)
     if current is not None:
@@ -210,13 +237,13 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
                 useful[:n].any() and score[:n][useful[:n]].max()
                 > score[n] + params.switch_margin_m2):
             return ViewStep(current, None, float(gains[n]), n, len(frontiers.kinds),
-                            coverage, False, grid)
+                            coverage, False, grid, visited)
     order = [k for k in np.argsort(-score[:n], kind="stable") if useful[k]]
     for k in order[:5]:  # the best few whose path is clear
-        path = plan_path(position, positions[k], cost, seed=seed)
+        path = plan_path(travel, positions[k], seed=seed)
         if path is not None:
             target = Target(positions[k], float(yaws[k]), looks_at[k])
             return ViewStep(target, path, float(gains[k]), n, len(frontiers.kinds),
-                            coverage, False, grid)
+                            coverage, False, grid, visited)
     best = float(gains[:n].max()) if n else 0.0
-    return ViewStep(None, None, best, n, len(frontiers.kinds), coverage, not order, grid)
+    return ViewStep(None, None, best, n, len(frontiers.kinds), coverage, not order, grid, visited)

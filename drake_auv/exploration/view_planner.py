@@ -44,12 +44,14 @@ YAW_RATE = np.radians(15.0)  # rad/s, the largest commanded yaw rate
 @dataclass(frozen=True)
 class _View:
     """The current target and its timed path, the planning grid and the map version (the
-    `ScanLog`) it reflects. Immutable: Drake's state copies may share it."""
+    `ScanLog`) it reflects, the targets reached. Immutable: Drake's state copies may share
+    it."""
 
     target: Target | None = None
     trajectory: PiecewisePolynomial | None = None
     grid: LabelGrid | None = None
     version: object = None
+    visited: np.ndarray | None = None
 
     def __deepcopy__(self, memo):
         return self
@@ -117,7 +119,8 @@ class ViewPlanner(LeafSystem):
                    if online.version is not None and view.grid is not None else None)
         rays = scan_rays(batches, params.cell_m) if batches is not None else None
         step = plan_view(online.map, x[:3], params, view.target,
-                         seed=self.seed + int(progress["steps"]), previous=view.grid, rays=rays)
+                         seed=self.seed + int(progress["steps"]), previous=view.grid, rays=rays,
+                         visited=view.visited)
         trajectory = view.trajectory
         if step.path is not None:
             trajectory = self._timed(step.path, step.target, params, x, t)
@@ -126,7 +129,7 @@ class ViewPlanner(LeafSystem):
         progress["finished"] = float(progress["no_gain_steps"] >= params.patience)
         progress["steps"] += 1
         state.get_mutable_abstract_state(self._view_index).set_value(
-            _View(step.target, trajectory, step.grid, online.version))
+            _View(step.target, trajectory, step.grid, online.version, step.visited))
         state.get_mutable_discrete_state(self._progress).set_value(
             [progress[k] for k in PROGRESS_FIELDS])
         state.get_mutable_discrete_state(self._last_step).set_value(

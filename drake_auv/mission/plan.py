@@ -313,14 +313,6 @@ def explore_parameters(step: ExploreStep, site: Site, spec: MissionSpec, label: 
     from drake_auv.geometry.raycast import RayCaster
 
     region = explore_region(step, site)
-    (sx0, sy0, sz0), (sx1, sy1, sz1) = site.to_site(site.world.bounds)
-    triangles = site.world.vertices[site.world.faces]
-    lo, hi = triangles.min(axis=1), triangles.max(axis=1)
-    if not np.any(np.all((hi >= region[:3]) & (lo <= region[3:]), axis=1)):
-        raise MissionFileError(label, f"{where}.region", f"{list(step.region)} holds no part "
-                               "of the world", f"a box meeting the world, which spans x "
-                               f"[{sx0:.1f}, {sx1:.1f}], y [{sy0:.1f}, {sy1:.1f}], z "
-                               f"[{sz0:.1f}, {sz1:.1f}] m")
     axes = [np.linspace(region[k] + 0.25, region[k + 3] - 0.25,
                         int(np.clip((region[k + 3] - region[k]) / 1.0, 2, 24)))
             for k in range(3)]
@@ -332,6 +324,14 @@ def explore_parameters(step: ExploreStep, site: Site, spec: MissionSpec, label: 
         raise MissionFileError(label, f"{where}.region", f"{list(step.region)} holds no water "
                                "the vehicle can reach (all of it below the seabed or inside "
                                "the structure)", "a box that holds open water below z = -1 m")
+    (sx0, sy0, sz0), (sx1, sy1, sz1) = site.to_site(site.world.bounds)
+    triangles = site.world.vertices[site.world.faces]
+    lo, hi = triangles.min(axis=1), triangles.max(axis=1)
+    if not np.any(np.all((hi >= region[:3]) & (lo <= region[3:]), axis=1)):
+        raise MissionFileError(label, f"{where}.region", f"{list(step.region)} holds no part "
+                               "of the world", f"a box meeting the world, which spans x "
+                               f"[{sx0:.1f}, {sx1:.1f}], y [{sy0:.1f}, {sy1:.1f}], z "
+                               f"[{sz0:.1f}, {sz1:.1f}] m")
     return ExploreParameters(
         region=tuple(region), omega=step.omega, clearance=step.clearance_m,
         strategy=step.strategy, min_gain_m2=step.min_gain_m2, max_range=site.max_range,
