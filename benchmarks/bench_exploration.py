@@ -29,22 +29,11 @@ from pathlib import Path as FilePath
 sys.path.insert(0, str(FilePath(__file__).resolve().parents[1] / "examples"))
 from _reference import machine  # noqa: E402
 from drake_auv.campaign.grid import parse_seeds  # noqa: E402
-from drake_auv.mission.config import load_mission  # noqa: E402
-from explore_vs_plan import dive_row, figure, median_time, run_all, table  # noqa: E402
+from explore_vs_plan import (PLAN_MISSION, dive_row, figure, median_time, run_all,  # noqa: E402
+                             strategy_override, table)
 
 STRATEGIES = ("gain", "nearest", "random")
-PLAN_MISSION = {"boulder_explore": "boulder", "breakwater_explore": "breakwater"}
 SLOWDOWN = 1.5  # the acceptance's bound on explore's median time to 90 % over plan + survey's
-
-
-def strategy_override(mission: str, strategy: str) -> str:
-    """The override setting the strategy of `mission`'s (first) explore step."""
-    steps = load_mission(mission).steps
-    index = next((i for i, s in enumerate(steps) if s.KIND == "explore"), None)
-    if index is None:
-        raise ValueError(f"--mission {mission}: has no explore step; allowed: a mission with "
-                         "one, e.g. " + ", ".join(PLAN_MISSION))
-    return f"steps.{index}.explore.strategy={strategy}"
 
 
 def checks(groups: dict[str, list[dict]], plan_mode: str) -> list[tuple[str, bool, str]]:

@@ -4,7 +4,8 @@
 `boulder` (the off-line plan on the shifted prior map, profile following, the survey with
 realtime replanning) are flown on each seed of `--seeds` (`A:B`, seeds A .. B-1, as
 `drake-auv campaign`). Every dive writes its `report.json` (`summarise`, with the
-coverage-against-time curve) to `--out/<mission>/seed<N>/`; `--reuse` reads a dive back instead
+coverage-against-time curve) to `--out/<mission>[-<strategy>]/seed<N>/` (the layout of
+`benchmarks/bench_exploration.py`, which shares these dives); `--reuse` reads a dive back instead
 of flying it when that file holds the same mission configuration. Written: `--figure` (default
 `docs/explore_vs_plan.png`, multibeam coverage of the true boulder against mission time, each
 seed and the median) and `--out/explore_vs_plan.md` (per dive and the medians: time to 80 % and
@@ -29,8 +30,18 @@ from drake_auv.mission.config import load_mission, mission_to_dict
 from drake_auv.mission.report import _rounded, summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 
-MODES = (("explore", "boulder_explore", ()), ("plan + survey", "boulder", ()))
+PLAN_MISSION = {"boulder_explore": "boulder", "breakwater_explore": "breakwater"}
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
+
+
+def strategy_override(mission: str, strategy: str) -> str:
+    """The override setting the strategy of `mission`'s (first) explore step."""
+    steps = load_mission(mission).steps
+    index = next((i for i, s in enumerate(steps) if s.KIND == "explore"), None)
+    if index is None:
+        raise ValueError(f"--mission {mission}: has no explore step; allowed: a mission with "
+                         "one, e.g. " + ", ".join(PLAN_MISSION))
+    return f"steps.{index}.explore.strategy={strategy}"
 
 
 def run_or_load(task: tuple) -> dict:
@@ -153,10 +164,12 @@ def main(argv=None):
         raise ValueError(f"--jobs must be >= 1, got {args.jobs}")
     for folder in (args.out, args.figure.parent):  # before any dive
         folder.mkdir(parents=True, exist_ok=True)
-    tasks = [(mission, seed, extra, args.out / mission / f"seed{seed}", args.reuse)
-             for _, mission, extra in MODES for seed in seeds]
+    modes = (("explore", "boulder_explore", (strategy_override("boulder_explore", "gain"),),
+              "boulder_explore-gain"), ("plan + survey", "boulder", (), "boulder"))
+    tasks = [(mission, seed, extra, args.out / folder / f"seed{seed}", args.reuse)
+             for _, mission, extra, folder in modes for seed in seeds]
     summaries = iter(run_all(tasks, args.jobs))
-    by_mode = {mode: [next(summaries) for _ in seeds] for mode, _, _ in MODES}
+    by_mode = {mode: [next(summaries) for _ in seeds] for mode, *_ in modes}
     title = f"Explore (no prior) against plan + survey (prior map), boulder, seeds {args.seeds}"
     figure({m: [s["coverage_vs_time"] for s in runs] for m, runs in by_mode.items()},
            args.figure, title)
