@@ -1,8 +1,9 @@
 """The builder and port tables of docs/architecture.md, generated from the code.
 
 `port_rows()` builds the boulder mission's Diagram with every fault spliced in and a live
-scene (so the fault gates and the viewers are there too), adds the two systems only a fly step
-brings (the DVL and the autopilot pilot), and walks every drake_auv system's ports: its name,
+scene (so the fault gates and the viewers are there too), adds the systems only a fly step
+brings (the DVL and the autopilot pilot) and the one an explore step brings (the view
+planner), and walks every drake_auv system's ports: its name,
 direction and type (a vector's size, an abstract port's value class). The meaning of each port
 is the doc's own column, kept by (system, direction, port); a port without a row gets an empty
 meaning, so the table the code gives differs from the committed one until its row is written.
@@ -51,6 +52,8 @@ def _systems():
     """[(class name, [names in the Diagram], system)] of every drake_auv system, in order, and
     the site's number of target faces (a per-face port's size)."""
     from drake_auv.autopilot.pilot import AutopilotPilot
+    from drake_auv.exploration.planner import ExploreParameters
+    from drake_auv.exploration.view_planner import ViewPlanner
     from drake_auv.mission.config import load_mission
     from drake_auv.mission.diagram import build_mission_diagram
     from drake_auv.mission.plan import plan_mission
@@ -65,7 +68,9 @@ def _systems():
     found: dict[str, tuple[list[str], object]] = {}
     for name, system in [*((s.get_name(), s) for s in diagram.GetSystems()),
                          ("dvl (fly steps)", DvlAltimeter(handles.caster)),
-                         ("autopilot (fly steps)", AutopilotPilot({}))]:
+                         ("autopilot (fly steps)", AutopilotPilot({})),
+                         ("view_planner (explore steps)", ViewPlanner(
+                             {0: ExploreParameters(region=(0.0, 0.0, -2.0, 1.0, 1.0, -1.0))}))]:
         if type(system).__module__.startswith("drake_auv"):
             found.setdefault(type(system).__name__, ([], system))[0].append(name)
     return [(cls, names, system) for cls, (names, system) in found.items()], len(site.target_faces)

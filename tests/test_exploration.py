@@ -103,11 +103,15 @@ def test_travel_goes_round_rock_and_keeps_clear():
     assert path is not None and np.allclose(path[0], start) and np.allclose(path[-1], goal)
     rock, _ = cost.distances(path)
     assert rock.min() >= 1.0
-    labels[14:16, 24:, :] = UNKNOWN  # the gap unseen, far from the vehicle: not crossed
+    labels[15, 24:, :] = UNKNOWN  # a sheet of the gap unseen, between known water: crossed
+    thin = TravelField.build(PathCost(grid, 2.0), start)
+    assert np.isfinite(thin.lengths(goal[None])[0])
+    labels[8:22, 24:, :] = UNKNOWN  # unseen water away from any known water: not crossed
     unseen = TravelField.build(PathCost(grid, 2.0), start)
     assert not np.isfinite(unseen.lengths(goal[None])[0])
-    near = TravelField.build(PathCost(grid, 2.0), np.array([13.5, 26.5, -14.5]))
-    assert np.isfinite(near.lengths(goal[None])[0])  # unseen water next to the vehicle is
+    labels[8:22, 24:, :] = FREE
+    labels[12:15, 24:, :] = UNKNOWN  # unseen water next to known water only: not crossed
+    assert not np.isfinite(TravelField.build(PathCost(grid, 2.0), start).lengths(goal[None])[0])
     labels[14:16, 24:, :] = OCCUPIED  # closed: unreachable
     closed = TravelField.build(PathCost(grid, 2.0), start)
     assert not np.isfinite(closed.lengths(goal[None])[0])

@@ -94,7 +94,8 @@ def test_omega_below_the_clearance_is_one_line():
 ])
 def test_regions_the_vehicle_cannot_explore(region, what):
     spec = mission_from_dict(explore_mission(region=region), ".", "m.yaml")
-    with pytest.raises(MissionFileError, match=r"explore_test: steps\[0\].explore.region: .*" + what):
+    with pytest.raises(MissionFileError,
+                       match=r"explore_test: steps\[0\].explore.region: .*" + what):
         plan_mission(spec, load_site(spec.site, 0))
 
 
@@ -120,3 +121,14 @@ def test_explore_dive_gains_coverage_without_contact():
     exploration = summary["exploration"]
     assert exploration["viewpoints"] >= 3 and exploration["strategy"] == "gain"
     assert 0.0 < exploration["believed_coverage"] < 1.0 and exploration["stopped"] == "time"
+
+
+def test_explore_leg_ends_when_the_planner_says_finished():
+    from drake_auv.mission.legs import Leg, goal_reached
+
+    leg = Leg("explore", 0, "explore", "explorer", 1800.0)
+    x, progress, none = np.zeros(12), np.zeros(4), np.full(3, -1.0)
+    args = (leg, 2, 10.0, x, progress, np.full(2, -1.0), none, none)
+    assert not goal_reached(*args, np.array([2.0, 0.0, 5.0]))
+    assert not goal_reached(*args, np.array([1.0, 1.0, 5.0]))  # another leg's
+    assert goal_reached(*args, np.array([2.0, 1.0, 5.0]))

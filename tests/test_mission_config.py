@@ -49,14 +49,15 @@ def _with(**changes):
 
 
 def test_builtin_missions_load():
-    assert builtin_missions() == ["boulder", "breakwater", "c_object", "monterey_wall", "pool"]
+    assert builtin_missions() == ["boulder", "boulder_explore", "breakwater",
+                                  "breakwater_explore", "c_object", "monterey_wall", "pool"]
     for name in builtin_missions():
         spec = load_mission(name)
         assert spec.name == name and spec.steps and spec.source.name == f"{name}.yaml"
         if name == "monterey_wall":  # cut from a shared tile on first use
             assert spec.site.tile.is_file() and spec.site.roi == (80.0, 120.0, 240.0, 280.0)
         else:
-            assert spec.site.scenario == name
+            assert spec.site.scenario == name.removesuffix("_explore")
     boulder = load_mission("boulder")
     plan, follow, survey = boulder.steps
     assert (plan.omega, plan.slice_count, plan.slice_spacing) == (10.0, 2, 2.0)
@@ -181,7 +182,7 @@ def test_bad_files_give_one_line_naming_the_field(tmp_path, raw, message):
 def test_missing_file_and_unknown_name(tmp_path):
     with pytest.raises(MissionFileError, match=r"^nope.yaml: mission file not found; allowed: "
                                                r"a YAML mission file or a built-in mission: "
-                                               r"boulder, breakwater"):
+                                               r"boulder, boulder_explore, breakwater"):
         load_mission(tmp_path / "nope.yaml")
     with pytest.raises(MissionFileError, match="^atlantis: mission file not found"):
         load_mission("atlantis")

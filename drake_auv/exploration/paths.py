@@ -1,23 +1,30 @@
 """The path to a chosen viewpoint: a grid search, smoothed by STOMP (`replanning.stomp`). Pure.
 
 `TravelField`: Dijkstra (`scipy.sparse.csgraph`) from the vehicle's cell over the 6-connected
-cells of the label grid that keep half the clearance from occupied cells, lie between the
-region's floor (zmin plus half the clearance) and z = -1 m and are known free water or
-unknown water within `LOCAL_UNKNOWN` clearances of the vehicle (its own unseen surroundings
-must not forbid every start; farther, unknown water may be unseen rock: the inside of a
-structure whose shell has holes), each metre priced 1 in known water with the clearance,
-`NEAR_FACTOR` in known water closer to rock or unknown, `UNKNOWN_FACTOR` in unknown water. It gives every
-candidate's travel length (a candidate it cannot reach is dropped) and the grid path to one.
-STOMP alone, from a straight line, cannot find the way round a 20 m boulder; from the grid
-path it only smooths. The grid path, resampled every `spacing` m (at most `MAX_POINTS`),
-is STOMP's initial trajectory; its interior moves against a cost per point of
-    rock_weight * max(0, clearance - d_rock)^2 + unknown_weight * max(0, clearance - d_blocked)^2
+cells of the label grid that keep `KEEP` clearances from occupied cells, lie between the
+region's floor (zmin plus half the clearance) and z = -1 m and are known free water, unknown
+cells between known free water (free on both sides along an axis: the sonar carves known water
+in sheets thinner than a cell, sampled with holes) or within `LOCAL_UNKNOWN` clearances of the
+vehicle horizontally and a cell vertically (its own unseen surroundings must not forbid every
+start; the horizontal profiler scans that layer, nothing scans straight below or above: in seed
+0 a descent through unknown water met the boulder's bulge). Other unknown water may be
+unseen rock: the edge of the known water next to an unseen face (in the first runs paths along
+it led under the boulder's overhang into rock), the inside of a structure whose shell has
+holes; it is not crossed. Each metre is priced 1 in known water with the clearance,
+`NEAR_FACTOR` in known water closer to rock or unknown, `UNKNOWN_FACTOR` in unknown water. It
+gives every candidate's travel length (a candidate it cannot reach is dropped) and the grid
+path to one. STOMP alone, from a straight line, cannot find the way round a 20 m boulder; from
+the grid path it only smooths. The grid path, resampled every `spacing` m (at most
+`MAX_POINTS`), is STOMP's initial trajectory; its interior moves against a cost per point of
+    rock_weight * max(0, clearance - d_rock)^2
+    + unknown_weight * max(0, clearance - d_blocked)^2
 with d_rock the distance to the nearest occupied cell and d_blocked to the nearest occupied or
-unknown one (unknown water is treated as rock within the clearance, softly: the vehicle's own
-unseen surroundings must not forbid every start), plus a depth term that keeps the path
-below z = -1 m and the clearance above the region's floor (zmin). A path is accepted if no
-point comes closer than half the clearance to an occupied cell or to the floor. Fields are read at the nearest cell; outside the grid the distances are
-taken as the clearance (no cost: the grid spans the region widened by Omega and the clearance).
+unknown one (unknown water is treated as rock within the clearance, softly), plus a depth term
+that keeps the path below z = -1 m and the clearance above the region's floor (zmin). Fields
+are read at the nearest cell; outside the grid the distances are taken as the clearance (no
+cost: the grid spans the region widened by Omega and the clearance). The smoothed path (or,
+failing it, the grid path) is accepted if it stays on the search's passable cells, keeps
+`KEEP` clearances from occupied cell centres and half a clearance above the floor.
 """
 
 from __future__ import annotations
@@ -37,7 +44,8 @@ from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 MAX_POINTS = 60
 NEAR_FACTOR = 2.0
 UNKNOWN_FACTOR = 10.0
-LOCAL_UNKNOWN = 2.0  # clearances around the vehicle where unknown water may be crossed
+KEEP = 0.75  # clearances a path keeps from occupied cell centres
+LOCAL_UNKNOWN = 1.0  # clearances around the vehicle where unknown water may be crossed
 
 
 @dataclass(frozen=True)
@@ -78,12 +86,14 @@ class TravelField:
 
     Attributes: cost: the `PathCost` (its grid and fields); start: (3,) the vehicle, m;
     length: (nx * ny * nz,) priced travel length to each cell, m (inf: unreachable);
-    previous: (nx * ny * nz,) the cell before each on its path (-9999 at the start)."""
+    previous: (nx * ny * nz,) the cell before each on its path (-9999 at the start);
+    passable: (nx * ny * nz,) the cells a path may cross."""
 
     cost: PathCost
     start: np.ndarray
     length: np.ndarray
     previous: np.ndarray
+    passable: np.ndarray
 
     @classmethod
     def build(cls, cost: PathCost, start) -> "TravelField":
@@ -93,12 +103,20 @@ class TravelField:
         z = grid.origin[2] + (np.arange(shape[2]) + 0.5) * grid.cell
         depth_ok = (z >= grid.region[2] + 0.5 * cost.clearance) & (z <= MAX_Z)
         centres = [grid.origin[k] + (np.arange(shape[k]) + 0.5) * grid.cell for k in range(3)]
-        near = ((centres[0][:, None, None] - start[0]) ** 2
-                + (centres[1][None, :, None] - start[1]) ** 2
-                + (centres[2][None, None, :] - start[2]) ** 2
-                <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
-        passable = ((cost.rock >= 0.5 * cost.clearance) & depth_ok[None, None, :]
-                    & ((grid.labels == FREE) | ((grid.labels == UNKNOWN) & near)))
+        near = (((centres[0][:, None, None] - start[0]) ** 2
+                 + (centres[1][None, :, None] - start[1]) ** 2
+                 <= (LOCAL_UNKNOWN * cost.clearance) ** 2)
+                & (np.abs(centres[2][None, None, :] - start[2]) <= grid.cell))
+        free = grid.labels == FREE
+        between = np.zeros_like(free)
+        for axis in range(3):
+            pad = [(0, 0)] * 3
+            pad[axis] = (1, 1)
+            f = np.pad(free, pad)
+            lo, hi = (np.take(f, np.arange(k, k + shape[axis]), axis=axis) for k in (0, 2))
+            between |= lo & hi
+        open_water = free | ((grid.labels == UNKNOWN) & (near | between))
+        passable = (cost.rock >= KEEP * cost.clearance) & depth_ok[None, None, :] & open_water
         factor = np.where(grid.labels == UNKNOWN, UNKNOWN_FACTOR,
                           np.where(cost.blocked >= cost.clearance, 1.0, NEAR_FACTOR))
         idx, inside = grid.index(start)
@@ -118,10 +136,10 @@ class TravelField:
         graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows),
                                                       np.concatenate(cols))), shape=(n, n))
         if first < 0:
-            return cls(cost, start, np.full(n, np.inf), np.full(n, -9999))
+            return cls(cost, start, np.full(n, np.inf), np.full(n, -9999), flat_pass)
         length, previous = dijkstra(graph.tocsr(), directed=False, indices=first,
                                     return_predecessors=True)
-        return cls(cost, start, length, previous)
+        return cls(cost, start, length, previous, flat_pass)
 
     def lengths(self, points) -> np.ndarray:
         """(m,) priced travel length to `points` (m, 3), m (inf: unreachable)."""
@@ -154,7 +172,8 @@ def plan_path(travel: TravelField, goal, spacing: float = 1.0,
               seed: int = 0) -> np.ndarray | None:
     """(N, 3) path from the vehicle to `goal` (m): the grid search's, smoothed by STOMP
     against its cost; None when the goal is unreachable or the path (smoothed or not) comes
-    within half the clearance of an occupied cell or of the floor."""
+    within `KEEP` clearances of an occupied cell centre or half a clearance of the floor, or
+    leaves the passable cells."""
     goal = np.asarray(goal, float)[:3]
     if not np.isfinite(travel.lengths(goal[None])[0]):
         return None
@@ -163,12 +182,21 @@ def plan_path(travel: TravelField, goal, spacing: float = 1.0,
         initial = resample(initial, spacing * len(initial) / (MAX_POINTS - 1))
     if len(initial) < 3:
         initial = travel.start + np.linspace(0.0, 1.0, 3)[:, None] * (goal - travel.start)
-    cost = travel.cost
-    smoothed = stomp(initial, cost, params, seed=seed,
+    smoothed = stomp(initial, travel.cost, params, seed=seed,
                      matrices=_matrices(len(initial))).trajectory
     for path in (smoothed, initial):
-        rock, _ = cost.distances(path[1:])
-        if np.all(rock >= 0.5 * cost.clearance) and np.all(
-                path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance):
+        if path_clear(travel, path):
             return path
     return None
+
+
+def path_clear(travel: TravelField, path) -> bool:
+    """Whether `path` (N, 3) after its first point stays on the passable cells (its last
+    point excepted), keeps `KEEP` clearances from occupied cell centres and half a clearance
+    above the floor."""
+    cost, path = travel.cost, np.asarray(path, float)
+    rock, _ = cost.distances(path[1:])
+    idx, inside = cost.grid.index(path[1:-1])
+    crossed = travel.passable[np.ravel_multi_index(tuple(idx.T), cost.grid.labels.shape)]
+    return bool(np.all(crossed & inside) and np.all(rock >= KEEP * cost.clearance)
+                and np.all(path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance))

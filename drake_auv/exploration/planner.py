@@ -26,7 +26,7 @@ from drake_auv.exploration.frontiers import (FREE, MAX_Z, OCCUPIED, UNKNOWN, Lab
                                              candidate_viewpoints, check_region,
                                              cluster_frontiers, frontier_cells)
 from drake_auv.exploration.gains import STRATEGIES, fan_rays, scores, view_gains, view_yaw
-from drake_auv.exploration.paths import PathCost, TravelField, plan_path
+from drake_auv.exploration.paths import PathCost, TravelField, path_clear, plan_path
 
 _FACE = ndimage.generate_binary_structure(3, 1)
 VISITED_RADIUS = 3.0  # m, around a reached target where no candidate is chosen again
@@ -62,7 +62,7 @@ class ExploreParameters:
     clearance: float = 3.0
     unknown_clearance: float = 1.5
     strategy: str = "gain"
-    min_gain_m2: float = 4.0
+    min_gain_m2: float = 1.0
     cell_m: float = 1.0
     cluster_m: float = 4.0
     speed: float = 0.5
@@ -71,7 +71,7 @@ class ExploreParameters:
     arrive_m: float = 1.5
     max_range: float = 20.0
     mount: str = "port"
-    patience: int = 2
+    patience: int = 3
     max_candidates: int = 200
 
     def __post_init__(self):
@@ -117,11 +117,13 @@ class ExploreParameters:
 
 @dataclass(frozen=True)
 class Target:
-    """A chosen viewpoint: position (3,), yaw (rad), the frontier point it looks at (3,)."""
+    """A chosen viewpoint: position (3,), yaw (rad), the frontier point it looks at (3,);
+    `look_around`: a turn in place (no view reachable: the fan's sweep carves known water)."""
 
     position: np.ndarray
     yaw: float
     looks_at: np.ndarray
+    look_around: bool = False
 
 
 @dataclass(frozen=True)
@@ -135,7 +137,8 @@ class ViewStep:
         candidates: admissible viewpoints scored.
         frontier_cells: frontier cells found.
         believed_coverage: share of the implied surface seen (see the module), in [0, 1].
-        no_gain: True when no candidate would newly see `min_gain_m2`.
+        no_gain: True when no candidate would newly see `min_gain_m2` or none has a clear
+            path (a turn in place).
         grid: the step's `LabelGrid` (for the next step).
         visited: (v, 3) the targets reached so far, m (for the next step).
     """
@@ -174,16 +177,19 @@ def approach_point(params: ExploreParameters, position) -> np.ndarray:
 
 def plan_view(octree_map, position, params: ExploreParameters, current: Target | None,
               seed: int = 0, previous: LabelGrid | None = None, rays=None,
-              visited=None) -> ViewStep:
+              visited=None, yaw: float = 0.0, current_path=None) -> ViewStep:
     """One planning step from the vehicle at `position` (3,) towards `current` (see the
     module); `seed` draws the random strategy and STOMP's rollouts; `previous`: the last
     step's grid (`ViewStep.grid`) and `rays` the beams inserted since (`scan_rays`), so
     only the cells they touched are read again; `visited` (v, 3): the targets reached
     before, m (a candidate within `VISITED_RADIUS` of one is not chosen again: what its view
-    promised and did not give, behind rock or below the floor, it will not give later)."""
+    promised and did not give, behind rock or below the floor, it will not give later);
+    `yaw`: the vehicle's, rad; `current_path` (k, 3): what is left of the path to `current`,
+    m (kept only while it stays clear on the new map, `paths.path_clear`)."""
     position = np.asarray(position, float)[:3]
     visited = np.zeros((0, 3)) if visited is None else np.asarray(visited, float)
-    if current is not None and np.linalg.norm(current.position - position) <= params.arrive_m:
+    if (current is not None and not current.look_around
+            and np.linalg.norm(current.position - position) <= params.arrive_m):
         visited = np.vstack([visited, current.position])
     grid = LabelGrid.from_map(octree_map, params.region,
                               params.omega + params.clearance + params.cell_m,
@@ -233,7 +239,9 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
         idx, inside = grid.index(current.position)
         reached = np.linalg.norm(current.position - position) <= params.arrive_m
         admissible = bool(inside and cost.blocked[tuple(idx)] >= 0.5 * params.clearance)
-        if not reached and admissible and useful[n] and not (
+        clear = current_path is None or len(current_path) < 2 or path_clear(travel,
+                                                                             current_path)
+        if not reached and admissible and clear and useful[n] and not (
                 useful[:n].any() and score[:n][useful[:n]].max()
                 > score[n] + params.switch_margin_m2):
             return ViewStep(current, None, float(gains[n]), n, len(frontiers.kinds),
@@ -246,4 +254,11 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
             return ViewStep(target, path, float(gains[k]), n, len(frontiers.kinds),
                             coverage, False, grid, visited)
     best = float(gains[:n].max()) if n else 0.0
-    return ViewStep(None, None, best, n, len(frontiers.kinds), coverage, not order, grid, visited)
+    unreachable = bool(np.any(~np.isfinite(distance) & fresh))
+    if order or unreachable:  # views exist but no clear path: turn in place, 120 degrees
+        turn = yaw + 2.0 * np.pi / 3.0
+        axis = turn + params.sensor_azimuth
+        look = position + 10.0 * np.array([np.cos(axis), np.sin(axis), 0.0])
+        return ViewStep(Target(position, float(turn), look, True), np.vstack([position] * 2),
+                        best, n, len(frontiers.kinds), coverage, True, grid, visited)
+    return ViewStep(None, None, best, n, len(frontiers.kinds), coverage, True, grid, visited)

@@ -120,7 +120,8 @@ class ViewPlanner(LeafSystem):
         rays = scan_rays(batches, params.cell_m) if batches is not None else None
         step = plan_view(online.map, x[:3], params, view.target,
                          seed=self.seed + int(progress["steps"]), previous=view.grid, rays=rays,
-                         visited=view.visited)
+                         visited=view.visited, yaw=float(x[5]),
+                         current_path=self._remaining(view.trajectory, t))
         trajectory = view.trajectory
         if step.path is not None:
             trajectory = self._timed(step.path, step.target, params, x, t)
@@ -135,6 +136,15 @@ class ViewPlanner(LeafSystem):
         state.get_mutable_discrete_state(self._last_step).set_value(
             [t, time.perf_counter() - start, step.gain_m2, step.candidates,
              step.frontier_cells, step.believed_coverage, progress["viewpoints"]])
+
+    @staticmethod
+    def _remaining(trajectory: PiecewisePolynomial | None, t: float) -> np.ndarray | None:
+        """(k, 3) the trajectory's positions from time `t` on (None without one)."""
+        if trajectory is None or t >= trajectory.end_time():
+            return None
+        times = trajectory.get_segment_times()
+        times = np.concatenate([[t], [s for s in times if s > t]])
+        return trajectory.vector_values(times)[:3].T
 
     @staticmethod
     def _timed(path: np.ndarray, target: Target, params: ExploreParameters, x: np.ndarray,

@@ -444,7 +444,7 @@ class ExploreStep:
     max_time_s: float = 1800.0
     clearance_m: float = 3.0
     strategy: str = "gain"
-    min_gain_m2: float = 4.0
+    min_gain_m2: float = 1.0
 
 
 @dataclass(frozen=True)
