@@ -347,7 +347,7 @@ def coverage_time_line(curve: dict) -> str:
     """The report's line on when each sensor reached the `COVERAGE_LEVELS`."""
     parts = []
     for name in ("multibeam", "camera"):
-        reached = ", ".join(f"{level} % at " + _fmt(t, ".0f", " s")
+        reached = ", ".join(f"{level} % never" if t is None else f"{level} % at {t:.0f} s"
                             for level, t in curve["time_to_s"][name].items())
         parts.append(f"{name} {reached}")
     return "- Coverage against time (`coverage_vs_time.png`): " + "; ".join(parts) + "."
