@@ -3,8 +3,11 @@
 Camera mode: a cone of `aperture_deg` about `axis_body` (default straight down), range
 `max_range`; multibeam mode: the faces hit by a fan of beams. Periodic discrete update at
 `rate` (frames per second) from the true state; the discrete state is the best viewing angle
-per target face (rad, NaN while unseen). Outputs: `coverage`, the seen share of the target
-area, and `face_angles`, that state (for colouring the mesh in Meshcat).
+per target face (rad, NaN while unseen) and, in a second group, the time each face was first
+seen (s, NaN while unseen): the coverage-against-time curve of the whole dive follows from that
+one vector after the run (`mission.report.coverage_curve`), nothing stored per step. Outputs: `coverage`, the
+seen share of the target area, and `face_angles`, the best angles (for colouring the mesh in
+Meshcat).
 The pure work is in `drake_auv.geometry.visibility`.
 
 A multibeam recorder built with `hits_input` does not cast: it reads the faces the payload
@@ -80,6 +83,8 @@ class CoverageRecorder(LeafSystem):
             if hits_input else None)
         num_target = len(self.visibility.target_index)
         self._best_index = self.DeclareDiscreteState(BasicVector(np.full(num_target, np.nan)))
+        self._first_seen_index = self.DeclareDiscreteState(
+            BasicVector(np.full(num_target, np.nan)))
         self.DeclarePeriodicDiscreteUpdateEvent(1.0 / rate, 0.0, self._update_best)
         self.coverage_output = self.DeclareVectorOutputPort(
             "coverage", 1, self._calc_coverage,
@@ -104,8 +109,12 @@ class CoverageRecorder(LeafSystem):
                 hits = self.caster.cast(origin, directions, self.max_range)
                 slots, angles = self.visibility.beams(hits, directions)
         if len(slots):
-            best = context.get_discrete_state(self._best_index).get_value()
-            discrete_state.set_value(self._best_index, merge_best(best, slots, angles))
+            best = merge_best(context.get_discrete_state(self._best_index).get_value(), slots,
+                              angles)
+            discrete_state.set_value(self._best_index, best)
+            first = context.get_discrete_state(self._first_seen_index).get_value().copy()
+            first[np.isnan(first) & np.isfinite(best)] = context.get_time()
+            discrete_state.set_value(self._first_seen_index, first)
 
     def _shared_hits(self, context) -> AxisHits:
         """The multibeam's `AxisHits` of this update; a ValueError if they are of another
@@ -128,6 +137,11 @@ class CoverageRecorder(LeafSystem):
     def best_angles(self, context) -> np.ndarray:
         """(T,) best viewing angle per target face, rad, NaN where unseen."""
         return context.get_discrete_state(self._best_index).get_value().copy()
+
+    def first_seen(self, context) -> np.ndarray:
+        """(T,) time each target face was first seen (its best angle became finite), s, NaN
+        where unseen."""
+        return context.get_discrete_state(self._first_seen_index).get_value().copy()
 
     def coverage(self, context) -> float:
         """Seen share of the target area."""

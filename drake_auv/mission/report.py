@@ -7,7 +7,9 @@ Diagram, written by `write_outputs`.
 2 Omega of the target, and `map_mean_m`, the same against the on-line map's voxels on the
 target, as the reference reports it), `phases` (`name`, `start_s`, `end_s`, one time axis),
 `faults` (the injected ones, as in the mission file), `responses` (the supervisor's answers:
-`response`, `cause`, `start_s`, `end_s`) and `mission.aborted`.
+`response`, `cause`, `start_s`, `end_s`), `mission.aborted` and `coverage_vs_time` (`t_s`,
+`multibeam`, `camera`: the covered shares every `period_s` from 0 to the end of the dive, and
+`time_to_s`, the exact mission time each sensor first covered 80 % and 90 %, null if never).
 Everything but `timing` depends only on the mission file and its seed. `timing` (wall clock,
 s): `sim_s` simulated; `wall_s` = `simulation_s`, the simulation's wall time, and
 `real_time_factor` = `sim_s / simulation_s`; from `write_outputs`, the end-to-end figures:
@@ -39,6 +41,8 @@ from drake_auv.reconstruction.products import products_markdown, write_products
 from drake_auv.signals import ReplanningStep, VehicleState
 
 PHASE_COLOURS = {"transit": "0.45", "follow": "tab:green", "survey": "tab:blue"}
+COVERAGE_PERIOD_S = 10.0  # s, the sampling of the coverage-against-time curve
+COVERAGE_LEVELS = (0.8, 0.9)  # the shares whose first time the report gives
 
 
 def angle_stats(best: np.ndarray, areas: np.ndarray) -> tuple[float, float]:
@@ -120,6 +124,52 @@ def plan_summary(result: MissionResult) -> dict | None:
     return out
 
 
+def coverage_curve(first_seen: np.ndarray, areas: np.ndarray, end_s: float,
+                   period_s: float = COVERAGE_PERIOD_S) -> tuple[np.ndarray, np.ndarray]:
+    """The seen share of the area against mission time from each face's first-seen time (s,
+    NaN unseen): (t (k,) s, every `period_s` from 0 and at `end_s`; share (k,) in [0, 1]).
+    Its length is bounded by `end_s / period_s`, not by the number of steps."""
+    if not (np.isfinite(period_s) and period_s > 0):
+        raise ValueError(f"period_s must be > 0 s, got {period_s}")
+    t = np.r_[np.arange(0.0, end_s, period_s), end_s]
+    times, cumulative = _first_seen_sorted(first_seen, areas)
+    return t, cumulative[np.searchsorted(times, t, side="right")]
+
+
+def time_to_coverage(first_seen: np.ndarray, areas: np.ndarray, level: float) -> float | None:
+    """The first mission time (s) the seen share of the area reached `level` in (0, 1], from
+    each face's first-seen time; None if it never did."""
+    if not (0 < level <= 1):
+        raise ValueError(f"level must be in (0, 1], got {level}")
+    times, cumulative = _first_seen_sorted(first_seen, areas)
+    k = int(np.searchsorted(cumulative[1:], level * (1 - 1e-12), side="left"))
+    return float(times[k]) if k < len(times) else None
+
+
+def _first_seen_sorted(first_seen, areas) -> tuple[np.ndarray, np.ndarray]:
+    """The seen faces' first-seen times in order (k,) and the covered share before the first
+    and after each (k + 1,)."""
+    seen = np.isfinite(first_seen)
+    order = np.argsort(first_seen[seen], kind="stable")
+    share = np.r_[0.0, np.cumsum(areas[seen][order])] / areas.sum()
+    return first_seen[seen][order], share
+
+
+def coverage_vs_time(result: MissionResult, period_s: float = COVERAGE_PERIOD_S) -> dict:
+    """Multibeam and camera coverage of the true target against mission time, from the
+    recorders' first-seen state at the end of the dive (`report.json`'s `coverage_vs_time`)."""
+    end = float(result.context.get_time())
+    out = dict(period_s=period_s, time_to_s={})
+    for name in ("multibeam", "camera"):
+        recorder = getattr(result.handles, f"{name}_coverage")
+        first = recorder.first_seen(recorder.GetMyContextFromRoot(result.context))
+        t, out[name] = coverage_curve(first, result.areas, end, period_s)
+        out["t_s"] = t
+        out["time_to_s"][name] = {f"{100 * level:g}": time_to_coverage(first, result.areas, level)
+                                  for level in COVERAGE_LEVELS}
+    return {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in out.items()}
+
+
 def summarise(result: MissionResult) -> dict:
     """Everything the report shows; `timing` holds the wall-clock figures (they vary with the
     machine), the rest depends only on the mission file and its seed."""
@@ -165,6 +215,7 @@ def summarise(result: MissionResult) -> dict:
         responses=result.responses,
         plan=plan_summary(result),
         config=mission_to_dict(result.spec),
+        coverage_vs_time=coverage_vs_time(result),
     )
     timing = dict(wall_s=result.wall_s, sim_s=result.duration_s, simulation_s=result.wall_s,
                   real_time_factor=result.duration_s / max(result.wall_s, 1e-9))
@@ -245,6 +296,7 @@ def report_markdown(summary: dict) -> str:
               + f": mean {_fmt(d['mean_m'], '.2f')} m, sd {_fmt(d['sd_m'], '.2f')} m;"
               f" minimum over the dive {d['min_m']:.2f} m. Against the on-line map: mean "
               f"{_fmt(d['map_mean_m'], '.2f')} m, sd {_fmt(d['map_sd_m'], '.2f')} m.",
+              coverage_time_line(summary["coverage_vs_time"]),
               f"- Minimum clearance to anything: {summary['min_clearance_m']:.2f} m: "
               + ("**contact**." if summary["contact"] else "no contact.")
               + f" Largest navigation error: {summary['navigation_error_max_m']:.2f} m.",
@@ -262,7 +314,8 @@ def report_markdown(summary: dict) -> str:
         lines.append(f"- {t['replan_steps']} replanning steps: median "
                      f"{t['replan_median_ms']:.1f} ms, 95th percentile {t['replan_p95_ms']:.1f}"
                      " ms.")
-    lines += ["", "Files: `coverage.png`, `distance.png`, `plan.png` (coverage plans), "
+    lines += ["", "Files: `coverage.png`, `coverage_vs_time.png`, `distance.png`, `plan.png` "
+              "(coverage plans), "
               "`mission.html` (Meshcat recording), `trajectory.csv`, `diagram.dot`.", ""]
     return "\n".join(lines)
 
@@ -289,6 +342,35 @@ def fig_coverage(result: MissionResult) -> Figure:
     share = coverage_share(best, result.areas)
     fig.suptitle(f"Multibeam coverage of the target: {100 * share:.1f} % "
                  "(colour: best viewing angle, 0 (yellow) to 90 deg (purple); red: unseen)")
+    return fig
+
+
+def coverage_time_line(curve: dict) -> str:
+    """The report's line on when each sensor reached the `COVERAGE_LEVELS`."""
+    parts = []
+    for name in ("multibeam", "camera"):
+        reached = ", ".join(f"{level} % never" if t is None else f"{level} % at {t:.0f} s"
+                            for level, t in curve["time_to_s"][name].items())
+        parts.append(f"{name} {reached}")
+    return "- Coverage against time (`coverage_vs_time.png`): " + "; ".join(parts) + "."
+
+
+def fig_coverage_vs_time(result: MissionResult, curve: dict) -> Figure:
+    """Multibeam and camera coverage of the true target against mission time (`curve`, the
+    report's `coverage_vs_time`), over the phases of the dive."""
+    fig = Figure(figsize=(8, 4))
+    ax = fig.add_subplot(1, 1, 1)
+    for phase in result.phases:
+        ax.axvspan(phase.start_s, phase.end_s, color=PHASE_COLOURS.get(phase.name, "0.8"),
+                   alpha=0.08, lw=0)
+    t = np.asarray(curve["t_s"])
+    ax.plot(t, 100 * np.asarray(curve["multibeam"]), color="tab:blue", label="multibeam")
+    ax.plot(t, 100 * np.asarray(curve["camera"]), color="tab:orange", label="camera")
+    for level in COVERAGE_LEVELS:
+        ax.axhline(100 * level, color="0.6", lw=0.6, ls="--")
+    ax.set(xlabel="mission time (s)", ylabel="coverage of the true target (%)", ylim=(0, 101),
+           xlim=(0, t[-1]), title="Coverage against time (shading: phases)")
+    ax.legend(loc="lower right", fontsize=8)
     return fig
 
 
@@ -352,7 +434,8 @@ def peak_rss_mb() -> float:
 
 def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float | None = None,
                   finish=None) -> dict:
-    """Writes report.json, report.md, coverage.png, distance.png, plan.png (coverage plans),
+    """Writes report.json, report.md, coverage.png, coverage_vs_time.png, distance.png, plan.png
+    (coverage plans),
     trajectory.csv, diagram.dot and the data products (points.ply; reconstruction.ply and .png
     with Open3D, `reconstruction.products`) into `outdir`; returns the summary.
 
@@ -366,7 +449,8 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
     products = time.perf_counter()
     summary["reconstruction"] = _rounded(write_products(result, out, dpi))
     reconstruction_s = time.perf_counter() - products
-    figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result)}
+    figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result),
+               "coverage_vs_time.png": fig_coverage_vs_time(result, summary["coverage_vs_time"])}
     if result.plan.coverage is not None:
         from drake_auv.planning.figures import fig_path3d
 

@@ -1,0 +1,113 @@
+"""The exploration ablation (issue 23): the view planner's gain against nearest-frontier-first
+and a random frontier, and the issue's acceptance checks.
+
+`--mission` (default `boulder_explore`, no prior map) is flown with its `explore` step's
+`strategy` set to gain, nearest and random on each seed of `--seeds` (`A:B`, seeds A .. B-1;
+default 0:10), and its plan + survey counterpart (`boulder`, `breakwater`: a prior map) on the
+same seeds. Every dive writes its `report.json` to `--out/<mission>[-<strategy>]/seed<N>/`
+(`--reuse` reads back a dive whose report holds the same configuration; the layout is
+`examples/explore_vs_plan.py`'s, so the two share their plan + survey dives). Per strategy:
+median time to 80 % and 90 % multibeam coverage of the true target (a seed that never reached
+it counts as infinitely late), median and worst final coverage, contacts, median believed
+coverage. The checks (issue 23, on the gain strategy): no contact in any seed; >= 90 %
+multibeam coverage in every seed; median time to 90 % within 1.5x of plan + survey's; gain
+reaches 80 % sooner than nearest on the median. Writes `--markdown` (the tables, the checks,
+the machine), `--figure` (coverage against time per strategy) and, with `--json`, the per-dive
+rows; exit status 1 when a check fails.
+
+    .venv/bin/python benchmarks/bench_exploration.py [--seeds 0:10] [--jobs 2] [--reuse]
+        [--json docs/exploration_ablation.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path as FilePath
+
+import numpy as np
+
+sys.path.insert(0, str(FilePath(__file__).resolve().parents[1] / "examples"))
+from _reference import machine  # noqa: E402
+from drake_auv.campaign.grid import parse_seeds  # noqa: E402
+from explore_vs_plan import (PLAN_MISSION, dive_row, figure, median_time, run_all,  # noqa: E402
+                             _s, strategy_override, table)
+
+STRATEGIES = ("gain", "nearest", "random")
+SLOWDOWN = 1.5  # the acceptance's bound on explore's median time to 90 % over plan + survey's
+
+
+def _secs(t: float) -> str:
+    return _s(t) + (" s" if np.isfinite(t) else "")
+
+
+def checks(groups: dict[str, list[dict]], plan_mode: str) -> list[tuple[str, bool, str]]:
+    """The issue's acceptance checks: (what, passed, the measured figures)."""
+    gain, plan = groups["gain"], groups[plan_mode]
+    contacts = sum(r["contact"] for r in gain)
+    worst = min(r["multibeam"] for r in gain)
+    t90, plan90 = median_time(gain, "t90"), median_time(plan, "t90")
+    t80, near80 = median_time(gain, "t80"), median_time(groups["nearest"], "t80")
+    return [
+        ("no contact in any seed (gain)", contacts == 0, f"{contacts}/{len(gain)} contacts"),
+        (">= 90 % multibeam coverage in every seed (gain)", worst >= 0.9,
+         f"worst {100 * worst:.1f} %"),
+        (f"median time to 90 % within {SLOWDOWN}x of {plan_mode}", t90 <= SLOWDOWN * plan90,
+         f"{_secs(t90)} against {_secs(plan90)}"
+         + (f" ({t90 / plan90:.2f}x)" if np.isfinite(t90 / plan90) else "")),
+        ("gain reaches 80 % sooner than nearest (median)", t80 < near80,
+         f"{_secs(t80)} against {_secs(near80)}"),
+    ]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--mission", default="boulder_explore", choices=sorted(PLAN_MISSION))
+    parser.add_argument("--seeds", default="0:10", help="A:B, seeds A .. B-1 (default 0:10)")
+    parser.add_argument("--jobs", type=int, default=1, help="dives at once (1)")
+    parser.add_argument("--reuse", action="store_true",
+                        help="read back dives whose report.json holds the same configuration")
+    parser.add_argument("--out", type=FilePath, default=FilePath("out/exploration"))
+    parser.add_argument("--markdown", type=FilePath, default=None,
+                        help="default: --out/bench_exploration_<mission>.md")
+    parser.add_argument("--json", type=FilePath, default=None,
+                        help="also write the per-dive rows, by mode, to this file")
+    parser.add_argument("--figure", type=FilePath,
+                        default=FilePath("docs/exploration_ablation.png"))
+    args = parser.parse_args(argv)
+    seeds = parse_seeds(args.seeds)
+    if args.jobs < 1:
+        raise ValueError(f"--jobs must be >= 1, got {args.jobs}")
+    markdown = args.markdown or args.out / f"bench_exploration_{args.mission}.md"
+    outputs = (args.out, markdown.parent, args.figure.parent) + \
+        ((args.json.parent,) if args.json is not None else ())
+    for folder in outputs:  # before any dive
+        folder.mkdir(parents=True, exist_ok=True)
+    plan_mission = PLAN_MISSION[args.mission]
+    plan_mode = f"plan + survey ({plan_mission})"
+    modes = [(s, args.mission, (strategy_override(args.mission, s),), f"{args.mission}-{s}")
+             for s in STRATEGIES] + [(plan_mode, plan_mission, (), plan_mission)]
+    tasks = [(mission, seed, extra, args.out / folder / f"seed{seed}", args.reuse)
+             for _, mission, extra, folder in modes for seed in seeds]
+    summaries = iter(run_all(tasks, args.jobs))
+    by_mode = {mode: [next(summaries) for _ in seeds] for mode, *_ in modes}
+    groups = {m: [dive_row(s) for s in runs] for m, runs in by_mode.items()}
+    title = f"Exploration ablation: {args.mission}, seeds {args.seeds}"
+    figure({m: [s["coverage_vs_time"] for s in runs] for m, runs in by_mode.items()},
+           args.figure, title)
+    results = checks(groups, plan_mode)
+    text = (table(groups, title) + "\n## Acceptance (issue 23)\n\n| check | result | measured |\n"
+            "| --- | --- | --- |\n"
+            + "".join(f"| {what} | {'pass' if ok else '**FAIL**'} | {measured} |\n"
+                      for what, ok, measured in results)
+            + f"\n{machine()}\n")
+    markdown.write_text(text)
+    if args.json is not None:
+        args.json.write_text(json.dumps(groups, indent=1) + "\n")
+    print(text)
+    return 0 if all(ok for _, ok, _ in results) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
