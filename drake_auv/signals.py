@@ -160,6 +160,13 @@ LegProgress = _signal(
     "LegProgress", ("bearing", "turned", "start_x", "start_y"),
     "A leg's progress record (4): last bearing from the loops' centre and the angle turned "
     "(rad), where the leg began (m).", start=("start_x", "start_y"))
+NavigationError = _signal(
+    "NavigationError", ("drift_x", "drift_y", "noise_x", "noise_y", "noise_z", "noise_yaw",
+                        "last_x", "last_y", "index", "started"),
+    "The `Navigation` system's error state (10): the dead-reckoning drift (m), this update's "
+    "white noise (m, rad), the true position at the last update (m), the update index, "
+    "whether an update has happened (0/1).",
+    drift=("drift_x", "drift_y"), noise=("noise_x", "noise_yaw"), last=("last_x", "last_y"))
 Wrench = _signal(
     "Wrench", ("X", "Y", "Z", "N"),
     "The tracker's body-frame wrench (4): forces along x, y, z (N) and the moment about z (N m).")

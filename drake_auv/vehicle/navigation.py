@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_auv.params import param, validate
+from drake_auv.signals import NavigationError, VehicleState
 
-# Layout of the error vector kept by the Navigation system.
-ERROR_SIZE = 10  # drift x, y; noise x, y, z, yaw; last true x, y; update index; started flag
+ERROR_SIZE = NavigationError.size()  # the error vector kept by the Navigation system
 
 
 @dataclass(frozen=True)
@@ -59,30 +59,33 @@ class NavigationParams:
 
 
 def update_error(params: NavigationParams, error: np.ndarray, true_state: np.ndarray) -> np.ndarray:
-    """The error vector after one navigation update at `true_state` (12)."""
-    error = error.copy()
-    x, y = true_state[0], true_state[1]
-    index = int(error[8])
+    """The error vector (`signals.NavigationError`) after one navigation update at
+    `true_state` (`VehicleState`)."""
+    error = NavigationError(np.array(error, dtype=float))
+    state = VehicleState(true_state)
+    x, y = state.x, state.y
+    index = int(error.index)
     rng = np.random.default_rng([params.seed, index])
     n = rng.standard_normal(6)
-    if error[9]:
-        dx, dy = x - error[6], y - error[7]
+    if error.started:
+        dx, dy = x - error.last_x, y - error.last_y
         c, s = math.cos(params.heading_bias), math.sin(params.heading_bias)
         k = 1.0 + params.scale_error
         walk = params.random_walk * math.sqrt(math.hypot(dx, dy))
-        error[0] += k * (c * dx - s * dy) - dx + walk * n[0]
-        error[1] += k * (s * dx + c * dy) - dy + walk * n[1]
-    error[2:6] = n[2:6] * (params.position_noise, params.position_noise, params.depth_noise,
-                           params.heading_noise)
-    error[6], error[7], error[8], error[9] = x, y, index + 1, 1.0
-    return error
+        error.drift_x += k * (c * dx - s * dy) - dx + walk * n[0]
+        error.drift_y += k * (s * dx + c * dy) - dy + walk * n[1]
+    error.noise = n[2:6] * (params.position_noise, params.position_noise, params.depth_noise,
+                            params.heading_noise)
+    error.last_x, error.last_y, error.index, error.started = x, y, index + 1, 1.0
+    return error[:]
 
 
 def estimate(params: NavigationParams, error: np.ndarray, true_state: np.ndarray) -> np.ndarray:
-    """The estimated 12-state: true state with the position drift, noise and compass error."""
-    est = np.array(true_state, dtype=float)
-    est[0] += error[0] + error[2]
-    est[1] += error[1] + error[3]
-    est[2] += error[4]
-    est[5] += params.heading_bias + error[5]
-    return est
+    """The estimated state (`VehicleState`): the true state with the position drift, noise and
+    compass error (`NavigationError`)."""
+    est, error = VehicleState(np.array(true_state, dtype=float)), NavigationError(error)
+    est.x += error.drift_x + error.noise_x
+    est.y += error.drift_y + error.noise_y
+    est.z += error.noise_z
+    est.yaw += params.heading_bias + error.noise_yaw
+    return est[:]
