@@ -36,6 +36,7 @@ import trimesh
 from drake_auv.mission.config import (FollowStep, MissionFileError, MissionSpec, PlanStep,
                                       SiteSpec)
 from drake_auv.scenarios import get_scenario
+from drake_auv.signals import VehicleState
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import top_surface
 
@@ -153,12 +154,12 @@ def prior_offset(error_m: float, seed: int) -> np.ndarray:
 
 
 def start_state(pose, origin) -> np.ndarray:
-    """(12,) local state `[x, y, z, roll, pitch, yaw, u, v, w, p, q, r]` at rest at `pose`
-    (x, y, z, yaw_deg), site coordinates, m and deg; `origin` (2,) the local frame's."""
-    state = np.zeros(12)
-    state[:3] = pose[0] - origin[0], pose[1] - origin[1], pose[2]
-    state[5] = math.radians(pose[3])
-    return state
+    """The local state (`signals.VehicleState`) at rest at `pose` (x, y, z, yaw_deg), site
+    coordinates, m and deg; `origin` (2,) the local frame's."""
+    state = VehicleState.zeros()
+    x, y, z, yaw_deg = pose
+    state.x, state.y, state.z, state.yaw = x - origin[0], y - origin[1], z, math.radians(yaw_deg)
+    return state[:]
 
 
 def load_mesh(path, where: str, label: str) -> trimesh.Trimesh:
