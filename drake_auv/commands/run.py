@@ -16,15 +16,17 @@ from pathlib import Path as FilePath
 
 from drake_auv.commands import add_recording_options
 from drake_auv.commands.outputs import MiB, output_folder
+from drake_auv.mission.config import builtin_missions
 
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "run", help="fly a mission file (or a built-in mission) in one dive",
         description="Loads a mission file (YAML: site, navigation, sonar noise, replanner, "
-                    "payload, limits, steps) or a built-in mission (boulder, breakwater, "
-                    "pool, c_object), plans it, flies every step in one simulated dive and "
-                    "writes the report, figures, recording, trajectory and Diagram.")
+                    "payload, limits, steps) or a built-in mission ("
+                    + ", ".join(builtin_missions()) + "), plans it, flies every step in one "
+                    "simulated dive and writes the report, figures, recording, trajectory and "
+                    "Diagram.")
     parser.add_argument("mission", help="a mission YAML file or a built-in mission's name")
     parser.add_argument("-o", "--out", required=True, help="output folder")
     add_mission_options(parser)
