@@ -85,7 +85,7 @@ def test_scores_of_the_strategies():
     assert np.argmax(scores("nearest", gains, distance, 0.5, 0.1, 0)) == 0
     a, b = (scores("random", gains, distance, 0.5, 0.1, s) for s in (3, 3))
     assert np.array_equal(a, b)
-    with pytest.raises(ValueError, match="strategy must be one of"):
+    with pytest.raises(ValueError, match="ExploreParameters.strategy = .best. is not allowed"):
         scores("greedy", gains, distance, 0.5, 0.1, 0)
 
 
@@ -171,5 +171,7 @@ def test_explore_parameters_name_what_is_wrong():
         ExploreParameters(region=(0, 0, -10, 1, 1, -5), omega=3.0, clearance=3.0)
     with pytest.raises(ValueError, match="min >= max"):
         ExploreParameters(region=(0, 0, -5, 1, 1, -10))
-    with pytest.raises(ValueError, match="strategy must be one of"):
+    with pytest.raises(ValueError, match="ExploreParameters.strategy = .best. is not allowed"):
         ExploreParameters(region=(0, 0, -10, 1, 1, -5), strategy="best")
+    with pytest.raises(ValueError, match=r"ExploreParameters.cell_m = 9 is out of range"):
+        ExploreParameters(region=(0, 0, -10, 1, 1, -5), cell_m=9)

@@ -27,6 +27,7 @@ from drake_auv.exploration.frontiers import (FREE, MAX_Z, OCCUPIED, UNKNOWN, Lab
                                              cluster_frontiers, frontier_cells)
 from drake_auv.exploration.gains import STRATEGIES, fan_rays, scores, view_gains, view_yaw
 from drake_auv.exploration.paths import PathCost, TravelField, path_clear, plan_path
+from drake_auv.params import param, validate
 
 _FACE = ndimage.generate_binary_structure(3, 1)
 VISITED_RADIUS = 3.0  # m, around a reached target where no candidate is chosen again
@@ -34,7 +35,7 @@ VISITED_RADIUS = 3.0  # m, around a reached target where no candidate is chosen 
 
 @dataclass(frozen=True)
 class ExploreParameters:
-    """Parameters of the view planner (units in the names; ranges checked here).
+    """Parameters of the view planner (ranges as field metadata, `drake_auv.params`).
 
     Attributes:
         region: (6,) [xmin, ymin, zmin, xmax, ymax, zmax] where the structure is believed to
@@ -57,57 +58,37 @@ class ExploreParameters:
         max_candidates: the best this many by straight-line score are gain-scored, >= 1.
     """
 
-    region: tuple
-    omega: float = 6.0
-    clearance: float = 3.0
-    unknown_clearance: float = 1.5
-    strategy: str = "gain"
-    min_gain_m2: float = 1.0
-    cell_m: float = 1.0
-    cluster_m: float = 4.0
-    speed: float = 0.5
-    travel_weight: float = 0.5
-    switch_margin_m2: float = 10.0
-    arrive_m: float = 1.5
-    max_range: float = 20.0
-    mount: str = "port"
-    patience: int = 3
-    max_candidates: int = 200
+    region: tuple = param(kind="vector", names=("xmin", "ymin", "zmin", "xmax", "ymax", "zmax"),
+                          unit="m")
+    omega: float = param(6.0, low=0.5, high=100.0, unit="m")
+    clearance: float = param(3.0, low=0.5, high=20.0, unit="m")
+    unknown_clearance: float = param(1.5, low=0.0, high=20.0, unit="m")
+    strategy: str = param("gain", kind="choice", choices=STRATEGIES)
+    min_gain_m2: float = param(1.0, low=0.0, unit="m^2")
+    cell_m: float = param(1.0, low=0.25, high=4.0, unit="m")
+    cluster_m: float = param(4.0, low=0.25, unit="m")
+    speed: float = param(0.5, low=0.0, low_open=True, high=3.0, unit="m/s")
+    travel_weight: float = param(0.5, low=0.0, unit="m^2/s")
+    switch_margin_m2: float = param(10.0, low=0.0, unit="m^2")
+    arrive_m: float = param(1.5, low=0.0, low_open=True, unit="m")
+    max_range: float = param(20.0, low=0.0, low_open=True, unit="m")
+    mount: str = param("port", kind="choice", choices=("port", "starboard", "down", "forward"))
+    patience: int = param(3, low=1, integer=True)
+    max_candidates: int = param(200, low=1, integer=True)
 
     def __post_init__(self):
+        validate(self)
         object.__setattr__(self, "region", tuple(check_region(self.region).tolist()))
-        if not (np.isfinite(self.clearance) and self.clearance > 0):
-            raise ValueError(f"clearance must be > 0 m, got {self.clearance}")
-        if not (np.isfinite(self.omega) and self.omega > self.clearance):
+        if not self.omega > self.clearance:
             raise ValueError(f"omega ({self.omega} m) must be above the clearance "
                              f"({self.clearance} m): a viewpoint at omega from the surface "
                              "would be inside the clearance")
-        if not (np.isfinite(self.unknown_clearance)
-                and 0.0 <= self.unknown_clearance <= self.clearance):
+        if not self.unknown_clearance <= self.clearance:
             raise ValueError(f"unknown_clearance must be in [0, clearance = {self.clearance}] "
                              f"m, got {self.unknown_clearance}")
-        if self.strategy not in STRATEGIES:
-            raise ValueError(f"strategy must be one of {STRATEGIES}, got {self.strategy!r}")
-        if self.mount not in ("port", "starboard", "down", "forward"):
-            raise ValueError(f"mount must be port, starboard, down or forward, got "
-                             f"{self.mount!r}")
-        for name, lo in (("min_gain_m2", 0.0), ("travel_weight", 0.0),
-                         ("switch_margin_m2", 0.0)):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= lo):
-                raise ValueError(f"{name} must be >= {lo}, got {value}")
-        for name in ("speed", "arrive_m", "max_range"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be > 0, got {value}")
-        if not 0.25 <= self.cell_m <= 4.0:
-            raise ValueError(f"cell_m must be in [0.25, 4] m, got {self.cell_m}")
         if not self.cluster_m >= self.cell_m:
             raise ValueError(f"cluster_m must be >= cell_m ({self.cell_m} m), got "
                              f"{self.cluster_m}")
-        for name in ("patience", "max_candidates"):
-            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
-                raise ValueError(f"{name} must be an integer >= 1, got {getattr(self, name)}")
 
     @property
     def sensor_azimuth(self) -> float:

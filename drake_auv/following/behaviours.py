@@ -202,7 +202,7 @@ class _Follower:
 
     def _begin(self, state: FollowerState, time, x, points_nav):
         """Checks the estimated state `x` (12), adds the returns to a copy of the map; returns
-        (x, dt, the new map, the state with the new time and start time)."""
+        (x as a `VehicleState`, dt, the state with the new map, time and start time)."""
         x = np.asarray(x, dtype=float)
         if x.shape != (12,) or not np.all(np.isfinite(x)):
             raise ValueError(f"state must be a finite 12-vector, got shape {x.shape}")
@@ -215,7 +215,7 @@ class _Follower:
                         start_time=time if state.start_time is None else state.start_time,
                         yaw_ref=float(VehicleState(x).yaw) if state.yaw_ref is None
                         else state.yaw_ref)
-        return x, dt, state
+        return VehicleState(x), dt, state
 
     def _search_speed(self, state: FollowerState) -> float:
         """Speed of the search behaviour: zero during the warm-up."""
@@ -267,7 +267,6 @@ class HorizontalFollower(_Follower):
         from the estimated state `x` (12); returns the new state and the output."""
         x, dt, state = self._begin(state, time, x, points_nav)
         p = self.params
-        x = VehicleState(x)
         depth_z = float(x.z) if state.anchor is None else state.anchor
         position = x.position
         points = state.map.horizontal_slice(position, p.plane_band)
@@ -319,7 +318,6 @@ class VerticalFollower(_Follower):
         from the estimated state `x` (12); returns the new state and the output."""
         x, dt, state = self._begin(state, time, x, points_nav)
         p = self.params
-        x = VehicleState(x)
         plane_yaw = float(x.yaw) if state.anchor is None else state.anchor
         sign = state.heading_sign or (1 if np.cos(x.yaw - plane_yaw) >= 0 else -1)
         turns = state.turns

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
 
+from drake_auv.exploration.planner import ExploreParameters
 from drake_auv.following.behaviours import FollowingParams
 from drake_auv.params import CHECK, NESTED, like, nested, param, validate
 from drake_auv.replanning.section import OPTIMIZERS, ReplanningParameters
@@ -341,11 +342,11 @@ class ExploreStep:
     KIND: ClassVar[str] = "explore"
     region: tuple = param(kind="vector", names=("xmin", "ymin", "zmin", "xmax", "ymax", "zmax"),
                           unit="m, site coordinates")
-    omega: float = param(6.0, low=0.5, high=100.0, unit="m")
+    omega: float = like(ExploreParameters, "omega")
     max_time_s: float = param(1800.0, low=0.0, low_open=True, unit="s")
-    clearance_m: float = param(3.0, low=0.5, high=20.0, unit="m")
-    strategy: str = param("gain", kind="choice", choices=("gain", "nearest", "random"))
-    min_gain_m2: float = param(1.0, low=0.0, unit="m^2")
+    clearance_m: float = like(ExploreParameters, "clearance")
+    strategy: str = like(ExploreParameters, "strategy")
+    min_gain_m2: float = like(ExploreParameters, "min_gain_m2")
 
     def __post_init__(self):
         validate(self)
