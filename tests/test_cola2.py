@@ -43,7 +43,7 @@ def caldera_file(caldera, tmp_path_factory):
 
 
 def test_reader_returns_what_was_written(caldera, caldera_file):
-    (plan, geo), (sec, f) = caldera, caldera_file
+    (_, geo), (sec, f) = caldera, caldera_file
     m = read_cola2(f)
     assert m.autopilot == "cola2" and m.source == str(f)
     assert [it.kind for it in m.items] == ["goto"] + ["section"] * len(sec) + ["park"]
