@@ -31,6 +31,7 @@ import numpy as np
 sys.path.insert(0, str(FilePath(__file__).resolve().parents[1] / "examples"))
 from _reference import machine  # noqa: E402
 from drake_auv.campaign.grid import parse_seeds  # noqa: E402
+from drake_auv.commands.outputs import output_folder  # noqa: E402
 from explore_vs_plan import (PLAN_MISSION, dive_row, figure, median_time, run_all,  # noqa: E402
                              _s, strategy_override, table)
 
@@ -76,14 +77,21 @@ def main(argv=None) -> int:
     parser.add_argument("--figure", type=FilePath,
                         default=FilePath("docs/exploration_ablation.png"))
     args = parser.parse_args(argv)
-    seeds = parse_seeds(args.seeds)
+    try:
+        seeds = parse_seeds(args.seeds)
+    except ValueError as err:
+        parser.error(str(err))
     if args.jobs < 1:
-        raise ValueError(f"--jobs must be >= 1, got {args.jobs}")
+        parser.error(f"--jobs must be >= 1, got {args.jobs}")
     markdown = args.markdown or args.out / f"bench_exploration_{args.mission}.md"
-    outputs = (args.out, markdown.parent, args.figure.parent) + \
-        ((args.json.parent,) if args.json is not None else ())
-    for folder in outputs:  # before any dive
-        folder.mkdir(parents=True, exist_ok=True)
+    outputs = (("--out", args.out), ("--markdown", markdown.parent),
+               ("--figure", args.figure.parent)) + \
+        ((("--json", args.json.parent),) if args.json is not None else ())
+    try:  # before any dive
+        for option, folder in outputs:
+            output_folder(folder, option, 0)
+    except ValueError as err:
+        parser.error(str(err))
     plan_mission = PLAN_MISSION[args.mission]
     plan_mode = f"plan + survey ({plan_mission})"
     modes = [(s, args.mission, (strategy_override(args.mission, s),), f"{args.mission}-{s}")

@@ -26,6 +26,7 @@ import numpy as np
 from tqdm import tqdm
 
 from drake_auv.campaign.grid import parse_seeds
+from drake_auv.commands.outputs import output_folder
 from drake_auv.mission.config import load_mission, mission_to_dict
 from drake_auv.mission.report import _rounded, summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
@@ -159,11 +160,17 @@ def main(argv=None):
     parser.add_argument("--out", type=FilePath, default=FilePath("out/exploration"))
     parser.add_argument("--figure", type=FilePath, default=FilePath("docs/explore_vs_plan.png"))
     args = parser.parse_args(argv)
-    seeds = parse_seeds(args.seeds)
+    try:
+        seeds = parse_seeds(args.seeds)
+    except ValueError as err:
+        parser.error(str(err))
     if args.jobs < 1:
-        raise ValueError(f"--jobs must be >= 1, got {args.jobs}")
-    for folder in (args.out, args.figure.parent):  # before any dive
-        folder.mkdir(parents=True, exist_ok=True)
+        parser.error(f"--jobs must be >= 1, got {args.jobs}")
+    try:  # before any dive
+        output_folder(args.out, "--out", 0)
+        output_folder(args.figure.parent, "--figure", 0)
+    except ValueError as err:
+        parser.error(str(err))
     modes = (("explore", "boulder_explore", (strategy_override("boulder_explore", "gain"),),
               "boulder_explore-gain"), ("plan + survey", "boulder", (), "boulder"))
     tasks = [(mission, seed, extra, args.out / folder / f"seed{seed}", args.reuse)

@@ -20,7 +20,6 @@ import numpy as np
 
 from drake_auv.exploration.frontiers import OCCUPIED, UNKNOWN, LabelGrid
 from drake_auv.sonar.beams import MOUNT_ROTATIONS, fan_angles
-from drake_auv.vehicle.control import rotation_world_body
 
 STRATEGIES = ("gain", "nearest", "random")
 
@@ -42,10 +41,11 @@ def fan_rays(mount: str, yaws, fan_deg: float = 120.0, beams: int = 13,
     body = MOUNT_ROTATIONS[mount] @ np.stack([np.cos(angles), np.sin(angles),
                                               np.zeros_like(angles)])  # (3, beams)
     offsets = np.radians(np.linspace(-sweep_deg, sweep_deg, sweeps)) if sweeps > 1 else [0.0]
-    yaw = np.asarray(yaws, dtype=float)[:, None] + np.asarray(offsets)[None, :]
-    rot = np.stack([rotation_world_body(0.0, 0.0, a) for a in yaw.ravel()])  # (c*s, 3, 3)
-    rays = np.einsum("nij,jb->nbi", rot, body)  # (c*s, beams, 3)
-    return rays.reshape(len(yaw), -1, 3)
+    yaw = (np.asarray(yaws, dtype=float)[:, None] + np.asarray(offsets)[None, :]).ravel()
+    c, s = np.cos(yaw)[:, None], np.sin(yaw)[:, None]  # level vehicle: R_WB = Rz(yaw)
+    rays = np.stack([c * body[0] - s * body[1], s * body[0] + c * body[1],
+                     np.broadcast_to(body[2], c.shape[:1] + body[2].shape)], axis=-1)
+    return rays.reshape(len(np.atleast_1d(yaws)), -1, 3)  # (c, s * beams, 3)
 
 
 def view_gains(grid: LabelGrid, positions, rays, max_range: float,
