@@ -67,7 +67,7 @@ def _systems():
                                              scene=Scene(live=True))
     found: dict[str, tuple[list[str], object]] = {}
     for name, system in [*((s.get_name(), s) for s in diagram.GetSystems()),
-                         ("dvl (fly steps)", DvlAltimeter(handles.caster)),
+                         ("dvl (fly, explore steps)", DvlAltimeter(handles.caster)),
                          ("autopilot (fly steps)", AutopilotPilot({})),
                          ("view_planner (explore steps)", ViewPlanner(
                              {0: ExploreParameters(region=(0.0, 0.0, -2.0, 1.0, 1.0, -1.0))}))]:

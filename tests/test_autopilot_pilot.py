@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 import trimesh
+from pydrake.common.value import AbstractValue
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
@@ -42,6 +43,36 @@ def test_dvl_altitude_on_a_slope_and_without_lock():
     assert 0.85 * len(noisy) < len(finite) < len(noisy)
     assert abs(np.median(finite) - exact) < 0.05 and finite.std() > 0.01
     assert np.isnan(measure_altitude(caster, DvlParams(max_range=5.0), state(x=10.0)))
+
+
+def test_dvl_returns_map_the_seabed_under_the_vehicle():
+    """The DVL's four beams, as returns at the estimated pose, put the seabed under the
+    vehicle into the octree (what the side-looking sonars graze)."""
+    from drake_auv.mapping.mapper import OctreeMapper
+
+    caster = RayCaster(slope_world(slope=0.0, depth=-30.0))
+    dvl = DvlAltimeter(caster, noise=False)
+    context = dvl.CreateDefaultContext()
+    true, estimated = state(z=-10.0), state(x=1.0, z=-10.0)  # navigation 1 m off in x
+    dvl.true_state_input.FixValue(context, true)
+    dvl.estimated_state_input.FixValue(context, estimated)
+    assert len(dvl.returns_output.Eval(context)) == 0  # nothing measured yet
+    simulator = Simulator(dvl, context)
+    simulator.AdvanceTo(0.1)
+    returns = dvl.returns_output.Eval(context)
+    assert returns.sequence == 1 and len(returns) == 4
+    np.testing.assert_allclose(returns.origin_nav, [1.0, 0.0, -10.0])
+    np.testing.assert_allclose(returns.ranges, 20.0 / np.cos(np.radians(30.0)))
+    np.testing.assert_allclose(returns.points_nav[:, 2], -30.0, atol=1e-9)
+    np.testing.assert_allclose(np.abs(returns.points_nav[:, :2] - [1.0, 0.0]),
+                               20.0 * np.tan(np.radians(30.0)) * np.sqrt(0.5), atol=1e-9)
+    mapper = OctreeMapper(resolution=0.5)
+    mapper_context = mapper.CreateDefaultContext()
+    mapper.dvl_input.FixValue(mapper_context, AbstractValue.Make(returns))
+    Simulator(mapper, mapper_context).AdvanceTo(0.15)
+    assert mapper.scan_log(mapper_context).count == 1  # recorded once
+    occupied = mapper.map_output.Eval(mapper_context).map.occupied_points()
+    assert len(occupied) == 4 and np.all(np.abs(occupied[:, 2] + 30.0) <= 0.5)
 
 
 def test_cola2_holds_the_final_target_from_the_section_start():

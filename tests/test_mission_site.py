@@ -104,10 +104,26 @@ def test_user_site_in_utm(tmp_path):
     check_against_site(spec, site)
 
 
+def test_a_step_that_needs_the_missing_prior_is_one_line(tmp_path):
+    """A site given by its world mesh alone has no prior map: the plan step is refused at
+    load, naming the step; explore steps run without one."""
+    path = write_utm_site(tmp_path)
+    with pytest.raises(MissionFileError) as err:
+        _mission(path, target=None, prior=None, crs=CRS)
+    assert str(err.value).startswith("mission.yaml: steps[0].plan: needs a prior map and "
+                                     "the site has none (site.prior is missing)")
+    raw = yaml.safe_load(path.read_text())
+    raw["steps"] = [{"explore": dict(region=[-10.0, -10.0, -19.0, 10.0, 10.0, -11.0])}]
+    path.write_text(yaml.safe_dump(raw))
+    assert load_mission(path).site.prior is None
+    with pytest.raises(MissionFileError, match="site.prior_from_world: only for a world"):
+        _mission(path, prior="prior.tif", prior_from_world=True)
+
+
 def test_user_site_without_target_or_prior(tmp_path):
     path = write_utm_site(tmp_path)
-    spec = _mission(path, target=None, prior=None, prior_error_m=0.0, prior_spacing_m=2.0,
-                    crs=CRS, start=[499990.0, 4600000.0, -10.0, 90.0])
+    spec = _mission(path, target=None, prior=None, prior_from_world=True, prior_error_m=0.0,
+                    prior_spacing_m=2.0, crs=CRS, start=[499990.0, 4600000.0, -10.0, 90.0])
     site = load_site(spec.site, seed=0)
     assert site.target_faces.all() and site.crs == CRS
     assert site.prior.spacing == (2.0, 2.0)

@@ -197,3 +197,16 @@ def test_cached_labels_match_reading_every_voxel_through_moving_scans_and_cleari
         omap, np.full(3, -np.inf), np.full(3, np.inf))))
     # Many of the first block's voxels were cleared once it moved (the rest are occluded).
     assert before > 100 and np.sum(everything[:, 0] < 0.5) < 0.75 * before
+
+
+def test_returns_on_a_voxel_face_are_occupied_where_octomap_keys_them():
+    """OctoMap keys points in single precision: ends on a flat seabed at z = -30 m (a voxel
+    face) computed a hair below it must still be found among the occupied voxels."""
+    m = OctreeMap(0.5)
+    a, c = np.sqrt(0.125), np.sqrt(0.75)
+    directions = np.array([[a, a, -c], [-a, a, -c], [-a, -a, -c], [a, -a, -c]])
+    ends = np.array([1.0, 0.0, -10.0]) + directions * 23.094011
+    assert np.any(ends[:, 2] < -30.0)  # in double precision, just below the face
+    m.insert_scan([1.0, 0.0, -10.0], directions, np.full(4, 23.094011), 80.0)
+    occupied = m.occupied_points()
+    assert len(occupied) == 4 and np.all(m.labels(occupied) == 1)

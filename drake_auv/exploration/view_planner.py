@@ -14,7 +14,13 @@ target, trajectory, the planning grid and the map version it reflects), the `pro
 (`signals.ExplorerProgress`) and the `last_step` group (`ExplorerStep`, the `step` output, for
 a log).
 
-Ports: inputs `estimated_state` (`VehicleState`), `map` (`OnlineMap`), `leg` (`LegSignal`);
+The seabed guard: with the DVL's `seabed_elevation` connected, the reference never goes below
+the measured seabed (or flat top) under the vehicle plus `GUARD` clearances, between two
+planning steps as well: a flat top seen only at grazing incidence is free water in the octree
+until the DVL's beams map it (boulder seed 2 descended onto the top to 0.19 m without it).
+
+Ports: inputs `estimated_state` (`VehicleState`), `map` (`OnlineMap`), `leg` (`LegSignal`),
+`seabed_elevation` (1, m, navigation frame, NaN without bottom lock; may be unconnected);
 outputs `reference` (`Reference`), `status` (`ExplorerStatus`, -1 before any leg) and `step`
 (`ExplorerStep`).
 """
@@ -39,6 +45,7 @@ from drake_auv.signals import (ExplorerProgress, ExplorerStatus, ExplorerStep, R
 from drake_auv.vehicle.path_reference import trajectory_reference
 
 YAW_RATE = np.radians(15.0)  # rad/s, the largest commanded yaw rate
+GUARD = 0.75  # clearances the reference keeps above the DVL's seabed
 
 
 @dataclass(frozen=True)
@@ -77,6 +84,7 @@ class ViewPlanner(LeafSystem):
         self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
+        self.seabed_input = self.DeclareVectorInputPort("seabed_elevation", 1)
         self._view_index = self.DeclareAbstractState(AbstractValue.Make(_View()))
         progress = ExplorerProgress.zeros()
         progress.leg = -1.0
@@ -88,7 +96,9 @@ class ViewPlanner(LeafSystem):
             "reference", Reference.size(), self._calc_reference,
             prerequisites_of_calc={self.abstract_state_ticket(self._view_index),
                                    self.time_ticket(),
-                                   self.input_port_ticket(self.state_input.get_index())})
+                                   self.input_port_ticket(self.state_input.get_index()),
+                                   self.input_port_ticket(self.leg_input.get_index()),
+                                   self.input_port_ticket(self.seabed_input.get_index())})
         self.status_output = self.DeclareVectorOutputPort(
             "status", ExplorerStatus.size(), self._calc_status,
             prerequisites_of_calc={self.discrete_state_ticket(self._progress)})
@@ -174,9 +184,16 @@ class ViewPlanner(LeafSystem):
         return trajectory
 
     def _calc_reference(self, context, output):
-        output.SetFromVector(trajectory_reference(self.view(context).trajectory,
-                                                  context.get_time(), self.state_input,
-                                                  context))
+        reference = Reference(trajectory_reference(self.view(context).trajectory,
+                                                   context.get_time(), self.state_input,
+                                                   context))
+        leg, _ = read_leg(self.leg_input, context)
+        if leg in self.legs and self.seabed_input.HasValue(context):
+            floor = (self.seabed_input.Eval(context)[0]
+                     + GUARD * self.legs[leg].clearance)
+            if np.isfinite(floor) and reference.z < floor:  # the seabed guard
+                reference.z, reference.vz = floor, max(reference.vz, 0.0)
+        output.SetFromVector(reference[:])
 
     def _calc_status(self, context, output):
         progress, status = self.progress(context), ExplorerStatus.zeros()

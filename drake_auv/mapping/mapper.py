@@ -1,4 +1,4 @@
-"""`OctreeMapper`: the on-line octree map, built from the multibeam and profiler returns.
+"""`OctreeMapper`: the on-line octree map, built from the multibeam, profiler and DVL returns.
 
 All of it lives in the Context. The state is the log of the returns received so far (a
 `ScanLog`, immutable and persistent, so Drake's state copies are free and each Context's
@@ -11,8 +11,8 @@ not its future (a state set by hand). Copying a Context rebuilds its octree from
 (`OnlineMap.__deepcopy__`, reading the log back from its file). So two Contexts of one
 diagram never share a map. A step's cost is the batches since the last one, never the log.
 
-Ports: inputs `multibeam_returns`, `profiler_returns` (`SonarReturns`; either may be left
-unconnected); outputs `map` (`OnlineMap`) and `scan_log` (`ScanLog`, the recorded returns).
+Ports: inputs `multibeam_returns`, `profiler_returns`, `dvl_returns` (`SonarReturns`; any
+may be left unconnected: the DVL's four beams map what lies under the vehicle); outputs `map` (`OnlineMap`) and `scan_log` (`ScanLog`, the recorded returns).
 """
 
 from __future__ import annotations
@@ -90,9 +90,10 @@ class OctreeMapper(LeafSystem):
         model = AbstractValue.Make(SonarReturns.empty(20.0))
         self.multibeam_input = self.DeclareAbstractInputPort("multibeam_returns", model)
         self.profiler_input = self.DeclareAbstractInputPort("profiler_returns", model.Clone())
+        self.dvl_input = self.DeclareAbstractInputPort("dvl_returns", model.Clone())
         self._log_index = self.DeclareAbstractState(AbstractValue.Make(ScanLog()))
         # The `sequence` of the last batch recorded from each sonar.
-        self._sequences = self.DeclareDiscreteState(np.array([-1.0, -1.0]))
+        self._sequences = self.DeclareDiscreteState(np.array([-1.0, -1.0, -1.0]))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_log)
         self.map_output = self.DeclareAbstractOutputPort(
             "map", lambda: AbstractValue.Make(OnlineMap(self.resolution)), self._calc_map,
@@ -104,7 +105,7 @@ class OctreeMapper(LeafSystem):
         sequences = context.get_discrete_state(self._sequences).get_value().copy()
         for k, (port, source, stride) in enumerate((
                 (self.multibeam_input, "multibeam", self.multibeam_stride),
-                (self.profiler_input, "profiler", 1))):
+                (self.profiler_input, "profiler", 1), (self.dvl_input, "dvl", 1))):
             if not port.HasValue(context):
                 continue
             returns = port.Eval(context)

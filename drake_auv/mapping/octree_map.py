@@ -132,7 +132,10 @@ class OctreeMap:
         endpoints = origin + directions * length[:, None]
         self.tree.insertPointCloud(endpoints, origin, maxrange=float(max_range), lazy_eval=True)
         if np.any(hit):
-            idx = np.floor(endpoints[hit] / self.resolution)
+            # OctoMap keys single-precision points (floor(float(p) / resolution)): keyed in
+            # float64, an end on a voxel face (a flat seabed at z = -30 m) lands one voxel off.
+            idx = np.floor(endpoints[hit].astype(np.float32).astype(float)
+                           * (1.0 / self.resolution))
             new = set(_encode(idx).tolist()) - self._candidates
             if new:
                 self._candidates.update(new)

@@ -29,7 +29,7 @@ from typing import Iterator
 
 import numpy as np
 
-SOURCES = ("multibeam", "profiler")
+SOURCES = ("multibeam", "profiler", "dvl")
 CACHE_BATCHES = 64  # the newest batches a store also keeps in memory
 # A record: this header, then the directions (n, 3) and ranges (n,) as little-endian float32.
 _HEADER = np.dtype([("time", "<f8"), ("source", "<i8"), ("origin", "<f8", (3,)),

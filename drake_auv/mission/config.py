@@ -155,6 +155,18 @@ class _Reader:
                           "a survey after a plan step")
         return tuple(steps)
 
+    def prior_needed(self, site: SiteSpec, steps: tuple) -> None:
+        """A site given by its world file alone has no prior map: the steps that plan or
+        place themselves on one (plan, follow, fly) are refused, explore steps need none."""
+        if site.world is None or site.prior is not None or site.prior_from_world:
+            return
+        for i, step in enumerate(steps):
+            if step.KIND in NEEDS_PRIOR:
+                self.fail(f"steps[{i}].{step.KIND}", "needs a prior map and the site has "
+                          "none (site.prior is missing)", "site.prior: <raster>, site."
+                          "prior_from_world: true (sampled from the world mesh), or explore "
+                          "steps only")
+
     def mission(self, raw, source) -> MissionSpec:
         raw = self.mapping(raw, "", TOP_KEYS)
         for key in ("site", "steps"):
@@ -170,10 +182,11 @@ class _Reader:
             if what is not None:
                 self.fail(key, f"{value!r} {what}", check.allowed())
         sections = {key: self.section(cls, raw.get(key), key) for key, cls in SECTIONS.items()}
+        steps = self.steps(raw["steps"])
+        self.prior_needed(sections["site"], steps)
         return MissionSpec(**top, **sections,
                            sonar_noise=self.sonar_noise(raw.get("sonar_noise")),
-                           faults=self.faults(raw.get("faults")),
-                           steps=self.steps(raw["steps"]), source=source)
+                           faults=self.faults(raw.get("faults")), steps=steps, source=source)
 
 
 def _has_default(cls, path) -> bool:
@@ -207,6 +220,9 @@ def _site_rule(reader: _Reader, v, where: str):
             if getattr(v, key) is not None:
                 reader.fail(f"{where}.{key}", "only for a site given by its world file",
                             "null with a scenario or a tile")
+    if v.prior_from_world and (v.world is None or v.prior is not None):
+        reader.fail(f"{where}.prior_from_world", "only for a world file without a prior "
+                    "raster", "false, or true with world and no prior")
 
 
 def _plan_rule(reader: _Reader, v, where: str):
@@ -260,6 +276,8 @@ def _explore_rule(reader: _Reader, v, where: str):
                     f"{v.clearance_m:g} m (a viewpoint at omega would break the clearance)",
                     f"omega > clearance_m ({v.clearance_m:g} m)")
 
+
+NEEDS_PRIOR = ("plan", "follow", "fly")  # step kinds that read the prior map
 
 RULES = {SiteSpec: _site_rule, PlanStep: _plan_rule, FollowStep: _follow_rule,
          FlyStep: _fly_rule, ExploreStep: _explore_rule}

@@ -78,8 +78,8 @@ class MissionHandles:
     logs: dict  # name -> VectorLogSink: state, estimated_state, reference, leg, response,
     # profile, replanning
     faults: dict  # fault name -> the system injecting it (only the mission's faults)
-    autopilot: AutopilotPilot | None = None  # with a fly step: the pilot and its DVL
-    dvl: DvlAltimeter | None = None
+    autopilot: AutopilotPilot | None = None  # with a fly step: the pilot
+    dvl: DvlAltimeter | None = None  # with a fly or an explore step
     explorer: ViewPlanner | None = None  # with an explore step: the view planner
 
 
@@ -136,15 +136,18 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
 
 def add_autopilot(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
                   spec: MissionSpec, plan: MissionPlan, estimated):
-    """The DVL (ray casting on the true world, realistic unless the sonars are clean) and the
-    autopilot pilot that flies the fly steps' exported files on the DVL's seabed; returns
-    (pilot, dvl), (None, None) without a fly step."""
-    if not plan.autopilot_legs:
+    """The DVL (ray casting on the true world, realistic unless the sonars are clean), with a
+    fly step (the autopilot flies the exported files on the DVL's seabed) or an explore step
+    (its beams map the seabed and flat tops under the vehicle, where no sonar sees), and the
+    autopilot pilot of the fly steps; returns (pilot, dvl), None for what no step needs."""
+    if not (plan.autopilot_legs or plan.explore_legs):
         return None, None
     dvl = builder.AddNamedSystem("dvl", DvlAltimeter(
         caster, noise=spec.sonar_noise.to_noise() is not None, seed=spec.seed + 2))
     builder.Connect(vehicle.dynamics.state_output, dvl.true_state_input)
     builder.Connect(estimated, dvl.estimated_state_input)
+    if not plan.autopilot_legs:
+        return None, dvl
     pilot = builder.AddNamedSystem("autopilot", AutopilotPilot(plan.autopilot_legs))
     builder.Connect(dvl.seabed_output, pilot.seabed_input)
     return pilot, dvl
@@ -152,10 +155,11 @@ def add_autopilot(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSy
 
 def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, mapper,
                    spec: MissionSpec, plan: MissionPlan, site: Site, estimated, returns,
-                   pilot: AutopilotPilot | None = None, replanner=None):
+                   pilot: AutopilotPilot | None = None, replanner=None, dvl=None):
     """The nominal plan's source, the behaviours (with `pilot`, the autopilot flying exported
     files), the reference switch and the supervisor (watching the sonars' `returns`, the
-    reference and the map), wired. `replanner`: a LeafSystem of your own (not yet added) to
+    reference and the map), wired; `dvl`: the DVL whose seabed guards the view planner.
+    `replanner`: a LeafSystem of your own (not yet added) to
     fly the replanning legs instead of the built-in `Replanner`, with its ports: inputs
     `estimated_state` (12), `leg` (2) and, if it declares them, `map` and `nominal`; outputs
     `reference` (8) and `status` (3: `[leg, finished, next_index]`, finished > 0 ends the
@@ -206,6 +210,8 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
             plan.explore_legs, period=EXPLORE_PERIOD, seed=spec.seed))
         builder.Connect(mapper.map_output, explorer.map_input)
         builder.Connect(explorer.status_output, supervisor.explorer_status_input)
+        if dvl is not None:
+            builder.Connect(dvl.seabed_output, explorer.seabed_input)
         behaviours["explore"] = explorer
     for name, system in behaviours.items():
         builder.Connect(estimated, system.GetInputPort("estimated_state"))
@@ -272,8 +278,11 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     builder.Connect(returns["multibeam"], mapper.multibeam_input)
     builder.Connect(returns["profiler"], mapper.profiler_input)
     pilot, dvl = add_autopilot(builder, caster, vehicle, spec, plan, estimated)
+    if dvl is not None:
+        builder.Connect(dvl.returns_output, mapper.dvl_input)
     path_reference, controller, replanner, supervisor, switch = add_behaviours(
-        builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns, pilot)
+        builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns, pilot,
+        dvl=dvl)
     explorer = (builder.GetMutableSubsystemByName("view_planner") if plan.explore_legs
                 else None)
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,

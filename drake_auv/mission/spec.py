@@ -83,7 +83,10 @@ class SiteSpec:
         world: true world mesh (PLY/OBJ/STL/GLB), seabed and structure, m, z up, sea surface
             z = 0, in the site's horizontal coordinates (those of the prior raster's CRS).
         target: mesh of the structure whose coverage is scored (None: the whole world).
-        prior: prior bathymetry raster the planner sees (None: sampled from the world).
+        prior: prior bathymetry raster the planner sees (None: the site has no prior map; the
+            plan, follow and fly steps need one, explore steps do not).
+        prior_from_world: with no `prior` raster, sample one from the world mesh as a survey
+            from above sees it (overhangs hidden), for a site given as a mesh alone.
         prior_error_m: horizontal shift of the prior, m, in a direction drawn from the seed.
         prior_spacing_m: cell of the prior when sampled from the world, m (None: the
             scenario's, or 1.0 m).
@@ -101,6 +104,7 @@ class SiteSpec:
     world: Path | None = param(None, kind="path", nullable=True, note=_FILE)
     target: Path | None = param(None, kind="path", nullable=True, note=_FILE)
     prior: Path | None = param(None, kind="path", nullable=True, note=_FILE)
+    prior_from_world: bool = param(False, kind="bool")
     prior_error_m: float = param(0.0, low=0.0, high=5.0, unit="m")
     prior_spacing_m: float | None = param(None, low=0.0, high=100.0, low_open=True, unit="m",
                                           nullable=True)

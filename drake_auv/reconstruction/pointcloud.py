@@ -35,7 +35,7 @@ class PointCloud:
     Attributes:
         points: (n, 3) return positions, m. origins: (n, 3) sensor origin of each return, m
             (NaN rows when unknown, e.g. a PLY of another tool). times: (n,) s (NaN unknown).
-        sources: (n,) uint8 index into `SOURCES` (0 multibeam, 1 profiler).
+        sources: (n,) uint8 index into `SOURCES` (0 multibeam, 1 profiler, 2 dvl).
     """
 
     points: np.ndarray

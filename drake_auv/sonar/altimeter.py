@@ -12,9 +12,15 @@ Without bottom lock the altitude is NaN. Update n draws from `default_rng([seed,
 This is what an autopilot holding altitude reads (COLA2 altitude mode, ArduSub's frame 10 via
 its downward rangefinder); the true world reaches the mission only through this ray casting.
 
-Ports: inputs `true_state` (12); outputs `altitude` (1, m, NaN without bottom lock) and
-`seabed_elevation` (1: the measured seabed under the vehicle, `z_est - altitude`, with the
-`estimated_state` input (12): the elevation in the navigation frame, NaN without lock).
+The four beams' ranges are also returns (`returns`, a `SonarReturns` placed with the
+estimated state, as the multibeam's are): the octree mapper inserts them, so the seabed or a
+structure's flat top under the vehicle is mapped where neither the side-looking multibeam nor
+the horizontal profiler sees it (a beam grazing a flat top returns nothing to them).
+
+Ports: inputs `true_state` (12), `estimated_state` (12); outputs `altitude` (1, m, NaN
+without bottom lock), `seabed_elevation` (1: the measured seabed under the vehicle,
+`z_est - altitude`: the elevation in the navigation frame, NaN without lock) and `returns`
+(`SonarReturns` of the four beams, navigation frame).
 """
 
 from __future__ import annotations
@@ -23,11 +29,13 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
+from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.params import param, validate
 from drake_auv.signals import VehicleState
+from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.vehicle.model import STATE_SIZE
 
@@ -66,21 +74,38 @@ class DvlParams:
                                 np.full(4, -np.cos(b))])
 
 
-def measure_altitude(caster: RayCaster, params: DvlParams, state: np.ndarray,
-                     rng: np.random.Generator | None = None) -> float:
-    """The DVL's altitude at the true `state` (12), m; NaN without bottom lock. `rng` None:
-    no noise."""
+def beam_directions(params: DvlParams, state) -> np.ndarray:
+    """(4, 3) unit beam directions in the world (or navigation) frame at `state` (12)."""
     state = VehicleState(np.asarray(state, dtype=float))
-    rot = rotation_world_body(state.roll, state.pitch, state.yaw)
-    directions = params.beams_body @ rot.T
-    ranges, _ = caster.cast_unit(state.position, directions, params.max_range)
+    return params.beams_body @ rotation_world_body(state.roll, state.pitch, state.yaw).T
+
+
+def measure_ranges(caster: RayCaster, params: DvlParams, state: np.ndarray,
+                   rng: np.random.Generator | None = None) -> np.ndarray:
+    """(4,) the beams' slant ranges at the true `state` (12), m, NaN where a beam is lost or
+    finds nothing within range. `rng` None: no noise."""
+    ranges, _ = caster.cast_unit(VehicleState(np.asarray(state, dtype=float)).position,
+                                 beam_directions(params, state), params.max_range)
     if rng is not None:
         sigma = params.range_sigma_fraction * np.nan_to_num(ranges) + params.range_sigma_m
         ranges = ranges + sigma * rng.standard_normal(4)
         ranges[rng.random(4) < params.dropout_prob] = np.nan
-    vertical = ranges * -directions[:, 2]
+    return ranges
+
+
+def altitude_of(params: DvlParams, state, ranges) -> float:
+    """The altitude the DVL reports from its beams' `ranges` (4,) at `state` (12), m: the
+    mean vertical range of the valid beams, NaN without bottom lock."""
+    vertical = np.asarray(ranges, float) * -beam_directions(params, state)[:, 2]
     valid = np.isfinite(vertical) & (vertical > 0)
     return float(vertical[valid].mean()) if valid.sum() >= params.min_beams else float("nan")
+
+
+def measure_altitude(caster: RayCaster, params: DvlParams, state: np.ndarray,
+                     rng: np.random.Generator | None = None) -> float:
+    """The DVL's altitude at the true `state` (12), m; NaN without bottom lock. `rng` None:
+    no noise."""
+    return altitude_of(params, state, measure_ranges(caster, params, state, rng))
 
 
 class DvlAltimeter(LeafSystem):
@@ -99,7 +124,9 @@ class DvlAltimeter(LeafSystem):
         self.noise, self.seed = bool(noise), int(seed)
         self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
         self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
-        self._measurement = self.DeclareDiscreteState(np.array([np.nan, 0.0]))  # altitude, n
+        # altitude, n (measurements so far), time of the last, its four slant ranges
+        self._measurement = self.DeclareDiscreteState(np.array([np.nan, 0.0, 0.0]
+                                                               + [np.nan] * 4))
         self.DeclarePeriodicDiscreteUpdateEvent(1.0 / self.params.rate, 0.0,
                                                 self._update_measurement)
         self.altitude_output = self.DeclareVectorOutputPort(
@@ -110,13 +137,20 @@ class DvlAltimeter(LeafSystem):
             prerequisites_of_calc={self.discrete_state_ticket(self._measurement),
                                    self.input_port_ticket(
                                        self.estimated_state_input.get_index())})
+        self.returns_output = self.DeclareAbstractOutputPort(
+            "returns", lambda: AbstractValue.Make(SonarReturns.empty(self.params.max_range)),
+            self._calc_returns,
+            prerequisites_of_calc={self.discrete_state_ticket(self._measurement),
+                                   self.input_port_ticket(
+                                       self.estimated_state_input.get_index())})
 
     def _update_measurement(self, context, discrete_state):
         n = int(context.get_discrete_state(self._measurement)[1])
         rng = np.random.default_rng([self.seed, n]) if self.noise else None
-        altitude = measure_altitude(self.caster, self.params,
-                                    self.true_state_input.Eval(context), rng)
-        discrete_state.set_value(self._measurement, [altitude, n + 1])
+        true = self.true_state_input.Eval(context)
+        ranges = measure_ranges(self.caster, self.params, true, rng)
+        discrete_state.set_value(self._measurement, [altitude_of(self.params, true, ranges),
+                                                     n + 1, context.get_time(), *ranges])
 
     def _calc_altitude(self, context, output: BasicVector):
         output.SetAtIndex(0, context.get_discrete_state(self._measurement)[0])
@@ -124,3 +158,19 @@ class DvlAltimeter(LeafSystem):
     def _calc_seabed_elevation(self, context, output: BasicVector):
         altitude = context.get_discrete_state(self._measurement)[0]
         output.SetAtIndex(0, self.estimated_state_input.Eval(context)[2] - altitude)
+
+    def _calc_returns(self, context, output):
+        """The last measurement's beams at the estimated pose (empty before the first)."""
+        measurement = context.get_discrete_state(self._measurement).get_value()
+        n = int(measurement[1])
+        if n == 0:
+            output.set_value(SonarReturns.empty(self.params.max_range))
+            return
+        estimated = self.estimated_state_input.Eval(context)
+        origin = VehicleState(estimated).position
+        directions = beam_directions(self.params, estimated)
+        ranges = measurement[3:7]
+        points = origin + directions * ranges[:, None]
+        output.set_value(SonarReturns(float(measurement[2]), origin, np.zeros(4), ranges,
+                                      directions, points, self.params.beams_body
+                                      * ranges[:, None], self.params.max_range, n))
