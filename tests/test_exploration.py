@@ -8,7 +8,7 @@ import pytest
 
 from drake_auv.exploration.frontiers import (FREE, OCCUPIED, UNKNOWN, LabelGrid,
                                              candidate_viewpoints, cluster_frontiers,
-                                             frontier_cells, scan_rays)
+                                             frontier_cells, multibeam_returns, scan_rays)
 from drake_auv.exploration.gains import fan_rays, scores, view_gains
 from drake_auv.exploration.paths import PathCost, TravelField, plan_path
 from drake_auv.exploration.planner import ExploreParameters, plan_view
@@ -49,13 +49,45 @@ def test_surface_frontier_is_the_edge_of_the_seen_wall():
     assert d[0] > 0.8 and d[1] > 0.1 and abs(d[2]) < 1e-9
 
 
+def test_rock_no_multibeam_return_landed_in_is_a_surface_frontier():
+    """The wall's middle, mapped but seen only by the profiler or the DVL (no multibeam return
+    in its cells), is still to be looked at: a surface frontier, and with it the gain."""
+    grid = wall_grid()
+    seen = grid.labels == OCCUPIED
+    seen[5, 4:6, 4:6] = False  # four cells of the middle no multibeam return landed in
+    unseen = LabelGrid(grid.origin, grid.cell, grid.labels, grid.region, seen)
+    before = cells_of(grid, frontier_cells(grid).centres[frontier_cells(grid).kinds == 0])
+    after = cells_of(unseen, frontier_cells(unseen).centres[frontier_cells(unseen).kinds == 0])
+    assert after - before == {(5, j, k) for j in (4, 5) for k in (4, 5)}
+    # the multibeam returns of a scan mark their cells seen on the next grid
+    m = OctreeMap(0.5)
+    batches = scanned_wall(m, np.arange(-3.0, 3.0, 0.25))
+    region = (-2.0, -6.0, -20.0, 2.0, 6.0, -10.0)
+    first = LabelGrid.from_map(m, region, 8.0, 1.0)
+    assert first.seen is None  # no history: what is occupied counts as seen
+    returns = multibeam_returns(batches)
+    grid = LabelGrid.from_map(m, region, 8.0, 1.0, previous=first, rays=scan_rays([], 1.0),
+                              returns=returns)
+    cells, inside = grid.index(returns)
+    assert grid.seen[tuple(cells[inside].T)].all() and inside.any()
+    profiler = [ScanBatch.make(0.0, "profiler", b.origin, b.directions, b.ranges, 20.0)
+                for b in batches]
+    assert len(multibeam_returns(profiler)) == 0
+
+
 def test_viewpoints_sit_omega_back_in_free_water():
     grid = wall_grid()
     clusters = cluster_frontiers(frontier_cells(grid), 4.0)
     cands = candidate_viewpoints(grid, clusters, omega=4.0, clearance=2.0,
                                  unknown_clearance=1.0)
     assert len(cands.positions) > 0
-    assert np.allclose(np.linalg.norm(cands.targets - cands.positions, axis=1), 4.0)
+    back = cands.targets - cands.positions
+    # omega back along the view, or that view's horizontal offset at the nearest admissible
+    # height (the floor's clearance, z = -1 m)
+    moved = (np.isclose(cands.positions[:, 2], grid.region[2] + 2.0)
+             | np.isclose(cands.positions[:, 2], -1.0))
+    assert np.allclose(np.linalg.norm(back[~moved], axis=1), 4.0) and (~moved).sum() > 0
+    assert np.all(np.linalg.norm(back[moved, :2], axis=1) <= 4.0 + 1e-9)
     idx, inside = grid.index(cands.positions)
     assert inside.all() and np.all(grid.labels[tuple(idx.T)] == FREE)
     # none within the clearance of the wall, none outside the region widened by omega

@@ -6,10 +6,17 @@ widened by a margin, each occupied (any occupied voxel inside it, from the map's
 occupied voxels), free or unknown (the octree's label at the cell centre). Everything after
 that is array work on the grid, so a step costs what the region holds, never the dive's length.
 
+Occupied is not yet seen. The profiler's horizontal sweep and the DVL's four beams map rock
+that the multibeam, the sensor whose coverage counts, has not looked at (in boulder seed 1 the
+planner believed 99 % covered with 16 % of the boulder unseen: its west side, mapped by the
+profiler on the approach, and its top, mapped by the DVL). The grid keeps `seen`, the cells
+holding a multibeam return (from the batches since the last step, `multibeam_returns`).
+
 Two kinds of frontier cells, both inside the region box:
 - surface: occupied cells next to (6-connected) an unknown cell that touches free water, the
   edge of the seen surface (an occupied cell next to the rock's own unseen interior is not a
-  frontier: that unknown touches no free water and no sonar will ever see it);
+  frontier: that unknown touches no free water and no sonar will ever see it), and occupied
+  cells next to free water that no multibeam return has landed in;
 - boundary: free cells next to an unknown cell, the edge of the known water.
 
 Their view direction (from a viewpoint to the frontier, unit): from the free cells of its
@@ -18,7 +25,9 @@ the offsets to those less the sum of the offsets to the free ones: at the edge o
 it points into the wall and a little along it, past the edge.
 Cells are clustered in blocks of `cluster` m per kind; a cluster's candidate viewpoints sit
 `omega` m back from its centroid along the view direction (and that direction turned by
-+-`TURN` about z, and tilted `TURN` down, so the viewpoint is higher), kept if at least
++-`TURN` about z, tilted `TURN` down, so the viewpoint is higher, and made level), moved to
+the nearest admissible height when below the floor's clearance or above z = -1 m (the base
+of a boulder, seen from no lower than the clearance over the floor), kept if at least
 `clearance` m from every occupied cell and `unknown_clearance` m from every unknown one (a
 port-looking fan carves known water in thin sheets: a full clearance from unknown water
 leaves hardly any viewpoint; the path search prices unknown water, `paths`), inside
@@ -34,6 +43,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
+
+from drake_auv.mapping.scan_log import SOURCES
 
 UNKNOWN, FREE, OCCUPIED = -1, 0, 1
 KINDS = ("surface", "boundary")
@@ -63,29 +74,43 @@ class LabelGrid:
         origin: (3,) corner of cell (0, 0, 0), m. cell: edge, m.
         labels: (nx, ny, nz) int8 of UNKNOWN, FREE, OCCUPIED.
         region: (6,) the region box the frontiers are sought in.
+        seen: (nx, ny, nz) bool, cells holding a multibeam return (None: every occupied
+            cell, for grids built by hand).
     """
 
     origin: np.ndarray
     cell: float
     labels: np.ndarray
     region: np.ndarray
+    seen: np.ndarray | None = None
 
     @classmethod
     def from_map(cls, octree_map, region, margin: float, cell: float,
-                 previous: "LabelGrid | None" = None, rays=None) -> "LabelGrid":
+                 previous: "LabelGrid | None" = None, rays=None,
+                 returns=None) -> "LabelGrid":
         """The grid of `octree_map` (an `OctreeMap`) over `region` widened by `margin` m
         (clipped at the sea surface). With the `previous` grid of the same box and the `rays`
         inserted into the map since it (`scan_rays`), only the cells those rays touch (and
-        the previous occupied ones) are read again: no other cell can have changed."""
+        the previous occupied ones) are read again: no other cell can have changed; the cells
+        of the multibeam `returns` (m, 3) since it join the previous grid's `seen` ones
+        (without `returns`, `seen` is None: every occupied cell counts as seen)."""
         region = check_region(region)
         lo = np.floor((region[:3] - margin) / cell) * cell
         hi = region[3:] + margin
         hi[2] = min(hi[2], 0.0)
         shape = np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)
-        grid = cls(lo, float(cell), np.empty(shape, np.int8), region)
-        if (rays is not None and previous is not None and previous.cell == cell
-                and previous.labels.shape == tuple(shape)
-                and np.allclose(previous.origin, lo)):
+        same = (previous is not None and previous.cell == cell
+                and previous.labels.shape == tuple(shape) and np.allclose(previous.origin, lo))
+        seen = None  # without a history of returns, what is occupied counts as seen
+        if returns is not None:
+            seen = np.zeros(shape, bool)
+            if same:
+                seen[:] = (previous.seen if previous.seen is not None
+                           else previous.labels == OCCUPIED)
+            cells, inside = cls(lo, float(cell), seen, region).index(returns)
+            seen[tuple(cells[inside].T)] = True
+        grid = cls(lo, float(cell), np.empty(shape, np.int8), region, seen)
+        if rays is not None and same:
             grid.labels[:] = previous.labels
             flat = np.union1d(grid.touched(*rays),
                               np.flatnonzero(previous.labels == OCCUPIED))
@@ -167,6 +192,13 @@ def scan_rays(batches, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return tuple(np.concatenate(a) for a in zip(*parts))
 
 
+def multibeam_returns(batches) -> np.ndarray:
+    """(m, 3) the return points of the multibeam's beams in `ScanBatch`es, m."""
+    points = [b.points() for b in batches or () if b.source == SOURCES.index("multibeam")]
+    points = np.concatenate(points) if points else np.zeros((0, 3))
+    return points[np.all(np.isfinite(points), axis=1)]
+
+
 def _neighbour_sum(mask: np.ndarray) -> np.ndarray:
     """(nx, ny, nz, 3) sum of the offsets (cells) to the 26 neighbours in `mask`."""
     m = mask.astype(float)
@@ -190,7 +222,10 @@ def frontier_cells(grid: LabelGrid) -> Frontiers:
     unknown, free, occupied = labels == UNKNOWN, labels == FREE, labels == OCCUPIED
     open_unknown = unknown & ndimage.binary_dilation(free, _FACE)
     region = grid.region_mask()
-    surface = occupied & ndimage.binary_dilation(open_unknown, _FACE) & region
+    edge = ndimage.binary_dilation(open_unknown, _FACE)
+    if grid.seen is not None:  # rock only the profiler or the DVL has mapped
+        edge |= ~grid.seen & ndimage.binary_dilation(free, _FACE)
+    surface = occupied & edge & region
     boundary = free & ndimage.binary_dilation(unknown, _FACE, border_value=1) & region
     towards_free = _neighbour_sum(free)
     towards_rock = _neighbour_sum(occupied) - towards_free
@@ -256,6 +291,13 @@ def _turned(d: np.ndarray, angle: float) -> np.ndarray:
     return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], d[:, 2]])
 
 
+def _level(d: np.ndarray) -> np.ndarray:
+    """`d` (n, 3) made horizontal (unit; straight down or up stays as it is)."""
+    h = np.linalg.norm(d[:, :2], axis=1, keepdims=True)
+    return np.where(h > 1e-6, np.column_stack([d[:, :2], np.zeros(len(d))]) / np.maximum(h, 1e-6),
+                    d)
+
+
 def _tilted(d: np.ndarray, angle: float) -> np.ndarray:
     """`d` (n, 3) tilted by `angle` rad towards -z in its vertical plane (unit)."""
     h = np.linalg.norm(d[:, :2], axis=1)
@@ -271,10 +313,14 @@ def candidate_viewpoints(grid: LabelGrid, clusters: Clusters, omega: float,
     +-`TURN` and tilted down by `TURN`), kept where admissible (see the module)."""
     unknown = ndimage.distance_transform_edt(grid.labels != UNKNOWN) * grid.cell
     d = clusters.directions
-    directions = np.concatenate([d, _turned(d, TURN), _turned(d, -TURN), _tilted(d, TURN)])
-    targets = np.tile(clusters.centroids, (4, 1))
-    cluster = np.tile(np.arange(len(clusters.sizes)), 4)
+    directions = np.concatenate([d, _turned(d, TURN), _turned(d, -TURN), _tilted(d, TURN),
+                                 _level(d)])
+    targets = np.tile(clusters.centroids, (5, 1))
+    cluster = np.tile(np.arange(len(clusters.sizes)), 5)
     positions = targets - omega * directions
+    # A view from below the floor (of a base, an undercut) or above MAX_Z is taken from the
+    # nearest admissible height instead; its gain, cast from there, says what it still sees.
+    positions[:, 2] = np.clip(positions[:, 2], grid.region[2] + clearance, MAX_Z - 1e-6)
     idx, inside = grid.index(positions)
     occupied = grid.centres(np.argwhere(grid.labels == OCCUPIED))
     rock = (cKDTree(occupied).query(positions)[0] if len(occupied)

@@ -160,11 +160,12 @@ def approach_point(params: ExploreParameters, position) -> np.ndarray:
 
 def plan_view(octree_map, position, params: ExploreParameters, current: Target | None,
               seed: int = 0, previous: LabelGrid | None = None, rays=None,
-              visited=None, yaw: float = 0.0, current_path=None) -> ViewStep:
+              visited=None, yaw: float = 0.0, current_path=None, returns=None) -> ViewStep:
     """One planning step from the vehicle at `position` (3,) towards `current` (see the
     module); `seed` draws the random strategy and STOMP's rollouts; `previous`: the last
     step's grid (`ViewStep.grid`) and `rays` the beams inserted since (`scan_rays`), so
-    only the cells they touched are read again; `visited` (v, 3): the targets reached
+    only the cells they touched are read again, and `returns` (m, 3) the multibeam's return
+    points since (`frontiers.multibeam_returns`: what it has seen); `visited` (v, 3): the targets reached
     before, m (a candidate within `VISITED_RADIUS` of one is not chosen again: what its view
     promised and did not give, behind rock or below the floor, it will not give later);
     `yaw`: the vehicle's, rad; `current_path` (k, 3): what is left of the path to `current`,
@@ -176,7 +177,7 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
         visited = np.vstack([visited, current.position])
     grid = LabelGrid.from_map(octree_map, params.region,
                               params.omega + params.clearance + params.cell_m,
-                              params.cell_m, previous, rays)
+                              params.cell_m, previous, rays, returns)
     cost = PathCost(grid, params.clearance)
     frontiers = frontier_cells(grid)
     surface_mask = np.zeros(grid.labels.shape, bool)

@@ -35,7 +35,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 from pydrake.trajectories import PiecewisePolynomial
 
-from drake_auv.exploration.frontiers import LabelGrid, scan_rays
+from drake_auv.exploration.frontiers import LabelGrid, multibeam_returns, scan_rays
 from drake_auv.exploration.planner import ExploreParameters, Target, plan_view
 from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.mapping.mapper import OnlineMap
@@ -136,10 +136,11 @@ class ViewPlanner(LeafSystem):
         batches = (online.version.since(view.version)
                    if online.version is not None and view.grid is not None else None)
         rays = scan_rays(batches, params.cell_m) if batches is not None else None
+        returns = multibeam_returns(batches) if batches is not None else None
         step = plan_view(online.map, x.position, params, view.target,
                          seed=self.seed + int(progress.steps), previous=view.grid, rays=rays,
                          visited=view.visited, yaw=float(x.yaw),
-                         current_path=self._remaining(view.trajectory, t))
+                         current_path=self._remaining(view.trajectory, t), returns=returns)
         trajectory = view.trajectory
         if step.path is not None:
             trajectory = self._timed(step.path, step.target, params, x, t)

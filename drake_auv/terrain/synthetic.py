@@ -80,3 +80,52 @@ def random_seabed(seed: int, shape: tuple[int, int] = (60, 80), cell: float = 1.
     span = np.ptp(field)
     z = -50.0 + (relief * (field - field.min()) / span if span > 0 else 0.0 * field)
     return Bathymetry(z, spacing=(cell, cell), origin=(0.0, 0.0))
+
+
+def wreck_site(seed: int = 0, cell: float = 0.5, half: float = 35.0, depth: float = 32.0,
+               origin=(431000.0, 4071000.0)):
+    """A wreck on a rough seabed, as a user's site files would give it (world and target
+    meshes, no prior map): a 20 m x 6 m hull with a pointed bow, heeled 12 deg and settled
+    1 m into the seabed, with a deckhouse (faces of at most 0.5 m edges: coverage is scored
+    per face); the seabed `depth` m deep, rough at the metre
+    scale (seeded Gaussian relief of 2.5 m peak-to-peak over ~1.5 m, on a 2 % slope).
+    Horizontal coordinates are eastings/northings about `origin` (m), z up.
+
+    Returns (world, target): trimesh meshes; the target is the wreck's faces above the seabed
+    (less the deck under the deckhouse).
+    """
+    import trimesh
+
+    from drake_auv.terrain.mesh import bathymetry_to_mesh
+
+    rng = np.random.default_rng(seed)
+    n = int(round(2 * half / cell)) + 1
+    field = ndimage.gaussian_filter(rng.normal(size=(n, n)), sigma=1.5 / cell, mode="reflect")
+    xs = np.arange(n) * cell - half
+    relief = 2.5 * (field - field.min()) / np.ptp(field)
+    z = -depth - 1.25 + relief + 0.02 * xs[None, :]
+    seabed = Bathymetry(z, spacing=(cell, cell), origin=(origin[0] - half, origin[1] - half))
+    outline = _hull_outline(20.0, 6.0)
+    hull = trimesh.convex.convex_hull(np.vstack([np.column_stack([outline, np.full(5, h)])
+                                                 for h in (0.0, 5.0)]))  # z from 0 to 5 m
+    deckhouse = trimesh.creation.box(extents=(5.0, 4.0, 3.0))
+    deckhouse.apply_translation([-3.0, 0.0, 6.5])
+    wreck = trimesh.util.concatenate([hull, deckhouse])
+    wreck = trimesh.Trimesh(*trimesh.remesh.subdivide_to_size(wreck.vertices, wreck.faces,
+                                                              max_edge=0.5), process=False)
+    c = wreck.triangles_center  # the deck under the deckhouse and its floor: never seen
+    hidden = (np.abs(c[:, 2] - 5.0) < 1e-6) & (np.abs(c[:, 0] + 3.0) < 2.5) & (np.abs(c[:, 1]) < 2.0)
+    wreck.apply_transform(trimesh.transformations.rotation_matrix(np.radians(12.0), [1, 0, 0]))
+    wreck.apply_transform(trimesh.transformations.rotation_matrix(np.radians(25.0), [0, 0, 1]))
+    wreck.apply_translation([origin[0], origin[1], -depth - 1.0])
+    below = wreck.triangles_center[:, 2] <= seabed.elevation_at(
+        wreck.triangles_center[:, 0], wreck.triangles_center[:, 1]) + 0.05
+    target = wreck.submesh([np.flatnonzero(~below & ~hidden)], append=True)
+    world = trimesh.util.concatenate([bathymetry_to_mesh(seabed), wreck])
+    return world, target
+
+
+def _hull_outline(length: float, beam: float) -> np.ndarray:
+    """(5, 2) the hull's waterline: a rectangle with a pointed bow along +x, centred, m."""
+    a, b = length / 2, beam / 2
+    return np.array([(-a, -b), (a - beam, -b), (a, 0.0), (a - beam, b), (-a, b)])
