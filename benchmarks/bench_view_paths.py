@@ -51,7 +51,7 @@ from scipy.spatial import cKDTree
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 # numpy/scipy only below: `compare` runs in a Python without Drake
 from _reference import machine  # noqa: E402
-from drake_auv.exploration.frontiers import OCCUPIED, LabelGrid  # noqa: E402
+from drake_auv.exploration.frontiers import OCCUPIED, UNKNOWN, LabelGrid  # noqa: E402
 from drake_auv.exploration.paths import KEEP, PathCost, TravelField, plan_path  # noqa: E402
 from drake_auv.planning.polyline import length, resample  # noqa: E402
 
@@ -184,10 +184,10 @@ class Validity:
                     and self.ok[i, j, k])
 
 
-def min_clearance(grid: LabelGrid, path) -> float:
-    """Least distance (m) from `path` (N, 3), resampled every 0.1 m, to an occupied cell
-    centre of `grid` (inf when none is)."""
-    occupied = grid.centres(np.argwhere(grid.labels == OCCUPIED))
+def min_clearance(grid: LabelGrid, path, labels=(OCCUPIED,)) -> float:
+    """Least distance (m) from `path` (N, 3), resampled every 0.1 m, to a cell centre of
+    `grid` labelled one of `labels` (inf when none is)."""
+    occupied = grid.centres(np.argwhere(np.isin(grid.labels, labels)))
     if not len(occupied):
         return math.inf
     return float(cKDTree(occupied).query(resample(np.asarray(path, float), SAMPLE_STEP))[0].min())
@@ -241,13 +241,15 @@ def rock_clear(travel: TravelField, path) -> bool:
     return bool(np.all(rock >= KEEP * travel.cost.clearance))
 
 
-def metrics(query: Query, path, ours) -> tuple[float, float, bool, bool]:
-    """(length over ours (nan when either is missing), min clearance m, valid at 0.1 m, rock
-    clear at 0.1 m) of `path` for `query`; (nan, nan, False, False) when there is none."""
+def metrics(query: Query, path, ours) -> tuple[float, float, float, bool, bool]:
+    """(length over ours (nan when either is missing), min clearance to occupied and to
+    occupied or unknown cells m, valid at 0.1 m, rock clear at 0.1 m) of `path` for `query`;
+    (nan, nan, nan, False, False) when there is none."""
     if path is None:
-        return math.nan, math.nan, False, False
+        return math.nan, math.nan, math.nan, False, False
+    grid = query.travel.cost.grid
     ratio = length(path) / length(ours) if ours is not None and length(ours) > 0 else math.nan
-    return (ratio, min_clearance(query.travel.cost.grid, path),
+    return (ratio, min_clearance(grid, path), min_clearance(grid, path, (OCCUPIED, UNKNOWN)),
             path_valid(Validity(query.travel, query.goal), path), rock_clear(query.travel, path))
 
 
@@ -287,16 +289,18 @@ def compare(queries: list[Query], planners: list[tuple[str, float]],
             f"TravelField.build (the Dijkstra for every candidate, once a step) ms median / "
             f"p95 {_stats(build)}; recorded plan_path ms {_stats([q.ms for q in queries])}", "",
             "| planner | success | solve ms median / p95 | length / ours median / p95 | "
-            "min clearance m median / worst | valid at 0.1 m | rock-clear at 0.1 m | "
-            "path_clear on its points |", "| --- " * 8 + "|"]
+            "min clearance m median / worst | to rock or unknown m median / worst | "
+            "valid at 0.1 m | rock-clear at 0.1 m | path_clear on its points |",
+            "| --- " * 9 + "|"]
     for label, (paths, times) in runs.items():
         m = np.array([metrics(q, p, q.path) for q, p in zip(queries, paths)], float)
         ok = np.array([p is not None for p in paths])
         clear = np.mean([path_clear(q.travel, p) for q, p in zip(queries, paths) if p is not None])
-        worst = np.nanmin(m[:, 1]) if ok.any() else math.nan
+        near = [f"{np.median(m[ok, k]):.2f} / {m[ok, k].min():.2f}" if ok.any() else "-"
+                for k in (1, 2)]
         rows.append(f"| {label} | {ok.mean():.0%} ({ok.sum()}/{len(ok)}) | {_stats(times)} | "
-                    f"{_stats(m[:, 0], '{:.3f}')} | {np.nanmedian(m[:, 1]):.2f} / {worst:.2f} | "
-                    f"{m[ok, 2].mean():.0%} | {m[ok, 3].mean():.0%} | {clear:.0%} |")
+                    f"{_stats(m[:, 0], '{:.3f}')} | {near[0]} | {near[1]} | "
+                    f"{m[ok, 3].mean():.0%} | {m[ok, 4].mean():.0%} | {clear:.0%} |")
     return rows
 
 

@@ -91,17 +91,19 @@ def test_min_clearance_and_metrics(travel):
     empty = LabelGrid(grid.origin, 1.0, np.full_like(grid.labels, FREE), grid.region)
     assert bench.min_clearance(empty, over) == math.inf
     q = bench.Query(travel, over[-1], 0, None, 0.0, np.empty((0, 3)), 0)
-    ratio, clearance, valid, clear = bench.metrics(q, np.vstack([over[0], [6.0, 4.5, -2.5], over[1]]),
+    ratio, clearance, to_unknown, valid, clear = bench.metrics(q, np.vstack([over[0], [6.0, 4.5, -2.5], over[1]]),
                                             over[[0, 1]] * [1, 1, 1])
     assert ratio == pytest.approx(1.0) and clearance == pytest.approx(2.0) and valid and clear
+    assert to_unknown == pytest.approx(2.0)  # the wall is nearer than unknown water
+    assert bench.min_clearance(grid, over, (UNKNOWN,)) == pytest.approx(3.0)  # y 1.5, z -2.5
     detour = np.array([[1.5, 4.5, -2.5], [6.0, 7.5, -2.5], [10.5, 4.5, -2.5]])
     assert bench.metrics(q, detour, over)[0] == pytest.approx(
         2 * math.hypot(4.5, 3.0) / 9.0)
     into = np.array([[6.5, 4.5, -2.5], [10.5, 0.5, -2.5], [10.5, 4.5, -2.5]])
-    assert bench.metrics(q, into, over)[2:] == (False, True)  # unknown water, far from rock
-    assert bench.metrics(q, [[1.5, 4.5, -6.5], [10.5, 4.5, -6.5]], over)[2:] == (False, False)
-    assert bench.metrics(q, None, over)[2:] == (False, False)
-    assert all(math.isnan(v) for v in bench.metrics(q, None, over)[:2])
+    assert bench.metrics(q, into, over)[3:] == (False, True)  # unknown water, far from rock
+    assert bench.metrics(q, [[1.5, 4.5, -6.5], [10.5, 4.5, -6.5]], over)[3:] == (False, False)
+    assert bench.metrics(q, None, over)[3:] == (False, False)
+    assert all(math.isnan(v) for v in bench.metrics(q, None, over)[:3])
 
 
 def test_bad_arguments_one_line(tmp_path, capsys):
