@@ -198,13 +198,11 @@ def path_valid(validity: Validity, path) -> bool:
     return bool(validity.points(resample(np.asarray(path, float), SAMPLE_STEP)[1:]).all())
 
 
-def ompl_plan(travel: TravelField, goal, planner: str, limit_s: float,
-              check_step: float = CHECK_STEP):
-    """One OMPL solve: (path (P, 3) m or None, wall s of setup + solve + simplify), motions
-    checked every `check_step` m."""
+def _setup(travel: TravelField, goal, check_step: float):
+    """(SimpleSetup, state space) in the grid's box, the query's validity, its start and
+    `goal`."""
     from ompl import base as ob, geometric as og
 
-    t = time.perf_counter()
     grid = travel.cost.grid
     space = ob.RealVectorStateSpace(3)
     bounds = ob.RealVectorBounds(3)
@@ -214,13 +212,34 @@ def ompl_plan(travel: TravelField, goal, planner: str, limit_s: float,
         bounds.setHigh(k, float(hi[k]))
     space.setBounds(bounds)
     ss = og.SimpleSetup(space)
-    si = ss.getSpaceInformation()
     ss.setStateValidityChecker(Validity(travel, goal))
-    si.setStateValidityCheckingResolution(check_step / space.getMaximumExtent())
-    start, end = space.allocState(), space.allocState()
+    ss.getSpaceInformation().setStateValidityCheckingResolution(
+        check_step / space.getMaximumExtent())
+    ss.setStartAndGoalStates(_state(space, travel.start), _state(space, goal))
+    return ss, space
+
+
+def _state(space, point):
+    state = space.allocState()
     for k in range(3):
-        start[k], end[k] = float(travel.start[k]), float(goal[k])
-    ss.setStartAndGoalStates(start, end)
+        state[k] = float(point[k])
+    return state
+
+
+def _path(ss) -> np.ndarray:
+    p = ss.getSolutionPath()
+    return np.array([[p.getState(i)[k] for k in range(3)] for i in range(p.getStateCount())])
+
+
+def ompl_plan(travel: TravelField, goal, planner: str, limit_s: float,
+              check_step: float = CHECK_STEP):
+    """One OMPL solve: (path (P, 3) m or None, wall s of setup + solve + simplify), motions
+    checked every `check_step` m."""
+    from ompl import base as ob, geometric as og
+
+    t = time.perf_counter()
+    ss, _ = _setup(travel, goal, check_step)
+    si = ss.getSpaceInformation()
     if planner != "RRTConnect":
         ss.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
     ss.setPlanner(getattr(og, planner)(si))
@@ -229,9 +248,32 @@ def ompl_plan(travel: TravelField, goal, planner: str, limit_s: float,
     if ss.haveExactSolutionPath():
         if planner == "RRTConnect":
             ss.simplifySolution()
-        p = ss.getSolutionPath()
-        path = np.array([[p.getState(i)[k] for k in range(3)] for i in range(p.getStateCount())])
+        path = _path(ss)
     return path, time.perf_counter() - t
+
+
+def prm_all(travel: TravelField, goals, grow_s: float, limit_s: float,
+            check_step: float = CHECK_STEP):
+    """One PRM roadmap for a step, grown `grow_s` from the start, then one query per goal of
+    `goals` (g, 3) on it (each `limit_s` at most): ((g,) solved, (g,) path length m (nan:
+    none), wall s in all)."""
+    from ompl import geometric as og
+
+    t = time.perf_counter()
+    ss, space = _setup(travel, goals[0], check_step)
+    prm = og.PRM(ss.getSpaceInformation())
+    ss.setPlanner(prm)
+    ss.setup()
+    prm.growRoadmap(grow_s)
+    solved, lengths = [], []
+    for goal in goals:
+        prm.clearQuery()
+        ss.getProblemDefinition().clearSolutionPaths()
+        ss.setGoalState(_state(space, goal))
+        ss.solve(limit_s)
+        solved.append(ss.haveExactSolutionPath())
+        lengths.append(length(_path(ss)) if solved[-1] else math.nan)
+    return np.array(solved, bool), np.array(lengths), time.perf_counter() - t
 
 
 def rock_clear(travel: TravelField, path) -> bool:
@@ -304,11 +346,12 @@ def compare(queries: list[Query], planners: list[tuple[str, float]],
     return rows
 
 
-def all_candidates(queries: list[Query], limit_s: float, check_step: float = CHECK_STEP):
-    """What one RRTConnect solve per candidate costs where the planner's one Dijkstra gives
-    every candidate's travel length: rows (markdown) over `queries`, each step's candidates
-    (the `max_candidates` nearest reachable and every unreachable one) solved with
-    `limit_s`."""
+def all_candidates(queries: list[Query], limit_s: float, check_step: float = CHECK_STEP,
+                   grow_s: float = 0.3):
+    """What OMPL needs where the planner's one Dijkstra gives every candidate's travel
+    length: rows (markdown) over `queries`, each step's candidates (the `max_candidates`
+    nearest reachable and every unreachable one) solved by RRTConnect one at a time with
+    `limit_s`, and by one PRM roadmap grown `grow_s`, queried per candidate (`limit_s`)."""
     rows = []
     for q in queries:
         lengths = q.travel.lengths(q.candidates)
@@ -325,13 +368,17 @@ def all_candidates(queries: list[Query], limit_s: float, check_step: float = CHE
             wall.append(1e3 * w)
         solved, wall = np.array(solved, bool), np.array(wall)
         n = len(reach)
+        prm_ok, _, prm_wall = prm_all(q.travel, q.candidates[np.concatenate([reach, unreach])],
+                                      grow_s, limit_s, check_step)
         rows.append((n, len(unreach), solved[:n].sum(), solved[n:].sum(), dijkstra,
-                     wall[:n].sum(), wall[n:].sum()))
+                     wall[:n].sum(), wall[n:].sum(), prm_ok[:n].sum(), prm_ok[n:].sum(),
+                     1e3 * prm_wall))
     r = np.array(rows, float)
+    share = max(r[:, 0].sum(), 1)
     return [f"| {len(r)} steps | {np.median(r[:, 0]):.0f} / {np.median(r[:, 1]):.0f} | "
-            f"{r[:, 2].sum() / max(r[:, 0].sum(), 1):.0%} / {r[:, 3].sum():.0f} | "
-            f"{_stats(r[:, 4])} | {_stats(r[:, 5])} | {_stats(r[:, 6])} | "
-            f"{_stats(r[:, 5] + r[:, 6])} |"]
+            f"{_stats(r[:, 4])} | {r[:, 2].sum() / share:.0%} / {r[:, 3].sum():.0f} | "
+            f"{_stats(r[:, 5])} | {_stats(r[:, 6])} | {_stats(r[:, 5] + r[:, 6])} | "
+            f"{r[:, 7].sum() / share:.0%} / {r[:, 8].sum():.0f} | {_stats(r[:, 9])} |"]
 
 
 def _planners(text: str) -> list[tuple[str, float]]:
@@ -405,12 +452,15 @@ def main(argv=None) -> int:
                 ""] + compare(queries, planners, args.check_step)
         if planners and args.candidate_steps:
             pick = np.unique(np.linspace(0, len(queries) - 1, args.candidate_steps).round())
-            rows += ["", f"Every candidate of a step, one RRTConnect solve each "
-                     f"({args.candidate_limit_ms:g} ms limit, checks every {args.check_step:g} "
-                     "m), against the one Dijkstra:", "",
-                     "| steps | candidates reachable / not (Dijkstra) | RRTConnect solved: "
-                     "reachable / unreachable | Dijkstra ms median / p95 | RRTConnect ms, "
-                     "reachable | on unreachable | total |", "| --- " * 7 + "|"]
+            rows += ["", f"Every candidate of a step (ms per step, median / p95), against the "
+                     f"one Dijkstra: one RRTConnect solve each ({args.candidate_limit_ms:g} ms "
+                     f"limit), and one PRM roadmap grown 300 ms then queried per candidate "
+                     f"({args.candidate_limit_ms:g} ms limit); checks every "
+                     f"{args.check_step:g} m:", "",
+                     "| steps | candidates reachable / not (Dijkstra) | Dijkstra ms | "
+                     "RRTConnect solved: reachable / unreachable | RRTConnect ms, reachable | "
+                     "on unreachable | total | PRM solved: reachable / unreachable | PRM ms "
+                     "(grow + queries) |", "| --- " * 9 + "|"]
             rows += all_candidates([queries[int(k)] for k in pick],
                                    args.candidate_limit_ms / 1e3, args.check_step)
     except (ValueError, FileNotFoundError) as err:
