@@ -90,19 +90,25 @@ def test_min_clearance_and_metrics(travel):
     assert bench.min_clearance(grid, [[1.5, 4.5, -6.5], [10.5, 4.5, -6.5]]) == pytest.approx(0.0)
     empty = LabelGrid(grid.origin, 1.0, np.full_like(grid.labels, FREE), grid.region)
     assert bench.min_clearance(empty, over) == math.inf
+    keep = 0.75  # KEEP * clearance 1 m
+    assert not bench.encroaches(grid, [[5.5, 4.5, -3.6], [5.5, 7.5, -3.6]], 1.0)  # at its start's
+    assert bench.encroaches(grid, [[5.5, 4.5, -3.0], [5.5, 7.5, -3.9]], keep)  # 0.6 m at its end
+    assert not bench.encroaches(grid, [[5.5, 4.5, -3.0], [5.5, 7.5, -3.0]], keep)
     q = bench.Query(travel, over[-1], 0, None, 0.0, np.empty((0, 3)), 0)
-    ratio, clearance, to_unknown, valid, clear = bench.metrics(q, np.vstack([over[0], [6.0, 4.5, -2.5], over[1]]),
-                                            over[[0, 1]] * [1, 1, 1])
+    bent = np.vstack([over[0], [6.0, 4.5, -2.5], over[1]])  # the same line, one more point
+    ratio, clearance, to_unknown, valid, clear, near = bench.metrics(q, bent, over)
     assert ratio == pytest.approx(1.0) and clearance == pytest.approx(2.0) and valid and clear
+    assert not near
     assert to_unknown == pytest.approx(2.0)  # the wall is nearer than unknown water
     assert bench.min_clearance(grid, over, (UNKNOWN,)) == pytest.approx(3.0)  # y 1.5, z -2.5
     detour = np.array([[1.5, 4.5, -2.5], [6.0, 7.5, -2.5], [10.5, 4.5, -2.5]])
     assert bench.metrics(q, detour, over)[0] == pytest.approx(
         2 * math.hypot(4.5, 3.0) / 9.0)
     into = np.array([[6.5, 4.5, -2.5], [10.5, 0.5, -2.5], [10.5, 4.5, -2.5]])
-    assert bench.metrics(q, into, over)[3:] == (False, True)  # unknown water, far from rock
-    assert bench.metrics(q, [[1.5, 4.5, -6.5], [10.5, 4.5, -6.5]], over)[3:] == (False, False)
-    assert bench.metrics(q, None, over)[3:] == (False, False)
+    assert bench.metrics(q, into, over)[3:] == (False, True, False)  # unknown water, far from rock
+    through = [[1.5, 4.5, -6.5], [10.5, 4.5, -6.5]]  # the wall
+    assert bench.metrics(q, through, over)[3:] == (False, False, True)
+    assert bench.metrics(q, None, over)[3:] == (False,) * 3
     assert all(math.isnan(v) for v in bench.metrics(q, None, over)[:3])
 
 
