@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import importlib
 import importlib.metadata
 import math
 import os
@@ -127,6 +128,8 @@ def record(mission: str, seeds, max_time: float, out: FilePath) -> int:
     total = 0
     out.mkdir(parents=True, exist_ok=True)
     for seed in seeds:
+        for old in out.glob(f"seed{seed}_q*.npz"):  # a shorter dive leaves none behind
+            old.unlink()
         calls, step = [], {}
 
         def candidates(*args, **kwargs):
@@ -414,12 +417,67 @@ def _planners(text: str) -> list[tuple[str, float]]:
     return out
 
 
+def _record(args) -> list[str]:
+    try:  # Drake and the mission's packages
+        for name in ("drake_auv.exploration.planner", "drake_auv.mission.runner"):
+            importlib.import_module(name)
+        from drake_auv.campaign.grid import parse_seeds
+    except ImportError as err:
+        raise ValueError(f"record needs the project's Python with Drake ({err})") from None
+    if not args.max_time > 0:
+        raise ValueError(f"--max-time: {args.max_time} s; allowed: > 0")
+    seeds = parse_seeds(args.seeds)
+    return [f"{record(args.mission, seeds, args.max_time, args.out)} queries in {args.out}"]
+
+
+def _compare(args) -> list[str]:
+    files = sorted(args.queries.glob("*.npz"))
+    if not files:
+        raise FileNotFoundError(f"--queries: no .npz in {args.queries}; allowed: a folder "
+                                "written by `bench_view_paths.py record`")
+    planners = _planners(args.planners)
+    for name, value, low in (("--check-step", args.check_step, 0.0),
+                             ("--candidate-limit-ms", args.candidate_limit_ms, 0.0)):
+        if not value > low:
+            raise ValueError(f"{name}: {value}; allowed: > {low:g}")
+    if args.candidate_steps < 0:
+        raise ValueError(f"--candidate-steps: {args.candidate_steps}; allowed: >= 0")
+    try:
+        from ompl import util as ou
+
+        ou.setLogLevel(ou.LOG_ERROR)
+        ou.RNG.setSeed(args.seed + 1)  # time-limited solves still vary run to run
+        versions = f"ompl {importlib.metadata.version('ompl')}"
+    except ImportError:
+        planners, versions = [], "ompl not importable in this Python: ours only"
+    queries = [load_query(f) for f in files]
+    rows = [machine(), f"{versions}, numpy {np.__version__}; queries from {args.queries}",
+            ""] + compare(queries, planners, args.check_step)
+    if planners and args.candidate_steps:
+        pick = np.unique(np.linspace(0, len(queries) - 1, args.candidate_steps).round())
+        rows += ["", f"Every candidate of a step (ms per step, median / p95), against the "
+                 f"one Dijkstra: one RRTConnect solve each ({args.candidate_limit_ms:g} ms "
+                 f"limit), and one PRM roadmap grown 300 ms then queried per candidate "
+                 f"({args.candidate_limit_ms:g} ms limit); checks every "
+                 f"{args.check_step:g} m:", "",
+                 "| steps | candidates reachable / not (Dijkstra) | Dijkstra ms | "
+                 "RRTConnect solved: reachable / unreachable | RRTConnect ms, reachable | "
+                 "on unreachable | total | PRM solved: reachable / unreachable | PRM ms "
+                 "(grow + queries) |", "| --- " * 9 + "|"]
+        rows += all_candidates([queries[int(k)] for k in pick],
+                               args.candidate_limit_ms / 1e3, args.check_step)
+    if args.markdown is not None:
+        args.markdown.write_text("\n".join(rows) + "\n")
+    return rows
+
+
 def main(argv=None) -> int:
+    """`record`, `compare`, or with no command both with their defaults (`make bench`)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command")
     rec = sub.add_parser("record", help="fly dives and record the view planner's path queries")
     rec.add_argument("--mission", default="boulder_explore")
-    rec.add_argument("--seeds", default="0:2", help="A:B, seeds A .. B-1 (default 0:2)")
+    rec.add_argument("--seeds", default="0:1", help="A:B, seeds A .. B-1 (default 0:1)")
     rec.add_argument("--max-time", type=float, default=1800.0,
                      help="limits.max_time_s (1800)")
     rec.add_argument("--out", type=FilePath, default=FilePath("out/view_paths"))
@@ -431,61 +489,21 @@ def main(argv=None) -> int:
                      help=f"OMPL's motion check spacing, m ({CHECK_STEP})")
     cmp.add_argument("--candidate-steps", type=int, default=10,
                      help="steps (evenly drawn queries) whose every candidate RRTConnect "
-                          "solves (10; 0: none)")
+                          "and PRM solve (10; 0: none)")
     cmp.add_argument("--candidate-limit-ms", type=float, default=100.0,
-                     help="RRTConnect's time limit per candidate, ms (100)")
+                     help="time limit per candidate, ms (100)")
     cmp.add_argument("--seed", type=int, default=0, help="OMPL's seed of seeds (0)")
     cmp.add_argument("--markdown", type=FilePath, default=None)
     args = parser.parse_args(argv)
+    runs = [args] if args.command else [parser.parse_args(["record"]),
+                                        parser.parse_args(["compare"])]
     try:
-        if args.command == "record":
-            from drake_auv.campaign.grid import parse_seeds
-
-            if not args.max_time > 0:
-                raise ValueError(f"--max-time: {args.max_time} s; allowed: > 0")
-            print(f"{record(args.mission, parse_seeds(args.seeds), args.max_time, args.out)} "
-                  f"queries in {args.out}")
-            return 0
-        files = sorted(args.queries.glob("*.npz"))
-        if not files:
-            raise FileNotFoundError(f"--queries: no .npz in {args.queries}; allowed: a folder "
-                                    "written by `bench_view_paths.py record`")
-        planners = _planners(args.planners)
-        for name, value, low in (("--check-step", args.check_step, 0.0),
-                                 ("--candidate-limit-ms", args.candidate_limit_ms, 0.0),
-                                 ("--candidate-steps", args.candidate_steps, -1)):
-            if not value > low:
-                raise ValueError(f"{name}: {value}; allowed: > {low:g}")
-        try:
-            from ompl import util as ou
-
-            ou.setLogLevel(ou.LOG_ERROR)
-            ou.RNG.setSeed(args.seed + 1)  # time-limited solves still vary run to run
-            versions = f"ompl {importlib.metadata.version('ompl')}"
-        except ImportError:
-            planners, versions = [], "ompl not importable: ours only"
-        queries = [load_query(f) for f in files]
-        rows = [machine(), f"{versions}, numpy {np.__version__}; queries from {args.queries}",
-                ""] + compare(queries, planners, args.check_step)
-        if planners and args.candidate_steps:
-            pick = np.unique(np.linspace(0, len(queries) - 1, args.candidate_steps).round())
-            rows += ["", f"Every candidate of a step (ms per step, median / p95), against the "
-                     f"one Dijkstra: one RRTConnect solve each ({args.candidate_limit_ms:g} ms "
-                     f"limit), and one PRM roadmap grown 300 ms then queried per candidate "
-                     f"({args.candidate_limit_ms:g} ms limit); checks every "
-                     f"{args.check_step:g} m:", "",
-                     "| steps | candidates reachable / not (Dijkstra) | Dijkstra ms | "
-                     "RRTConnect solved: reachable / unreachable | RRTConnect ms, reachable | "
-                     "on unreachable | total | PRM solved: reachable / unreachable | PRM ms "
-                     "(grow + queries) |", "| --- " * 9 + "|"]
-            rows += all_candidates([queries[int(k)] for k in pick],
-                                   args.candidate_limit_ms / 1e3, args.check_step)
+        for run in runs:
+            print("\n".join(_record(run) if run.command == "record" else _compare(run)),
+                  flush=True)
     except (ValueError, FileNotFoundError) as err:
         print(f"bench_view_paths: {err}", file=sys.stderr)
         return 2
-    print("\n".join(rows))
-    if args.markdown is not None:
-        args.markdown.write_text("\n".join(rows) + "\n")
     return 0
 
 
