@@ -1,34 +1,39 @@
 """The view planner's paths (issue 23, item 2): its grid search + STOMP against OMPL, on the
-path queries of real exploration dives.
+path queries of real exploration dives (results: docs/exploration_paths.md).
 
 `record` flies a mission (default `boulder_explore`) for each seed of `--seeds` (`A:B`),
-`limits.max_time_s` set to `--max-time`, with `drake_auv.exploration.planner.plan_path`
-wrapped in this process only: every call writes `<out>/seed<S>_q<NNNN>.npz` with the
-`TravelField`'s inputs (every field of its `LabelGrid`, the `PathCost`'s clearance and
-weights, `passable`, the start), the goal, STOMP's seed, the path returned (none: `solved`
-false) and the call's wall time. Drake is needed (the project venv):
+`limits.max_time_s` set to `--max-time`, with `drake_auv.exploration.planner.plan_path` and
+`candidate_viewpoints` wrapped in this process only: every path query writes
+`<out>/seed<S>_q<NNNN>.npz` with the `TravelField`'s inputs (every field of its `LabelGrid`,
+the `PathCost`'s clearance and weights, `passable`, the start), the goal, STOMP's seed, the
+path returned (none: `solved` false), the call's wall time and the step's candidate
+viewpoints. Drake is needed (the project venv):
 
-    .venv/bin/python benchmarks/bench_view_paths.py record --seeds 0:4 --max-time 1800 \\
-        --out out/view_paths
+    .venv/bin/python benchmarks/bench_view_paths.py record --seeds 0:8 --out out/view_paths
 
 `compare` replays the recorded queries. Each query's `TravelField` is rebuilt from the grid
 and start (and checked equal to the recorded `passable`); every planner gets the same
 validity, `paths.path_clear`'s rule at a point: inside the grid, on a passable cell (the
-start's and the goal's cells included, as `path_clear` excepts the goal), `KEEP` clearances
-from occupied cell centres (the distance field read at the point's cell) and half a
-clearance above the region's floor. Planners:
+goal's cell exempt, as `path_clear` exempts the last point; the start's cell valid whatever
+it holds, as `path_clear` skips the first point and OMPL needs a valid start), `KEEP`
+clearances from occupied cell centres (the distance field read at the point's cell) and half
+a clearance above the region's floor. Planners:
 - `ours`: `paths.plan_path` (Dijkstra's grid path, STOMP-smoothed, accepted by `path_clear`
   on its points), re-run for its time (the `TravelField` given, as in the planner, which
   builds it once per step for every candidate; its build time reported apart);
 - OMPL (when `ompl` imports; not in the project venv): a `RealVectorStateSpace(3)` bounded by
-  the grid, the validity above as a Python callback, motions checked every 0.25 m;
-  RRTConnect + `simplifySolution`, and BITstar with the path-length objective for a fixed
-  time (`--planners NAME:ms,...`). Solve time: setup + solve (+ simplify), wall.
-Per planner: success (a path found, and for ours as in the dive), solve time median / p95,
-path length over ours (the queries both solved), the least distance from the path, resampled
-every 0.1 m, to an occupied cell centre (median and worst), and the share of paths whose
-0.1 m resampling passes the validity (ours also on its own points, as `path_clear` judges
-it). `--markdown` writes the table with the machine line.
+  the grid, the validity above as a Python callback, motions checked every `--check-step`
+  (0.25 m); RRTConnect + `simplifySolution`, and BITstar with the path-length objective for
+  a fixed time (`--planners NAME:ms,...`). Solve time: setup + solve (+ simplify), wall.
+Per planner: success, solve time median / p95, path length over ours (the queries both
+solved), and on the path resampled every 0.1 m: the least distance to an occupied cell
+centre and to an occupied or unknown one (median, worst), the share of paths valid
+throughout (and by the rock part of the rule alone), the paths nearer rock than `KEEP`
+clearances and than their own start; and the share passing `path_clear` on their own points.
+Then, on `--candidate-steps` steps, what OMPL needs for what the one Dijkstra gives (every
+candidate's travel length): one RRTConnect solve per candidate, and one PRM roadmap queried
+per candidate. `--markdown` writes the tables with the machine line. With no command,
+`record` then `compare` run with their defaults (`make bench`).
 
     python3.13 -m venv /tmp/ompl313 && /tmp/ompl313/bin/pip install ompl==2.0.1 numpy scipy
     /tmp/ompl313/bin/python benchmarks/bench_view_paths.py compare --queries out/view_paths
