@@ -49,30 +49,39 @@ def test_surface_frontier_is_the_edge_of_the_seen_wall():
     assert d[0] > 0.8 and d[1] > 0.1 and abs(d[2]) < 1e-9
 
 
-def test_rock_no_multibeam_return_landed_in_is_a_surface_frontier():
-    """The wall's middle, mapped but seen only by the profiler or the DVL (no multibeam return
-    in its cells), is still to be looked at: a surface frontier, and with it the gain."""
+def test_rock_no_multibeam_return_has_seen_from_the_water_is_a_surface_frontier():
+    """The wall's middle, mapped but its water side (-x face) seen by no multibeam return
+    (only the profiler or the DVL mapped it, or returns from above), is still to be looked
+    at: a surface frontier."""
     grid = wall_grid()
-    seen = grid.labels == OCCUPIED
-    seen[5, 4:6, 4:6] = False  # four cells of the middle no multibeam return landed in
+    seen = np.repeat((grid.labels == OCCUPIED)[..., None], 6, axis=-1)
+    seen[5, 4:6, 4:6, 1] = False  # the -x faces (on the water) of four middle cells
     unseen = LabelGrid(grid.origin, grid.cell, grid.labels, grid.region, seen)
     before = cells_of(grid, frontier_cells(grid).centres[frontier_cells(grid).kinds == 0])
     after = cells_of(unseen, frontier_cells(unseen).centres[frontier_cells(unseen).kinds == 0])
     assert after - before == {(5, j, k) for j in (4, 5) for k in (4, 5)}
-    # the multibeam returns of a scan mark their cells seen on the next grid
+    seen[5, 4:6, 4:6, 1], seen[5, 4:6, 4:6, 4] = True, False  # +z faces: on rock, not water
+    assert cells_of(unseen, frontier_cells(unseen).centres[
+        frontier_cells(unseen).kinds == 0]) == before
+    # the multibeam returns of a scan mark the faces their beams look at on the next grid
     m = OctreeMap(0.5)
     batches = scanned_wall(m, np.arange(-3.0, 3.0, 0.25))
     region = (-2.0, -6.0, -20.0, 2.0, 6.0, -10.0)
     first = LabelGrid.from_map(m, region, 8.0, 1.0)
     assert first.seen is None  # no history: what is occupied counts as seen
-    returns = multibeam_returns(batches)
+    points, directions = multibeam_returns(batches)
+    assert len(points) == len(directions) > 0
     grid = LabelGrid.from_map(m, region, 8.0, 1.0, previous=first, rays=scan_rays([], 1.0),
-                              returns=returns)
-    cells, inside = grid.index(returns)
-    assert grid.seen[tuple(cells[inside].T)].all() and inside.any()
+                              returns=(points, directions))
+    cells, inside = grid.index(points)
+    level = inside & (np.abs(directions[:, 2]) < 0.5)  # beams within 60 deg of +x
+    assert grid.seen[(*cells[level].T, 1)].all() and level.any()  # their -x faces
+    fresh = LabelGrid.from_map(m, region, 8.0, 1.0, previous=grid, rays=scan_rays([], 1.0),
+                               returns=(points[:1], np.array([[0.0, 0.0, -1.0]])))
+    assert fresh.seen[(*grid.index(points[:1])[0][0], 4)]  # a beam from above: the top face
     profiler = [ScanBatch.make(0.0, "profiler", b.origin, b.directions, b.ranges, 20.0)
                 for b in batches]
-    assert len(multibeam_returns(profiler)) == 0
+    assert len(multibeam_returns(profiler)[0]) == 0
 
 
 def test_viewpoints_sit_omega_back_in_free_water():
@@ -165,6 +174,27 @@ def scanned_wall(m: OctreeMap, ys) -> list:
         m.insert_scan(origin, d, ranges, 20.0)
         batches.append(ScanBatch.make(0.0, "multibeam", origin, d, ranges, 20.0))
     return batches
+
+
+def test_a_vehicle_nearer_rock_than_the_keep_out_finds_its_way_out():
+    labels = np.full((30, 30, 12), FREE, np.int8)
+    labels[14:16, :, :] = OCCUPIED  # a wall across x
+    grid = LabelGrid(np.array([0.0, 0.0, -20.0]), 1.0, labels,
+                     np.array([0.0, 0.0, -20.0, 30.0, 30.0, -8.0]))
+    cost = PathCost(grid, clearance=3.0)  # keep-out: 2.25 m from rock cell centres
+    start, goal = np.array([13.6, 15.5, -14.5]), np.array([5.5, 15.5, -14.5])
+    assert cost.distances(start)[0] == 1.0  # the vehicle's cell is 1 m from the wall
+    travel = TravelField.build(cost, start)
+    path = plan_path(travel, goal)
+    assert path is not None and np.isfinite(travel.lengths(goal[None])[0])
+    rock, _ = cost.distances(path[1:])
+    assert rock.min() >= 1.0  # never nearer than it started
+    assert np.all(rock[np.linalg.norm(path[1:] - start, axis=1) > 3.0] >= 2.25)
+    # no way out that does not come nearer: stays unreachable
+    labels[:, :, :] = OCCUPIED
+    labels[13, 15, 5] = FREE
+    shut = TravelField.build(PathCost(grid, 3.0), start)
+    assert not np.isfinite(shut.lengths(goal[None])[0])
 
 
 def test_label_grid_refreshed_by_the_new_rays_equals_a_full_read():

@@ -9,14 +9,17 @@ that is array work on the grid, so a step costs what the region holds, never the
 Occupied is not yet seen. The profiler's horizontal sweep and the DVL's four beams map rock
 that the multibeam, the sensor whose coverage counts, has not looked at (in boulder seed 1 the
 planner believed 99 % covered with 16 % of the boulder unseen: its west side, mapped by the
-profiler on the approach, and its top, mapped by the DVL). The grid keeps `seen`, the cells
-holding a multibeam return (from the batches since the last step, `multibeam_returns`).
+profiler on the approach, and its top, mapped by the DVL). And a cell is not one surface: the
+cell where a boulder's base meets the seabed is seen from above by the seabed's returns long
+before its side is. The grid keeps `seen` per cell face (the six of `FACES`): a face is seen
+when a multibeam return landed in the cell along a beam within 60 deg of the face's normal
+(from the batches since the last step, `multibeam_returns`).
 
 Two kinds of frontier cells, both inside the region box:
 - surface: occupied cells next to (6-connected) an unknown cell that touches free water, the
   edge of the seen surface (an occupied cell next to the rock's own unseen interior is not a
   frontier: that unknown touches no free water and no sonar will ever see it), and occupied
-  cells next to free water that no multibeam return has landed in;
+  cells on free water none of whose faces on free water a multibeam return has seen;
 - boundary: free cells next to an unknown cell, the edge of the known water.
 
 Their view direction (from a viewpoint to the frontier, unit): from the free cells of its
@@ -47,6 +50,8 @@ from scipy.spatial import cKDTree
 from drake_auv.mapping.scan_log import SOURCES
 
 UNKNOWN, FREE, OCCUPIED = -1, 0, 1
+FACES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
+FACE_VIEW = np.cos(np.radians(60.0))  # a return sees a face within 60 deg of its normal
 KINDS = ("surface", "boundary")
 TURN = np.radians(35.0)  # the side candidates' turn of the view direction about z
 MAX_Z = -1.0  # m, viewpoints stay deeper than this
@@ -74,8 +79,8 @@ class LabelGrid:
         origin: (3,) corner of cell (0, 0, 0), m. cell: edge, m.
         labels: (nx, ny, nz) int8 of UNKNOWN, FREE, OCCUPIED.
         region: (6,) the region box the frontiers are sought in.
-        seen: (nx, ny, nz) bool, cells holding a multibeam return (None: every occupied
-            cell, for grids built by hand).
+        seen: (nx, ny, nz, 6) bool, the cell faces (`FACES`) a multibeam return has seen
+            (None: every face of every occupied cell, for grids built by hand).
     """
 
     origin: np.ndarray
@@ -92,8 +97,9 @@ class LabelGrid:
         (clipped at the sea surface). With the `previous` grid of the same box and the `rays`
         inserted into the map since it (`scan_rays`), only the cells those rays touch (and
         the previous occupied ones) are read again: no other cell can have changed; the cells
-        of the multibeam `returns` (m, 3) since it join the previous grid's `seen` ones
-        (without `returns`, `seen` is None: every occupied cell counts as seen)."""
+        of the multibeam `returns` since it ((points (m, 3), unit beam directions (m, 3)))
+        join the previous grid's `seen` faces (without `returns`, `seen` is None: every
+        occupied cell counts as seen)."""
         region = check_region(region)
         lo = np.floor((region[:3] - margin) / cell) * cell
         hi = region[3:] + margin
@@ -103,12 +109,15 @@ class LabelGrid:
                 and previous.labels.shape == tuple(shape) and np.allclose(previous.origin, lo))
         seen = None  # without a history of returns, what is occupied counts as seen
         if returns is not None:
-            seen = np.zeros(shape, bool)
+            seen = np.zeros((*shape, len(FACES)), bool)
             if same:
                 seen[:] = (previous.seen if previous.seen is not None
-                           else previous.labels == OCCUPIED)
-            cells, inside = cls(lo, float(cell), seen, region).index(returns)
-            seen[tuple(cells[inside].T)] = True
+                           else (previous.labels == OCCUPIED)[..., None])
+            points, directions = returns
+            cells, inside = cls(lo, float(cell), seen[..., 0], region).index(points)
+            faces = -np.asarray(directions, float)[inside] @ FACES.T > FACE_VIEW  # (m, 6)
+            row, face = np.nonzero(faces)
+            seen[(*cells[inside][row].T, face)] = True
         grid = cls(lo, float(cell), np.empty(shape, np.int8), region, seen)
         if rays is not None and same:
             grid.labels[:] = previous.labels
@@ -192,11 +201,29 @@ def scan_rays(batches, cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return tuple(np.concatenate(a) for a in zip(*parts))
 
 
-def multibeam_returns(batches) -> np.ndarray:
-    """(m, 3) the return points of the multibeam's beams in `ScanBatch`es, m."""
-    points = [b.points() for b in batches or () if b.source == SOURCES.index("multibeam")]
-    points = np.concatenate(points) if points else np.zeros((0, 3))
-    return points[np.all(np.isfinite(points), axis=1)]
+def multibeam_returns(batches) -> tuple[np.ndarray, np.ndarray]:
+    """((m, 3) return points, m; (m, 3) their unit beam directions) of the multibeam's beams
+    in `ScanBatch`es."""
+    points, directions = [np.zeros((0, 3))], [np.zeros((0, 3))]
+    for b in batches or ():
+        if b.source == SOURCES.index("multibeam"):
+            hit = np.isfinite(b.ranges)
+            points.append(b.points())
+            directions.append(np.asarray(b.directions, float)[hit])
+    return np.concatenate(points), np.concatenate(directions)
+
+
+def face_neighbours(mask: np.ndarray) -> np.ndarray:
+    """(nx, ny, nz, 6) whether each cell's face-neighbour across face k (`FACES`) is in
+    `mask` (nx, ny, nz) (False beyond the grid)."""
+    out = np.zeros((*mask.shape, len(FACES)), bool)
+    for k, normal in enumerate(FACES):
+        axis = int(np.flatnonzero(normal)[0])
+        src, dst = [slice(None)] * 3, [slice(None)] * 3
+        src[axis], dst[axis] = ((slice(1, None), slice(None, -1)) if normal[axis] > 0
+                                else (slice(None, -1), slice(1, None)))
+        out[(*dst, k)] = mask[tuple(src)]
+    return out
 
 
 def _neighbour_sum(mask: np.ndarray) -> np.ndarray:
@@ -223,8 +250,9 @@ def frontier_cells(grid: LabelGrid) -> Frontiers:
     open_unknown = unknown & ndimage.binary_dilation(free, _FACE)
     region = grid.region_mask()
     edge = ndimage.binary_dilation(open_unknown, _FACE)
-    if grid.seen is not None:  # rock only the profiler or the DVL has mapped
-        edge |= ~grid.seen & ndimage.binary_dilation(free, _FACE)
+    if grid.seen is not None:  # rock on free water no multibeam return has seen
+        on_water = face_neighbours(free)
+        edge |= on_water.any(axis=-1) & ~(on_water & grid.seen).any(axis=-1)
     surface = occupied & edge & region
     boundary = free & ndimage.binary_dilation(unknown, _FACE, border_value=1) & region
     towards_free = _neighbour_sum(free)

@@ -25,6 +25,11 @@ are read at the nearest cell; outside the grid the distances are taken as the cl
 cost: the grid spans the region widened by Omega and the clearance). The smoothed path (or,
 failing it, the grid path) is accepted if it stays on the search's passable cells, keeps
 `KEEP` clearances from occupied cell centres and half a clearance above the floor.
+
+A vehicle already nearer rock than `KEEP` clearances (rock seen since it got there, drift, the
+seabed guard's lift) may leave: within `ESCAPE` cells of its start a path may cross cells no
+nearer rock than the start's own cell (in boulder seed 1 every cell round the vehicle was
+within the keep-out, nothing was reachable and exploring stopped at 61 %).
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ MAX_POINTS = 60
 NEAR_FACTOR = 2.0
 UNKNOWN_FACTOR = 10.0
 KEEP = 0.75  # clearances a path keeps from occupied cell centres
+ESCAPE = 2.0  # cells around a start nearer rock than KEEP where a path may leave it
 LOCAL_UNKNOWN = 1.0  # clearances around the vehicle where unknown water may be crossed
 
 
@@ -87,13 +93,16 @@ class TravelField:
     Attributes: cost: the `PathCost` (its grid and fields); start: (3,) the vehicle, m;
     length: (nx * ny * nz,) priced travel length to each cell, m (inf: unreachable);
     previous: (nx * ny * nz,) the cell before each on its path (-9999 at the start);
-    passable: (nx * ny * nz,) the cells a path may cross."""
+    passable: (nx * ny * nz,) the cells a path may cross; keep: (nx * ny * nz,) the least
+    distance to occupied cell centres a path keeps in each cell, m (`KEEP` clearances, or
+    the start's own distance round a start nearer rock, `ESCAPE`)."""
 
     cost: PathCost
     start: np.ndarray
     length: np.ndarray
     previous: np.ndarray
     passable: np.ndarray
+    keep: np.ndarray
 
     @classmethod
     def build(cls, cost: PathCost, start) -> "TravelField":
@@ -116,10 +125,16 @@ class TravelField:
             lo, hi = (np.take(f, np.arange(k, k + shape[axis]), axis=axis) for k in (0, 2))
             between |= lo & hi
         open_water = free | ((grid.labels == UNKNOWN) & (near | between))
-        passable = (cost.rock >= KEEP * cost.clearance) & depth_ok[None, None, :] & open_water
+        idx, inside = grid.index(start)
+        keep = np.full(shape, KEEP * cost.clearance)
+        if inside:  # a start inside the keep-out: the way out, never nearer rock
+            start_rock = float(cost.rock[tuple(idx)])
+            out = (np.linalg.norm(np.indices(shape) - idx[:, None, None, None], axis=0)
+                   <= ESCAPE)
+            keep[out] = min(KEEP * cost.clearance, start_rock)
+        passable = (cost.rock >= keep) & depth_ok[None, None, :] & open_water
         factor = np.where(grid.labels == UNKNOWN, UNKNOWN_FACTOR,
                           np.where(cost.blocked >= cost.clearance, 1.0, NEAR_FACTOR))
-        idx, inside = grid.index(start)
         first = int(np.ravel_multi_index(tuple(idx), shape)) if inside else -1
         flat_pass, flat_factor = passable.reshape(-1), factor.reshape(-1)
         if first >= 0:
@@ -136,10 +151,11 @@ class TravelField:
         graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows),
                                                       np.concatenate(cols))), shape=(n, n))
         if first < 0:
-            return cls(cost, start, np.full(n, np.inf), np.full(n, -9999), flat_pass)
+            return cls(cost, start, np.full(n, np.inf), np.full(n, -9999), flat_pass,
+                       keep.reshape(-1))
         length, previous = dijkstra(graph.tocsr(), directed=False, indices=first,
                                     return_predecessors=True)
-        return cls(cost, start, length, previous, flat_pass)
+        return cls(cost, start, length, previous, flat_pass, keep.reshape(-1))
 
     def lengths(self, points) -> np.ndarray:
         """(m,) priced travel length to `points` (m, 3), m (inf: unreachable)."""
@@ -192,11 +208,15 @@ def plan_path(travel: TravelField, goal, spacing: float = 1.0,
 
 def path_clear(travel: TravelField, path) -> bool:
     """Whether `path` (N, 3) after its first point stays on the passable cells (its last
-    point excepted), keeps `KEEP` clearances from occupied cell centres and half a clearance
-    above the floor."""
+    point excepted), keeps `KEEP` clearances from occupied cell centres (`travel.keep`: less
+    on the way out of a start nearer rock) and half a clearance above the floor."""
     cost, path = travel.cost, np.asarray(path, float)
     rock, _ = cost.distances(path[1:])
+    shape = cost.grid.labels.shape
     idx, inside = cost.grid.index(path[1:-1])
-    crossed = travel.passable[np.ravel_multi_index(tuple(idx.T), cost.grid.labels.shape)]
-    return bool(np.all(crossed & inside) and np.all(rock >= KEEP * cost.clearance)
+    crossed = travel.passable[np.ravel_multi_index(tuple(idx.T), shape)]
+    cells, within = cost.grid.index(path[1:])
+    keep = np.where(within, travel.keep[np.ravel_multi_index(tuple(cells.T), shape)],
+                    KEEP * cost.clearance)
+    return bool(np.all(crossed & inside) and np.all(rock >= keep - 1e-9)
                 and np.all(path[1:, 2] >= cost.grid.region[2] + 0.5 * cost.clearance))

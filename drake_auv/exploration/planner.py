@@ -10,9 +10,10 @@ holds nothing known, the target is the edge of the region widened by Omega neare
 vehicle (an approach, in a straight line: nothing is known to avoid), and so it is while the
 vehicle is outside the planning grid.
 
-Believed coverage: of the surface the map implies inside the region, the share seen: seen
-occupied cells that are not surface frontiers over all occupied cells plus the unknown
-water cells touching them (each one a cell of surface not yet seen).
+Believed coverage: of the surface the map implies inside the region, the share seen, in cell
+faces: the faces of occupied cells on free water that a multibeam return has seen, over the
+faces of occupied cells on free water or on unknown water that touches free water (surface
+not yet seen).
 """
 
 from __future__ import annotations
@@ -24,7 +25,8 @@ from scipy import ndimage
 
 from drake_auv.exploration.frontiers import (FREE, MAX_Z, OCCUPIED, UNKNOWN, LabelGrid,
                                              candidate_viewpoints, check_region,
-                                             cluster_frontiers, frontier_cells)
+                                             cluster_frontiers, face_neighbours,
+                                             frontier_cells)
 from drake_auv.exploration.gains import STRATEGIES, fan_rays, scores, view_gains, view_yaw
 from drake_auv.exploration.paths import PathCost, TravelField, path_clear, plan_path
 from drake_auv.params import param, validate
@@ -137,16 +139,16 @@ class ViewStep:
     turning: bool = False
 
 
-def believed_coverage(grid: LabelGrid, surface_frontier: np.ndarray) -> float:
-    """Seen over implied surface in the region (see the module)."""
-    region = grid.region_mask()
-    occupied = (grid.labels == OCCUPIED) & region
-    open_unknown = ((grid.labels == UNKNOWN) & region
-                    & ndimage.binary_dilation(grid.labels == FREE, _FACE)
-                    & ndimage.binary_dilation(occupied, _FACE))
-    seen = int((occupied & ~surface_frontier).sum())
-    total = int(occupied.sum() + open_unknown.sum())
-    return seen / total if total else 0.0
+def believed_coverage(grid: LabelGrid) -> float:
+    """Seen over implied surface in the region, counted in cell faces (see the module)."""
+    occupied = (grid.labels == OCCUPIED) & grid.region_mask()
+    unknown = grid.labels == UNKNOWN
+    open_unknown = unknown & ndimage.binary_dilation(grid.labels == FREE, _FACE)
+    on_water = face_neighbours(grid.labels == FREE) & occupied[..., None]
+    on_unknown = face_neighbours(open_unknown) & occupied[..., None]
+    seen = on_water if grid.seen is None else on_water & grid.seen
+    total = int(on_water.sum() + on_unknown.sum())
+    return int(seen.sum()) / total if total else 0.0
 
 
 def approach_point(params: ExploreParameters, position) -> np.ndarray:
@@ -183,7 +185,7 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
     surface_mask = np.zeros(grid.labels.shape, bool)
     surface = frontiers.kinds == 0
     surface_mask[tuple(grid.index(frontiers.centres[surface])[0].T)] = True
-    coverage = believed_coverage(grid, surface_mask)
+    coverage = believed_coverage(grid)
     if not (np.any(grid.labels[grid.region_mask()] != UNKNOWN)
             and grid.index(position)[1]):  # approach: straight to the region
         goal = approach_point(params, position)
