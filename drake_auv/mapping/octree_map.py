@@ -299,6 +299,7 @@ class OctreeMap:
         """The voxels ever hit (a superset of the occupied ones), in insertion order: their
         centres (n, 3), m, and whether each one's label was never read from the octree (n,)
         (a box query reads only the voxels in its box)."""
+        self._materialise()
         return self._centres[:self._count].copy(), self._checked[:self._count] == -1
 
     @property
