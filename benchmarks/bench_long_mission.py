@@ -3,9 +3,9 @@ window of a Monterey Bay tile, 1 m world, the ~10 m survey as prior, Omega 10 m,
 replanned survey, about 3.8 h of dive), its cost per simulated hour.
 
 Per simulated hour: the replanning step's median and p95 (wall, ms), the real-time factor, the
-process's resident memory at the hour's end and its peak so far (MB); the octree's own memory;
-the mission's coverage, true distance and contact. Acceptance (docs/benchmarks.md, "Survey-scale
-dives"): step median <= 10 ms and p95 <= 25 ms in every hour, the last hour's median within
+process's resident memory at the hour's end and its peak so far (MB); the octree's leaves and
+own memory at the hour's end (`OctreeMap.memory()`); the mission's coverage, true distance and
+contact. Acceptance (docs/benchmarks.md, "Survey-scale dives"): step median <= 10 ms and p95 <= 25 ms in every hour, the last hour's median within
 1.5x of the first's, resident memory growing by less than 100 MB per hour after the first.
 `--surveys N` flies the replanned survey N times in the dive (the single one is already 3.8 h);
 `--max-time S` stops it after S simulated seconds.
@@ -16,6 +16,7 @@ dives"): step median <= 10 ms and p95 <= 25 ms in every hour, the last hour's me
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import resource
 import sys
@@ -27,6 +28,7 @@ import numpy as np
 import yaml
 
 from _reference import machine
+from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mission.config import BUILTIN_DIR, mission_from_dict
 from drake_auv.mission.report import summarise
 from drake_auv.mission.runner import run_mission
@@ -51,12 +53,22 @@ def peak_mb() -> float:
     return peak / 2**20 if sys.platform == "darwin" else peak / 2**10
 
 
-class Probe:
-    """Samples wall time and memory every `every` simulated seconds (the runner's probe)."""
+def octree_memory() -> dict:
+    """`OctreeMap.memory()` of the dive's map, found among the live objects (the runner's
+    probe sees only the Context; the mapper's cache holds one `OnlineMap`)."""
+    maps = [o for o in gc.get_objects() if isinstance(o, OnlineMap) and o.version is not None]
+    return max((m.map.memory() for m in maps), key=lambda m: m["leaves"], default={})
 
-    def __init__(self, every: float = 60.0):
+
+class Probe:
+    """Samples wall time and memory every `every` simulated seconds (the runner's probe), and
+    the octree's memory every `map_every` s (a search of the live objects: not every step)."""
+
+    def __init__(self, every: float = 60.0, map_every: float = 600.0):
         self.every, self.next = every, 0.0
+        self.map_every = map_every
         self.rows: list[tuple] = []  # (sim s, wall s, rss MB, peak MB)
+        self.maps: list[tuple] = []  # (sim s, leaves, octree MB, candidates' index MB)
         self.start = time.perf_counter()
 
     def __call__(self, context) -> None:
@@ -64,9 +76,15 @@ class Probe:
         if t >= self.next:
             self.rows.append((t, time.perf_counter() - self.start, rss_mb(), peak_mb()))
             self.next += self.every
+            if t % self.map_every < self.every and t > 0:
+                m = octree_memory()
+                self.maps.append((t, m.get("leaves", 0), m.get("octree_mb", 0.0),
+                                  m.get("index_mb", 0.0)))
             if len(self.rows) > 1 and t % HOUR < self.every:  # an hour done: progress line
+                leaves, octree = self.maps[-1][1:3]
                 print(f"  {t:.0f} s simulated, {self.rows[-1][1]:.0f} s wall, RSS "
-                      f"{self.rows[-1][2]:.0f} MB", flush=True)
+                      f"{self.rows[-1][2]:.0f} MB, octree {leaves} leaves {octree:.0f} MB",
+                      flush=True)
 
 
 def per_hour(result, probe: Probe) -> list[dict]:
@@ -74,6 +92,7 @@ def per_hour(result, probe: Probe) -> list[dict]:
     steps = ReplanningStep(result.replanning)
     t_step, wall = steps.time, 1e3 * steps.wall_time
     samples = np.array(probe.rows)
+    maps = np.array(probe.maps).reshape(-1, 4)
     rows = []
     for h in range(int(np.ceil(result.duration_s / HOUR))):
         mine = wall[(t_step >= h * HOUR) & (t_step < (h + 1) * HOUR)]
@@ -81,11 +100,15 @@ def per_hour(result, probe: Probe) -> list[dict]:
         if len(mine) == 0 or len(inside) < 2:
             continue
         (t0, w0), (t1, w1) = inside[0, :2], inside[-1, :2]
+        last = maps[maps[:, 0] <= t1 + 1e-9][-1] if np.any(maps[:, 0] <= t1 + 1e-9) else None
         rows.append(dict(hour=h + 1, sim_s=float(t1 - t0), steps=int(len(mine)),
                          step_median_ms=float(np.median(mine)),
                          step_p95_ms=float(np.percentile(mine, 95)),
                          real_time_factor=float((t1 - t0) / max(w1 - w0, 1e-9)),
-                         rss_end_mb=float(inside[-1, 2]), peak_mb=float(inside[-1, 3])))
+                         rss_end_mb=float(inside[-1, 2]), peak_mb=float(inside[-1, 3]),
+                         octree_leaves=int(last[1]) if last is not None else 0,
+                         octree_mb=float(last[2]) if last is not None else 0.0,
+                         index_mb=float(last[3]) if last is not None else 0.0))
     return rows
 
 
@@ -129,11 +152,13 @@ def main() -> None:
           f"candidate voxels, index {m['index_mb']:.0f} MB; {m['batches']} batches, "
           f"{m['returns']} returns, scan file {m['scan_file_mb']:.0f} MB (on disk)")
     print("\n| hour | steps | step median (ms) | step p95 (ms) | real-time factor | RSS at end "
-          "(MB) | peak RSS (MB) |\n|---|---|---|---|---|---|---|")
+          "(MB) | peak RSS (MB) | octree leaves | octree (MB) | index (MB) |\n"
+          "|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['hour']} | {r['steps']} | {r['step_median_ms']:.1f} | "
               f"{r['step_p95_ms']:.1f} | {r['real_time_factor']:.1f} | {r['rss_end_mb']:.0f} | "
-              f"{r['peak_mb']:.0f} |")
+              f"{r['peak_mb']:.0f} | {r['octree_leaves']} | {r['octree_mb']:.1f} | "
+              f"{r['index_mb']:.1f} |")
     with tempfile.TemporaryDirectory() as folder:
         t0 = time.perf_counter()
         n = write_points(result, Path(folder) / "points.ply")

@@ -123,34 +123,73 @@ def test_box_query_matches_the_whole_map_and_sees_clearing():
     assert len(omap.occupied_points()) == 0
 
 
-def test_lazy_insertion_labels_match_eager_octomap_and_the_file_is_complete(tmp_path):
+def _lazy_octomap(resolution):
+    """OctoMap's own tree with the same sensor model, fed lazily below: never pruned."""
+    import octomap
+
+    tree = octomap.OcTree(resolution)
+    tree.setProbHit(0.7), tree.setProbMiss(0.4)
+    tree.setClampingThresMin(0.12), tree.setClampingThresMax(0.97)
+    return tree
+
+
+def test_pruning_changes_no_label_log_odds_or_occupied_voxel_and_the_file_is_complete(tmp_path):
     import octomap
 
     block = trimesh.creation.box(extents=(5.0, 5.0, 12.0))
     block.apply_translation((0.0, 0.0, -4.0))
-    omap = OctreeMap(resolution=0.5)
-    eager = octomap.OcTree(0.5)  # OctoMap's own eager insertion, same sensor model
-    eager.setProbHit(0.7), eager.setProbMiss(0.4)
-    eager.setClampingThresMin(0.12), eager.setClampingThresMax(0.97)
-    for angle in np.linspace(0, 2 * np.pi, 16, endpoint=False):
+    omap, lazy = OctreeMap(resolution=0.5), _lazy_octomap(0.5)
+    for angle in np.tile(np.linspace(0, 2 * np.pi, 16, endpoint=False), 4):  # sweeps again
         origin = np.array([8.5 * np.cos(angle), 8.5 * np.sin(angle), -5.0])
         c, s = np.cos(angle + np.pi), np.sin(angle + np.pi)
-        d = _fan(n=240, tilt=0.3) @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
-        r = _cast(block, origin, d, 20.0)
-        omap.insert_scan(origin, d, r, 20.0)
-        eager.insertPointCloud(origin + d * np.where(np.isfinite(r), r, 21.0)[:, None], origin,
-                               maxrange=20.0)
+        for tilt in (0.1, 0.3, 0.5):
+            d = _fan(n=240, tilt=tilt) @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
+            r = _cast(block, origin, d, 20.0)
+            omap.insert_scan(origin, d, r, 20.0)
+            lazy.insertPointCloud(origin + d * np.where(np.isfinite(r), r, 21.0)[:, None],
+                                  origin, maxrange=20.0, lazy_eval=True)
+    # The map did prune (else this test compares a tree with itself).
+    assert omap.memory()["leaves"] < 0.9 * lazy.getNumLeafNodes()
     probe = np.random.default_rng(5).uniform([-22, -22, -25], [22, 22, 12], (50000, 3))
     surface = trimesh.sample.sample_surface(block, 2000, seed=6)[0]
     probe = np.vstack([probe, surface])
     labels = omap.labels(probe)
-    assert np.array_equal(labels, np.asarray(eager.getLabels(probe)))
+    assert np.array_equal(labels, np.asarray(lazy.getLabels(probe)))
     assert (labels == 1).sum() > 100 and (labels == 0).sum() > 1000
+    known = probe[labels >= 0]
+    assert np.array_equal([omap.tree.search(p).getLogOdds() for p in known],
+                          [lazy.search(p).getLogOdds() for p in known])
+    centres = omap.candidates()[0]
+    want = centres[np.asarray(lazy.getLabels(centres)) == 1]
+    assert sorted(map(tuple, omap.occupied_points())) == sorted(map(tuple, want))
     # The written file carries the inner nodes too: read back, it answers the same.
     omap.write(tmp_path / "map.bt")
     back = octomap.OcTree(0.5)
     assert back.readBinary(str(tmp_path / "map.bt").encode())
     assert np.array_equal(np.asarray(back.getLabels(probe)), labels)
+
+
+def test_leaves_stay_bounded_over_repeated_free_space_sweeps():
+    # A downward fan flown over a flat floor, pass after pass: once the water it crosses
+    # reaches the free clamping threshold its uniform subtrees are pruned, so the tree holds
+    # a fraction of the voxels known, and further passes add nothing.
+    a = np.linspace(-np.radians(60), np.radians(60), 240)
+    d = np.stack([np.zeros_like(a), np.sin(a), -np.cos(a)], axis=1)
+    omap, lazy = OctreeMap(resolution=0.5), _lazy_octomap(0.5)
+    leaves = []
+    for _ in range(6):
+        for x in np.arange(0.0, 16.0, 0.25):
+            origin = np.array([x, 0.3, -5.0])
+            r = 15.0 / np.cos(a)
+            r[r > 20.0] = np.nan  # beyond the floor's reach: clears up to max range
+            omap.insert_scan(origin, d, r, 20.0)
+            lazy.insertPointCloud(origin + d * np.where(np.isfinite(r), r, 21.0)[:, None],
+                                  origin, maxrange=20.0, lazy_eval=True)
+        leaves.append(omap.memory()["leaves"])
+    known = lazy.getNumLeafNodes()  # every voxel crossed, unpruned
+    assert known > 30000
+    assert max(leaves[1:]) <= leaves[0] and leaves[-1] < 0.25 * known
+    assert np.count_nonzero(omap.labels(omap.candidates()[0]) == 1) > 500  # the floor's hits
 
 
 def _brute_force_occupied(omap, lo, hi):

@@ -42,7 +42,7 @@ def _frozen(array, dtype) -> np.ndarray:
     return out
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class ScanBatch:
     """One sensor update: beams from one origin (a multibeam fan, the profiler's pings).
 
@@ -137,7 +137,7 @@ class ScanStore:
             self._cache.popitem(last=False)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class _Batches:
     """Some consecutive batches of a log, oldest first, read from its store when asked
     (`batches()`, what `reconstruction.pointcloud.from_scan_log` reads)."""
@@ -149,7 +149,7 @@ class _Batches:
         return [self.store.get(offset, remember=False) for offset in self.offsets]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class ScanLog:
     """A version of the log: `count` batches, the newest in `store` at `offset`, the older ones
     in `parent`; `returns`: the beams with a return (finite range) of all `count` batches."""

@@ -1,0 +1,85 @@
+"""OctoMap insertion, lazy against eager (issue 21): the per-ping cost and the tree's size.
+
+Flies the first `--max-time` simulated seconds of the built-in `monterey_wall` mission, then
+inserts its recorded sonar batches again into two fresh OctoMap trees with the map's sensor
+model (`OctreeMap`'s, 0.5 m): one lazily (`lazy_eval=True`: inner nodes deferred, never
+pruned), one eagerly (`lazy_eval=False`: what `OctreeMap` does, pruning uniform subtrees), the
+two in turn `--repeats` times. Prints per mode and sonar the median and mean insertion time
+per ping (ms), the whole replay's time, and the leaves and `memoryUsage` of the tree every
+quarter of the batches; checks that both trees give the same label at every voxel centre the
+scans hit and at random points of the surveyed box.
+
+    .venv/bin/python benchmarks/bench_octree_insertion.py [--max-time 1200] [--repeats 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+import octomap
+
+from _reference import machine
+from bench_long_mission import long_mission
+from drake_auv.mapping.scan_log import SOURCES
+from drake_auv.mission.runner import run_mission
+
+RESOLUTION = 0.5
+
+
+def replay(batches, lazy: bool):
+    """Inserts `batches` as `OctreeMap.insert_scan` does; returns the tree, the per-batch
+    insertion times (s) and (batches inserted, leaves, MB) rows at each quarter."""
+    tree = octomap.OcTree(RESOLUTION)
+    tree.setProbHit(0.7), tree.setProbMiss(0.4)
+    tree.setClampingThresMin(0.12), tree.setClampingThresMax(0.97)
+    times, sizes = np.zeros(len(batches)), []
+    quarter = max(len(batches) // 4, 1)
+    for i, b in enumerate(batches):
+        ranges = b.ranges.astype(float)
+        hit = np.isfinite(ranges) & (ranges <= b.max_range)
+        length = np.where(hit, ranges, b.max_range + 2.0 * RESOLUTION)
+        endpoints = b.origin + b.directions.astype(float) * length[:, None]
+        start = time.perf_counter()
+        tree.insertPointCloud(endpoints, b.origin, maxrange=float(b.max_range), lazy_eval=lazy)
+        times[i] = time.perf_counter() - start
+        if (i + 1) % quarter == 0 or i + 1 == len(batches):
+            sizes.append((i + 1, tree.getNumLeafNodes(), tree.memoryUsage() / 2**20))
+    return tree, times, sizes
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--max-time", type=float, default=1200.0, help="simulated s")
+    parser.add_argument("--repeats", type=int, default=2)
+    args = parser.parse_args()
+    if not args.max_time > 0 or args.repeats < 1:
+        parser.error("--max-time must be > 0 s and --repeats >= 1")
+    print(machine())
+    result = run_mission(long_mission("monterey_wall", 0, 1, args.max_time), progress=False)
+    batches = list(result.scan_log.iter_batches())
+    sources = np.array([b.source for b in batches])
+    print(f"{result.duration_s:.0f} s simulated: {len(batches)} batches, "
+          f"{sum(len(b.ranges) for b in batches)} beams")
+    trees = {}
+    for _ in range(args.repeats):
+        for name, lazy in (("lazy", True), ("eager", False)):
+            tree, times, sizes = replay(batches, lazy)
+            trees[name] = tree
+            per = "; ".join(f"{SOURCES[s]} median {1e3 * np.median(times[sources == s]):.3f} "
+                            f"mean {1e3 * times[sources == s].mean():.3f} ms"
+                            for s in np.unique(sources))
+            print(f"{name}: {times.sum():.2f} s for the replay; {per}")
+            print("   " + ", ".join(f"{n} batches: {leaves} leaves {mb:.1f} MB"
+                                    for n, leaves, mb in sizes))
+    hits = np.concatenate([b.points() for b in batches])
+    centres = (np.unique(np.floor(hits / RESOLUTION), axis=0) + 0.5) * RESOLUTION
+    lo, hi = hits.min(axis=0) - 20.0, hits.max(axis=0) + 20.0
+    points = np.vstack([centres, np.random.default_rng(0).uniform(lo, hi, (200000, 3))])
+    same = np.array_equal(trees["lazy"].getLabels(points), trees["eager"].getLabels(points))
+    print(f"labels equal at {len(centres)} hit voxels and 200000 random points: {same}")
+
+
+if __name__ == "__main__":
+    main()
