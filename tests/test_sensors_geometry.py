@@ -292,3 +292,7 @@ def test_scan_with_hits_gives_the_axis_faces_of_the_same_cast():
     again = scan(caster, model, angles, state, state, rng=np.random.default_rng(3), time=2.5)
     np.testing.assert_array_equal(again.ranges, returns.ranges)
     assert not returns.ranges.flags.writeable and not hits.faces.flags.writeable
+    alone, no_hits = scan_with_hits(caster, model, angles, state, state,
+                                    rng=np.random.default_rng(3), time=2.5, axis_hits=False)
+    assert no_hits is None  # a sonar without a recorder skips them, same returns
+    np.testing.assert_array_equal(alone.points_nav, returns.points_nav)
