@@ -197,7 +197,8 @@ def pose(state) -> tuple[np.ndarray, np.ndarray]:
     values = np.asarray(state, dtype=float)[:6].tolist()  # Python floats: cheap scalar maths
     if len(values) < 6 or not all(map(math.isfinite, values)):
         raise ValueError("state must start with a finite [x, y, z, roll, pitch, yaw]")
-    return np.array(values[:3]), rotation_world_body(*values[3:])
+    x, y, z, roll, pitch, yaw = values
+    return np.array((x, y, z)), rotation_world_body(roll, pitch, yaw)
 
 
 def _surface_multipath(caster: RayCaster, origin: np.ndarray, rays: np.ndarray,
