@@ -309,12 +309,11 @@ def scan_with_hits(caster: RayCaster, model: SonarModel, angles, true_state, est
     d_b = g.directions_body
     if noise.enabled:
         ranges = apply_noise(ranges, model.max_range, noise, rng)
-    points_b = mount.position + ranges[:, None] * d_b
-    returns = SonarReturns.of_fresh_arrays(
+    returns = SonarReturns.of_scan(
         float(time), _read_only(p_nb + r_nb @ mount.position), g.angles,
         _read_only(ranges.astype(float, copy=False)),  # Embree's float32 when clean
-        _read_only(d_b @ r_nb.T), _read_only(p_nb + points_b @ r_nb.T), _read_only(points_b),
-        float(model.max_range), int(sequence))
+        _read_only(d_b @ r_nb.T), float(model.max_range), int(sequence), mount.position, d_b,
+        p_nb, r_nb)
     return returns, hits
 
 
