@@ -101,3 +101,44 @@ def test_a_mission_report_holds_the_curve_ending_at_its_coverage(tmp_path):
     assert curve["time_to_s"]["multibeam"] == {"80": None, "90": None}
     fig_coverage_vs_time(result, curve).savefig(tmp_path / "coverage_vs_time.png")
     assert (tmp_path / "coverage_vs_time.png").stat().st_size > 10_000
+
+
+
+def test_recorder_state_equals_the_pure_accumulator_over_its_frames():
+    """The recorder updates its best angles and first-seen times in place, slot by slot: the
+    same values as `CoverageMap` (copy-and-merge) fed the same pings. A multibeam whose fan
+    lies along the track sees each face from several poses at different angles, so the
+    smallest must be kept."""
+    from drake_auv.geometry.visibility import CoverageMap
+    from drake_auv.sonar.beams import SonarMount, fan_angles
+    from drake_auv.vehicle.control import rotation_world_body
+
+    duration, x0, yaw = 10.0, -5.0, np.pi / 2  # body y (the fan) along world -x
+    ground = bathymetry_to_mesh(Bathymetry(np.full((5, 81), -20.0), (0.25, 0.25), (0.0, -0.5)))
+    builder = DiagramBuilder()
+    recorder = builder.AddSystem(CoverageRecorder(ground, sensor="multibeam", rate=RATE,
+                                                  max_range=10.0, num_beams=64, fan_deg=90.0))
+    start, end = np.zeros(12), np.zeros(12)
+    start[[0, 2, 5]] = x0, -20.0 + ALTITUDE, yaw
+    end[[0, 2, 5]] = x0 + SPEED * duration, -20.0 + ALTITUDE, yaw
+    source = builder.AddSystem(TrajectorySource(PiecewisePolynomial.FirstOrderHold(
+        [0.0, duration], np.column_stack([start, end]))))
+    builder.Connect(source.get_output_port(), recorder.true_state_input)
+    simulator = Simulator(builder.Build())
+    simulator.AdvanceTo(duration)
+    context = recorder.GetMyContextFromRoot(simulator.get_context())
+
+    a = fan_angles(64, np.radians(90.0))
+    beams = np.column_stack([np.cos(a), np.sin(a), np.zeros_like(a)]) \
+        @ SonarMount.named("down").rotation.T @ rotation_world_body(0.0, 0.0, yaw).T
+    offline = CoverageMap(recorder.caster)
+    first = np.full(len(offline.best), np.nan)
+    for k in range(int(duration * RATE)):
+        t = k / RATE
+        origin = np.array([x0 + SPEED * t, 0.0, -20.0 + ALTITUDE])
+        offline.observe_beams(recorder.caster.cast(origin, beams, 10.0), beams)
+        first[np.isnan(first) & np.isfinite(offline.best)] = t
+    seen = np.isfinite(offline.best)
+    assert 0.05 < seen.mean() < 0.9 and np.ptp(offline.best[seen]) > 0.3  # partial, varied
+    np.testing.assert_allclose(recorder.best_angles(context), offline.best, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(recorder.first_seen(context), first)

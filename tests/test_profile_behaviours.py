@@ -177,6 +177,7 @@ def test_update_returns_a_new_state_and_leaves_the_old_one_as_it_was():
     follower = HorizontalFollower(FollowingParams(), seed=4)
     first, _ = follower.update(follower.initial_state(), 0.0, x, wall)
     clone = copy.deepcopy(first)  # what Drake does to abstract state
+    assert clone is first  # immutable, so Drake's copies share it
     second, a = follower.update(clone, 0.1, x, wall)
     assert len(second.map) == 120 and len(clone.map) == 60 and len(first.map) == 60
     assert clone.rng == first.rng and second.rng != first.rng  # RANSAC drew from a copy

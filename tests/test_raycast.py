@@ -108,3 +108,19 @@ def test_bad_meshes_and_rays_raise():
         caster.cast(np.zeros(3), [[0, 0, 0]], 1.0)
     with pytest.raises(ValueError, match="origins"):
         caster.cast(np.zeros((2, 3)), [[1, 0, 0]], 1.0)
+
+
+def test_cast_unit_takes_scalar_or_per_ray_ranges_and_marks_misses():
+    caster = RayCaster(trimesh.creation.box(extents=(2.0, 2.0, 2.0)))
+    directions = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+    origin = np.array([0.0, -0.5, 0.0])
+    for max_range in (5.0, np.float32(5.0), [5.0, 5.0, 0.2], np.array([5.0, 5.0, 0.2])):
+        ranges, faces = caster.cast_unit(origin, directions, max_range)
+        np.testing.assert_allclose(ranges[:2], [1.0, 1.0], atol=1e-6)
+        assert (faces[:2] >= 0).all()
+        if np.ndim(max_range):  # the third ray (1.5 m to the wall) stops at 0.2 m
+            assert np.isnan(ranges[2]) and faces[2] == -1
+        else:
+            assert abs(ranges[2] - 1.5) < 1e-6
+    again, _ = caster.cast_unit(origin, directions, 5.0)
+    assert not np.shares_memory(again, ranges)  # each query owns its arrays

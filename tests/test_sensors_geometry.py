@@ -292,3 +292,30 @@ def test_scan_with_hits_gives_the_axis_faces_of_the_same_cast():
     again = scan(caster, model, angles, state, state, rng=np.random.default_rng(3), time=2.5)
     np.testing.assert_array_equal(again.ranges, returns.ranges)
     assert not returns.ranges.flags.writeable and not hits.faces.flags.writeable
+    alone, no_hits = scan_with_hits(caster, model, angles, state, state,
+                                    rng=np.random.default_rng(3), time=2.5, axis_hits=False)
+    assert no_hits is None  # a sonar without a recorder skips them, same returns
+    np.testing.assert_array_equal(alone.points_nav, returns.points_nav)
+
+
+def test_scan_points_derived_on_first_read_survive_copies_and_pickling():
+    import copy
+    import pickle
+
+    caster = RayCaster(_wall(4.0))
+    model = SonarModel(SonarMount.named("horizontal", (0.3, 0.0, 0.1)))
+    state, estimated = _state(), _state()
+    estimated[[0, 5]] += 0.5, 0.1
+    returns = scan(caster, model, np.linspace(-0.4, 0.4, 9), state, estimated)
+    copies = [copy.deepcopy(returns), pickle.loads(pickle.dumps(returns))]
+    r_nb = Rotation.from_euler("ZYX", estimated[[5, 4, 3]]).as_matrix()
+    points_body = model.mount.position + returns.ranges[:, None] * np.column_stack(
+        [np.cos(returns.angles), np.sin(returns.angles), np.zeros(9)])
+    np.testing.assert_allclose(returns.points_body, points_body, atol=1e-12)
+    np.testing.assert_allclose(returns.points_nav, estimated[:3] + points_body @ r_nb.T,
+                               atol=1e-12)
+    assert np.isfinite(returns.ranges).all() and not returns.points_nav.flags.writeable
+    for other in copies:
+        np.testing.assert_array_equal(other.points_nav, returns.points_nav)
+    with pytest.raises(AttributeError, match="no attribute 'points'"):
+        returns.points

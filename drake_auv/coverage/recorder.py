@@ -22,8 +22,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.vehicle.control import rotation_world_body
-from drake_auv.geometry.visibility import (FaceVisibility, angle_histogram, coverage_share,
-                                           merge_best)
+from drake_auv.geometry.visibility import FaceVisibility, angle_histogram, coverage_share
 from drake_auv.signals import VehicleState
 from drake_auv.sonar.beams import AxisHits, SonarMount, fan_angles
 from drake_auv.sonar.range_sonar import STATE_SIZE, as_caster
@@ -109,12 +108,13 @@ class CoverageRecorder(LeafSystem):
                 hits = self.caster.cast(origin, directions, self.max_range)
                 slots, angles = self.visibility.beams(hits, directions)
         if len(slots):
-            best = merge_best(context.get_discrete_state(self._best_index).get_value(), slots,
-                              angles)
-            discrete_state.set_value(self._best_index, best)
-            first = context.get_discrete_state(self._first_seen_index).get_value().copy()
-            first[np.isnan(first) & np.isfinite(best)] = context.get_time()
-            discrete_state.set_value(self._first_seen_index, first)
+            # In place on the update's own copy of the state (Drake fills it with the current
+            # values): only the observed slots are read and written, not all T faces.
+            best = discrete_state.get_mutable_value(self._best_index)
+            first = discrete_state.get_mutable_value(self._first_seen_index)
+            unseen = slots[np.isnan(best[slots])]
+            np.fmin.at(best, slots, angles)  # the smallest angle per slot, NaN (unseen) skipped
+            first[unseen[np.isfinite(best[unseen])]] = context.get_time()
 
     def _shared_hits(self, context) -> AxisHits:
         """The multibeam's `AxisHits` of this update; a ValueError if they are of another

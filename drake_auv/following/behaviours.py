@@ -180,6 +180,10 @@ class FollowerState:
     heading_sign: int = 0
     turns: int = 0
 
+    def __deepcopy__(self, memo):
+        # Immutable (see above): Drake's copies of the state at every event can share it.
+        return self
+
 
 class _Follower:
     """Common part of the two followers: immutable (parameters, anchor, seed); each `update`

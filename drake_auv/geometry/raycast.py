@@ -121,10 +121,14 @@ class RayCaster:
             origins32[:] = shifted  # the same float32 rounding as astype
         else:
             origins32 = np.asarray(shifted, dtype=np.float32)
-        dists = (np.full(n, max_range, dtype=np.float32) if np.ndim(max_range) == 0
-                 else np.asarray(max_range, dtype=np.float32))
+        if isinstance(max_range, (float, int, np.floating)):
+            dists = np.empty(n, dtype=np.float32)
+            dists.fill(max_range)
+        else:
+            dists = np.asarray(max_range, dtype=np.float32)
         out = self._scene.run(origins32, np.asarray(unit_directions, dtype=np.float32),
                               dists=dists, output=1)
         faces = out["primID"].astype(np.int64)
-        ranges = np.where(faces >= 0, out["tfar"], np.nan)
+        ranges = out["tfar"]  # float32, Embree's own array: the misses are marked in place
+        ranges[faces < 0] = np.nan
         return ranges, faces

@@ -15,6 +15,7 @@ along its axis, the nearest echo above the detection threshold (`SonarNoise`).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -95,6 +96,12 @@ class SonarModel:
 
     def __post_init__(self):
         validate(self)
+
+    @functools.cached_property
+    def min_echo_cosine(self) -> float:
+        """cos(max_incidence), less a rounding margin: rays whose |cos(incidence)| is below
+        it return nothing (computed once, read at every ping)."""
+        return float(np.cos(self.max_incidence) - 1e-12)
 
 
 def fan_angles(num_beams: int, fan: float) -> np.ndarray:
@@ -190,7 +197,8 @@ def pose(state) -> tuple[np.ndarray, np.ndarray]:
     values = np.asarray(state, dtype=float)[:6].tolist()  # Python floats: cheap scalar maths
     if len(values) < 6 or not all(map(math.isfinite, values)):
         raise ValueError("state must start with a finite [x, y, z, roll, pitch, yaw]")
-    return np.array(values[:3]), rotation_world_body(*values[3:])
+    x, y, z, roll, pitch, yaw = values
+    return np.array((x, y, z)), rotation_world_body(roll, pitch, yaw)
 
 
 def _surface_multipath(caster: RayCaster, origin: np.ndarray, rays: np.ndarray,
@@ -257,39 +265,42 @@ def scan(caster: RayCaster, model: SonarModel, angles, true_state, estimated_sta
         geometry: `beam_geometry(model, angles)`, precomputed by callers that repeat angles.
     """
     return scan_with_hits(caster, model, angles, true_state, estimated_state, rng, time,
-                          sequence, geometry)[0]
+                          sequence, geometry, axis_hits=False)[0]
 
 
 def scan_with_hits(caster: RayCaster, model: SonarModel, angles, true_state, estimated_state,
                    rng: np.random.Generator | None = None, time: float = 0.0,
-                   sequence: int = 0, geometry: BeamGeometry | None = None
-                   ) -> tuple[SonarReturns, AxisHits]:
-    """`scan` and the `AxisHits` of its first cast (one ray query serves both). The rays of
-    the whole update go to Embree in one call; every array is made once, read-only."""
+                   sequence: int = 0, geometry: BeamGeometry | None = None,
+                   axis_hits: bool = True) -> tuple[SonarReturns, AxisHits | None]:
+    """`scan` and the `AxisHits` of its first cast (one ray query serves both; None with
+    `axis_hits` False, when no one scores the beams). The rays of the whole update go to
+    Embree in one call; every array is made once, read-only, and the per-ping work is a
+    fixed handful of vectorised operations (no per-beam Python)."""
     g = geometry if geometry is not None else beam_geometry(model, angles)
-    p_wb, r_wb = pose(true_state)
-    p_nb, r_nb = pose(estimated_state)
-    mount = model.mount
     noise = model.noise
     if noise.enabled and rng is None:
         raise ValueError("scan: a seeded rng is required when noise is enabled")
+    p_wb, r_wb = pose(true_state)
+    p_nb, r_nb = pose(estimated_state)
+    mount = model.mount
     origin_w = p_wb + r_wb @ mount.position
     rays_w = g.rays_body @ r_wb.T
     ranges, faces = caster.cast_unit(origin_w, rays_w, model.max_range)
     m = g.rays_per_beam
-    axes_w = rays_w[::m] if m > 1 else rays_w
-    hits = AxisHits(float(time), _read_only(origin_w), _read_only(axes_w),
-                    _read_only(faces[::m].copy() if m > 1 else faces.copy()),
-                    float(model.max_range))
+    hits = None
+    if axis_hits:
+        hits = AxisHits(float(time), _read_only(origin_w), _read_only(rays_w[::m]),
+                        _read_only(faces[::m].copy()), float(model.max_range))
     rays_echo = rays_w
     if noise.surface_prob > 0:
         rays_echo = _surface_multipath(caster, origin_w, rays_w, ranges, faces,
                                        model.max_range, noise.surface_prob, rng)
     # Grazing rays scatter away: no echo beyond max_incidence from the normal; weak echoes
-    # (gain * cos^2 of the incidence) stay below the detection threshold.
-    cos_inc = np.abs(np.einsum("ij,ij->i", caster.face_normals[np.maximum(faces, 0)],
+    # (gain * cos^2 of the incidence) stay below the detection threshold. (take's "clip"
+    # reads face 0 for the misses, whose range is NaN anyway.)
+    cos_inc = np.abs(np.einsum("ij,ij->i", caster.face_normals.take(faces, 0, mode="clip"),
                                rays_echo))
-    lost = cos_inc < np.cos(model.max_incidence) - 1e-12
+    lost = cos_inc < model.min_echo_cosine
     if noise.echo_threshold > 0:
         lost |= g.gains_per_ray * cos_inc ** 2 < noise.echo_threshold
     ranges[lost] = np.nan
@@ -298,12 +309,11 @@ def scan_with_hits(caster: RayCaster, model: SonarModel, angles, true_state, est
     d_b = g.directions_body
     if noise.enabled:
         ranges = apply_noise(ranges, model.max_range, noise, rng)
-    points_b = mount.position + ranges[:, None] * d_b
-    returns = SonarReturns.of_fresh_arrays(
+    returns = SonarReturns.of_scan(
         float(time), _read_only(p_nb + r_nb @ mount.position), g.angles,
         _read_only(ranges.astype(float, copy=False)),  # Embree's float32 when clean
-        _read_only(d_b @ r_nb.T), _read_only(p_nb + points_b @ r_nb.T), _read_only(points_b),
-        float(model.max_range), int(sequence))
+        _read_only(d_b @ r_nb.T), float(model.max_range), int(sequence), mount.position, d_b,
+        p_nb, r_nb)
     return returns, hits
 
 

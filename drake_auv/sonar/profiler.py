@@ -9,6 +9,8 @@ pings that fall in its period in one vectorised call, from the pose at the updat
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from drake_auv.leg_signal import LEG_SIZE, read_leg
@@ -97,8 +99,8 @@ class PencilBeamProfiler(RangeSonar):
         return self._leg_models.get(read_leg(self.leg_input, context)[0], self.model)
 
     def _ping_range(self, n: int) -> tuple[int, int]:
-        first = int(np.floor(n * self.pings_per_update + 1e-9))
-        return first, int(np.floor((n + 1) * self.pings_per_update + 1e-9))
+        first = math.floor(n * self.pings_per_update + 1e-9)  # Python ints: read every update
+        return first, math.floor((n + 1) * self.pings_per_update + 1e-9)
 
     def update_angles(self, n: int) -> np.ndarray:
         first, last = self._ping_range(n)

@@ -79,7 +79,8 @@ class RangeSonar(LeafSystem):
                                        self.true_state_input.Eval(context),
                                        self.estimated_state_input.Eval(context), rng=rng,
                                        time=context.get_time(), sequence=n + 1,
-                                       geometry=self.update_geometry(n, model))
+                                       geometry=self.update_geometry(n, model),
+                                       axis_hits=self._hits_index is not None)
         state.get_mutable_abstract_state(self._returns_index).set_value(returns)
-        if self._hits_index is not None:
+        if hits is not None:
             state.get_mutable_abstract_state(self._hits_index).set_value(hits)

@@ -11,6 +11,7 @@ import numpy as np
 class SonarReturns:
     """Returns of n beams, placed with the estimated (navigation) state. Immutable: the
     arrays are made read-only (views are copied first), so Drake's state copies share them.
+    (`scan`'s returns derive their points on first read: see `of_scan`.)
 
     Attributes:
         time: time of the update, s.
@@ -49,18 +50,35 @@ class SonarReturns:
         return self
 
     @classmethod
-    def of_fresh_arrays(cls, time: float, origin_nav, angles, ranges, directions_nav,
-                        points_nav, points_body, max_range: float,
-                        sequence: int) -> "SonarReturns":
-        """The returns of float64 arrays that are already read-only and shared with no one
-        who may write them (what `scan` makes): the per-field conversions are skipped."""
+    def of_scan(cls, time: float, origin_nav, angles, ranges, directions_nav, max_range: float,
+                sequence: int, mount_position, directions_body, position_nav,
+                rotation_nav) -> "SonarReturns":
+        """The returns of one `scan`, from float64 arrays that are already read-only and
+        shared with no one who may write them (the per-field conversions are skipped).
+        `points_body` (mount_position + range * directions_body) and `points_nav`
+        (position_nav + rotation_nav @ points_body) are derived on first read: most
+        consumers (the mapper, the multibeam's) read only the ranges and directions."""
         returns = object.__new__(cls)
         for name, value in (("time", time), ("origin_nav", origin_nav), ("angles", angles),
                             ("ranges", ranges), ("directions_nav", directions_nav),
-                            ("points_nav", points_nav), ("points_body", points_body),
-                            ("max_range", max_range), ("sequence", sequence)):
+                            ("max_range", max_range), ("sequence", sequence),
+                            ("_frame", (mount_position, directions_body, position_nav,
+                                        rotation_nav))):
             object.__setattr__(returns, name, value)
         return returns
+
+    def __getattr__(self, name):
+        # Only reached for attributes not set yet: the points of `of_scan` returns.
+        frame = self.__dict__.get("_frame") if name in ("points_body", "points_nav") else None
+        if frame is None:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        mount_position, d_b, p_nb, r_nb = frame
+        points_body = mount_position + self.ranges[:, None] * d_b
+        points_nav = p_nb + points_body @ r_nb.T
+        for key, value in (("points_body", points_body), ("points_nav", points_nav)):
+            value.setflags(write=False)
+            object.__setattr__(self, key, value)  # the same values for everyone sharing it
+        return self.__dict__[name]
 
     @classmethod
     def empty(cls, max_range: float) -> "SonarReturns":
