@@ -49,7 +49,7 @@ from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 MAX_POINTS = 60
 NEAR_FACTOR = 2.0
 UNKNOWN_FACTOR = 10.0
-KEEP = 0.75  # clearances a path keeps from occupied cell centres
+KEEP = 1.0  # clearances a path keeps from occupied cell centres (their rock can be 0.87 m nearer)
 ESCAPE = 2.0  # cells around a start nearer rock than KEEP where a path may leave it
 LOCAL_UNKNOWN = 1.0  # clearances around the vehicle where unknown water may be crossed
 
