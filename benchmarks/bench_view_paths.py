@@ -88,7 +88,7 @@ def save_query(file, travel: TravelField, goal, seed: int, path, ms: float,
     nearest reachable."""
     grid, cost = travel.cost.grid, travel.cost
     arrays = {f"grid_{f.name}": np.asarray(getattr(grid, f.name))
-              for f in dataclasses.fields(grid)}
+              for f in dataclasses.fields(grid) if getattr(grid, f.name) is not None}
     arrays.update({f"cost_{name}": np.float64(getattr(cost, name)) for name in COST_FIELDS})
     np.savez_compressed(file, **arrays, passable=travel.passable, start=travel.start,
                         goal=np.asarray(goal, float)[:3], seed=np.int64(seed),
@@ -169,7 +169,7 @@ class Validity:
 
     def __init__(self, travel: TravelField, goal):
         cost, grid = travel.cost, travel.cost.grid
-        rock_ok = cost.rock >= KEEP * cost.clearance
+        rock_ok = cost.rock >= travel.keep.reshape(grid.labels.shape) - 1e-9
         self.ok = travel.passable.reshape(grid.labels.shape) & rock_ok
         for p, rule in ((goal, rock_ok), (travel.start, np.ones_like(rock_ok))):
             idx, inside = grid.index(np.asarray(p, float)[:3])

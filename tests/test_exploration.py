@@ -181,7 +181,7 @@ def test_a_vehicle_nearer_rock_than_the_keep_out_finds_its_way_out():
     labels[14:16, :, :] = OCCUPIED  # a wall across x
     grid = LabelGrid(np.array([0.0, 0.0, -20.0]), 1.0, labels,
                      np.array([0.0, 0.0, -20.0, 30.0, 30.0, -8.0]))
-    cost = PathCost(grid, clearance=3.0)  # keep-out: 2.25 m from rock cell centres
+    cost = PathCost(grid, clearance=3.0)  # keep-out: 3 m from rock cell centres (KEEP)
     start, goal = np.array([13.6, 15.5, -14.5]), np.array([5.5, 15.5, -14.5])
     assert cost.distances(start)[0] == 1.0  # the vehicle's cell is 1 m from the wall
     travel = TravelField.build(cost, start)
@@ -189,7 +189,7 @@ def test_a_vehicle_nearer_rock_than_the_keep_out_finds_its_way_out():
     assert path is not None and np.isfinite(travel.lengths(goal[None])[0])
     rock, _ = cost.distances(path[1:])
     assert rock.min() >= 1.0  # never nearer than it started
-    assert np.all(rock[np.linalg.norm(path[1:] - start, axis=1) > 3.0] >= 2.25)
+    assert np.all(rock[np.linalg.norm(path[1:] - start, axis=1) > 3.0] >= 3.0)
     # no way out that does not come nearer: stays unreachable
     labels[:, :, :] = OCCUPIED
     labels[13, 15, 5] = FREE
@@ -226,6 +226,13 @@ def test_plan_view_chooses_a_reachable_view_of_the_wall():
     # the same map and target a step later: kept, no new path
     kept = plan_view(m, position, params, step.target, seed=1, previous=step.grid)
     assert kept.target is step.target and kept.path is None
+    # frontiers, but no view left to take (every one within 3 m of a view already reached):
+    # a turn in place, which sweeps the fan over what else is there, not the end
+    visited = np.stack(np.meshgrid(np.arange(-16.0, 12.0, 2.0), np.arange(-16.0, 16.0, 2.0),
+                                   np.arange(-24.0, -4.0, 2.0)), axis=-1).reshape(-1, 3)
+    turn = plan_view(m, position, params, None, seed=0, visited=visited)
+    assert turn.frontier_cells > 0 and turn.candidates == 0
+    assert turn.turning and turn.target.look_around and turn.no_gain
 
 
 def test_explore_parameters_name_what_is_wrong():

@@ -241,7 +241,10 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
                             coverage, False, grid, visited)
     best = float(gains[:n].max()) if n else 0.0
     unreachable = bool(np.any(~np.isfinite(distance) & fresh))
-    if order or unreachable:  # views exist but no clear path: turn in place, 120 degrees
+    if order or unreachable or (n == 0 and len(frontiers.kinds)):
+        # views exist but no clear path, or frontiers but no admissible view of them (the
+        # breakwater's start, its fan along the row: every view of the gaps' faces lay by a
+        # neighbouring block, and it stopped 15 s in): turn in place, 120 degrees
         turn = yaw + 2.0 * np.pi / 3.0
         axis = turn + params.sensor_azimuth
         look = position + 10.0 * np.array([np.cos(axis), np.sin(axis), 0.0])
