@@ -171,3 +171,17 @@ def test_the_pilot_serves_only_its_leg():
     simulator.AdvanceTo(0.5)
     assert PilotStatus(pilot.status_output.Eval(context)).leg == 2
     assert pilot.reference_output.Eval(context)[2] == -10.0
+
+
+def test_dvl_ranges_within_the_blanking_distance_are_no_measurement():
+    """A beam 0.3 m from the seabed: with noise its range could be negative (the mapper
+    refuses those); within the blanking distance it is no measurement, never a range < 0."""
+    from drake_auv.sonar.altimeter import measure_ranges
+
+    caster = RayCaster(slope_world(slope=0.0, depth=-10.3))
+    params = DvlParams(range_sigma_m=0.5)
+    ranges = np.array([measure_ranges(caster, params, state(z=-10.0), np.random.default_rng(k))
+                       for k in range(50)])
+    assert np.all(np.isnan(ranges) | (ranges >= params.blanking_m))
+    far = measure_ranges(caster, DvlParams(blanking_m=0.0), state(z=-10.0))
+    np.testing.assert_allclose(far, 0.3 / np.cos(np.radians(30.0)))

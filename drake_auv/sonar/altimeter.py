@@ -51,6 +51,8 @@ class DvlParams:
         range_sigma_fraction, range_sigma_m: range noise, a fraction of the range and m, >= 0.
         dropout_prob: probability that a beam is lost, in [0, 1].
         min_beams: valid beams needed for bottom lock, in 1..4.
+        blanking_m: a beam's range below this is no measurement (the transducer's ringing),
+            m, >= 0 (a noisy range there could even be negative).
     """
 
     beam_deg: float = param(30.0, low=0.0, high=60.0, unit="deg")
@@ -60,6 +62,7 @@ class DvlParams:
     range_sigma_m: float = param(0.02, low=0.0, unit="m")
     dropout_prob: float = param(0.02, low=0.0, high=1.0)
     min_beams: int = param(3, low=1, high=4, integer=True)
+    blanking_m: float = param(0.5, low=0.0, unit="m")
 
     def __post_init__(self):
         validate(self)
@@ -82,14 +85,16 @@ def beam_directions(params: DvlParams, state) -> np.ndarray:
 
 def measure_ranges(caster: RayCaster, params: DvlParams, state: np.ndarray,
                    rng: np.random.Generator | None = None) -> np.ndarray:
-    """(4,) the beams' slant ranges at the true `state` (12), m, NaN where a beam is lost or
-    finds nothing within range. `rng` None: no noise."""
+    """(4,) the beams' slant ranges at the true `state` (12), m, NaN where a beam is lost,
+    finds nothing within range or returns within the blanking distance. `rng` None: no
+    noise."""
     ranges, _ = caster.cast_unit(VehicleState(np.asarray(state, dtype=float)).position,
                                  beam_directions(params, state), params.max_range)
     if rng is not None:
         sigma = params.range_sigma_fraction * np.nan_to_num(ranges) + params.range_sigma_m
         ranges = ranges + sigma * rng.standard_normal(4)
         ranges[rng.random(4) < params.dropout_prob] = np.nan
+    ranges[ranges < params.blanking_m] = np.nan
     return ranges
 
 
