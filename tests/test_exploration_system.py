@@ -12,7 +12,7 @@ from drake_auv.cli import main
 from drake_auv.exploration.planner import ExploreParameters
 from drake_auv.exploration.view_planner import ViewPlanner
 from drake_auv.mapping.mapper import OnlineMap
-from drake_auv.mapping.scan_log import ScanLog
+from drake_auv.mapping.scan_log import SOURCES, ScanLog
 from drake_auv.mission.config import MissionFileError, load_mission, mission_from_dict
 from drake_auv.mission.plan import plan_mission
 from drake_auv.mission.site import load_site
@@ -61,6 +61,23 @@ def test_view_planner_flies_towards_a_view_of_the_wall():
             < np.linalg.norm(start[:3] - target.position))
     step = planner.GetOutputPort("step").Eval(context)
     assert step[2] >= 2.0 and 0.0 < step[5] < 1.0  # gain, believed coverage
+
+
+def test_the_reference_keeps_the_guard_above_the_dvl_seabed():
+    """The seabed guard: however the path descends, the reference stays GUARD clearances above
+    the DVL's seabed (and its vertical rate is not downwards there); no lock, no guard."""
+    from drake_auv.exploration.view_planner import GUARD
+
+    planner, simulator, x = planner_context(0.0)
+    context = simulator.get_context()
+    free = planner.GetOutputPort("reference").Eval(context).copy()
+    seabed = free[2] - 0.5  # a seabed just under the reference
+    planner.GetInputPort("seabed_elevation").FixValue(context, [seabed])
+    guarded = planner.GetOutputPort("reference").Eval(context)
+    assert guarded[2] == pytest.approx(seabed + GUARD * 3.0) and guarded[6] >= 0.0
+    np.testing.assert_array_equal(np.delete(guarded, [2, 6]), np.delete(free, [2, 6]))
+    planner.GetInputPort("seabed_elevation").FixValue(context, [np.nan])
+    np.testing.assert_array_equal(planner.GetOutputPort("reference").Eval(context), free)
 
 
 def test_view_planner_idles_on_another_leg():
@@ -121,6 +138,9 @@ def test_explore_dive_gains_coverage_without_contact():
     exploration = summary["exploration"]
     assert exploration["viewpoints"] >= 3 and exploration["strategy"] == "gain"
     assert 0.0 < exploration["believed_coverage"] < 1.0 and exploration["stopped"] == "time"
+    # the DVL's beams reach the map: the seabed under the vehicle is in the scan log
+    dvl = [b for b in result.scan_log.batches() if b.source == SOURCES.index("dvl")]
+    assert len(dvl) > 100 and all(len(b.ranges) == 4 for b in dvl)
 
 
 def test_explore_leg_ends_when_the_planner_says_finished():

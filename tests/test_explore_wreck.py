@@ -21,7 +21,13 @@ spec.loader.exec_module(example)
 
 def test_the_wreck_sits_on_a_rough_seabed_and_its_target_is_what_can_be_seen():
     world, target = wreck_site(seed=0, origin=(0.0, 0.0))
-    assert target.area == pytest.approx(335.3, abs=1.0)  # hull and deckhouse above the seabed
+    # The hull (20 m x 6 m, a 6 m bow, 5 m high) and the deckhouse (5 x 4 x 3 m) less the two
+    # faces they share (2 x 20 m^2) and the hull's bottom, settled 1 m (up to 2.5 m on the
+    # rough seabed and the heel) into the seabed: only what stands above it is the target.
+    perimeter = 2 * 14.0 + 6.0 + 2 * np.hypot(6.0, 3.0)
+    deck = 14.0 * 6.0 + 6.0 * 6.0 / 2
+    above = (deck - 20.0) + 2 * (20.0 + 15.0 + 12.0) - 20.0
+    assert above + 2.5 * perimeter < target.area < above + 4.0 * perimeter
     assert np.all(target.triangles_center[:, 2] > world.bounds[0, 2])
     lo, hi = world.bounds
     assert hi[2] < -24.0 and lo[2] > -34.0  # the deckhouse's top, the deepest seabed

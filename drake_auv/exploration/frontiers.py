@@ -107,18 +107,18 @@ class LabelGrid:
         shape = np.maximum(np.ceil((hi - lo) / cell).astype(int), 1)
         same = (previous is not None and previous.cell == cell
                 and previous.labels.shape == tuple(shape) and np.allclose(previous.origin, lo))
-        seen = None  # without a history of returns, what is occupied counts as seen
+        # without a history of returns, what is occupied counts as seen
+        seen = None if returns is None else np.zeros((*shape, len(FACES)), bool)
+        grid = cls(lo, float(cell), np.empty(shape, np.int8), region, seen)
         if returns is not None:
-            seen = np.zeros((*shape, len(FACES)), bool)
             if same:
                 seen[:] = (previous.seen if previous.seen is not None
                            else (previous.labels == OCCUPIED)[..., None])
             points, directions = returns
-            cells, inside = cls(lo, float(cell), seen[..., 0], region).index(points)
+            cells, inside = grid.index(points)
             faces = -np.asarray(directions, float)[inside] @ FACES.T > FACE_VIEW  # (m, 6)
             row, face = np.nonzero(faces)
             seen[(*cells[inside][row].T, face)] = True
-        grid = cls(lo, float(cell), np.empty(shape, np.int8), region, seen)
         if rays is not None and same:
             grid.labels[:] = previous.labels
             flat = np.union1d(grid.touched(*rays),
@@ -338,7 +338,8 @@ def _tilted(d: np.ndarray, angle: float) -> np.ndarray:
 def candidate_viewpoints(grid: LabelGrid, clusters: Clusters, omega: float,
                          clearance: float, unknown_clearance: float) -> Candidates:
     """Viewpoints `omega` m back from each cluster along its view direction (turned by
-    +-`TURN` and tilted down by `TURN`), kept where admissible (see the module)."""
+    +-`TURN`, tilted down by `TURN` and made level), moved to the nearest admissible height,
+    kept where admissible (see the module)."""
     unknown = ndimage.distance_transform_edt(grid.labels != UNKNOWN) * grid.cell
     d = clusters.directions
     directions = np.concatenate([d, _turned(d, TURN), _turned(d, -TURN), _tilted(d, TURN),

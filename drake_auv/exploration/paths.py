@@ -128,10 +128,13 @@ class TravelField:
         idx, inside = grid.index(start)
         keep = np.full(shape, KEEP * cost.clearance)
         if inside:  # a start inside the keep-out: the way out, never nearer rock
-            start_rock = float(cost.rock[tuple(idx)])
-            out = (np.linalg.norm(np.indices(shape) - idx[:, None, None, None], axis=0)
-                   <= ESCAPE)
-            keep[out] = min(KEEP * cost.clearance, start_rock)
+            lo = np.maximum(idx - int(ESCAPE), 0)
+            hi = np.minimum(idx + int(ESCAPE) + 1, shape)
+            offsets = np.meshgrid(*(np.arange(a, b) - i for a, b, i in zip(lo, hi, idx)),
+                                  indexing="ij")
+            near = sum(o ** 2 for o in offsets) <= ESCAPE ** 2
+            box = tuple(slice(a, b) for a, b in zip(lo, hi))
+            keep[box][near] = min(KEEP * cost.clearance, float(cost.rock[tuple(idx)]))
         passable = (cost.rock >= keep) & depth_ok[None, None, :] & open_water
         factor = np.where(grid.labels == UNKNOWN, UNKNOWN_FACTOR,
                           np.where(cost.blocked >= cost.clearance, 1.0, NEAR_FACTOR))

@@ -12,7 +12,8 @@ not its future (a state set by hand). Copying a Context rebuilds its octree from
 diagram never share a map. A step's cost is the batches since the last one, never the log.
 
 Ports: inputs `multibeam_returns`, `profiler_returns`, `dvl_returns` (`SonarReturns`; any
-may be left unconnected: the DVL's four beams map what lies under the vehicle); outputs `map` (`OnlineMap`) and `scan_log` (`ScanLog`, the recorded returns).
+may be left unconnected: the DVL's four beams map what lies under the vehicle); outputs `map`
+(`OnlineMap`) and `scan_log` (`ScanLog`, the recorded returns).
 """
 
 from __future__ import annotations

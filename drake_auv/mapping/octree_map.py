@@ -12,7 +12,7 @@ free water at the clamping threshold, where further misses change nothing), so t
 what the scans distinguish, not every voxel a beam ever crossed. Lazy insertion, which defers
 that, never prunes: on the first 1,200 s of `monterey_wall` it held 1.11 M leaves (31 MB)
 against 0.70 M (20 MB) here, and the gap widens as beams sweep the same water again, for
-about 8 % more work per multibeam ping (docs/benchmarks.md). Pruning changes no label or
+about 10 % more work per multibeam ping (docs/benchmarks.md: 0.86 against 0.77 ms). Pruning changes no label or
 log-odds: `search` finds the leaf, or the pruned node it was merged into, which carries the
 same value, and a pruned node is expanded with that value when a later scan touches it.
 (Discretised insertion, one ray per endpoint voxel, is 25 % faster for a 240-beam fan but

@@ -129,9 +129,9 @@ class DvlAltimeter(LeafSystem):
         self.noise, self.seed = bool(noise), int(seed)
         self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
         self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
-        # altitude, n (measurements so far), time of the last, its four slant ranges
-        self._measurement = self.DeclareDiscreteState(np.array([np.nan, 0.0, 0.0]
-                                                               + [np.nan] * 4))
+        self._measurement = self.DeclareDiscreteState(np.array([np.nan, 0.0]))  # altitude, n
+        # the last measurement's time and its four slant ranges (NaN: no measurement)
+        self._beams = self.DeclareDiscreteState(np.array([0.0] + [np.nan] * 4))
         self.DeclarePeriodicDiscreteUpdateEvent(1.0 / self.params.rate, 0.0,
                                                 self._update_measurement)
         self.altitude_output = self.DeclareVectorOutputPort(
@@ -146,6 +146,7 @@ class DvlAltimeter(LeafSystem):
             "returns", lambda: AbstractValue.Make(SonarReturns.empty(self.params.max_range)),
             self._calc_returns,
             prerequisites_of_calc={self.discrete_state_ticket(self._measurement),
+                                   self.discrete_state_ticket(self._beams),
                                    self.input_port_ticket(
                                        self.estimated_state_input.get_index())})
 
@@ -155,7 +156,8 @@ class DvlAltimeter(LeafSystem):
         true = self.true_state_input.Eval(context)
         ranges = measure_ranges(self.caster, self.params, true, rng)
         discrete_state.set_value(self._measurement, [altitude_of(self.params, true, ranges),
-                                                     n + 1, context.get_time(), *ranges])
+                                                     n + 1])
+        discrete_state.set_value(self._beams, [context.get_time(), *ranges])
 
     def _calc_altitude(self, context, output: BasicVector):
         output.SetAtIndex(0, context.get_discrete_state(self._measurement)[0])
@@ -166,16 +168,16 @@ class DvlAltimeter(LeafSystem):
 
     def _calc_returns(self, context, output):
         """The last measurement's beams at the estimated pose (empty before the first)."""
-        measurement = context.get_discrete_state(self._measurement).get_value()
-        n = int(measurement[1])
+        n = int(context.get_discrete_state(self._measurement)[1])
         if n == 0:
             output.set_value(SonarReturns.empty(self.params.max_range))
             return
+        time, *ranges = context.get_discrete_state(self._beams).get_value()
+        ranges = np.asarray(ranges)
         estimated = self.estimated_state_input.Eval(context)
         origin = VehicleState(estimated).position
         directions = beam_directions(self.params, estimated)
-        ranges = measurement[3:7]
-        points = origin + directions * ranges[:, None]
-        output.set_value(SonarReturns(float(measurement[2]), origin, np.zeros(4), ranges,
-                                      directions, points, self.params.beams_body
-                                      * ranges[:, None], self.params.max_range, n))
+        output.set_value(SonarReturns(float(time), origin, np.zeros(4), ranges, directions,
+                                      origin + directions * ranges[:, None],
+                                      self.params.beams_body * ranges[:, None],
+                                      self.params.max_range, n))
