@@ -10,12 +10,20 @@ the log (`mapping.mapper`), and so is the recorded point cloud of the dive.
 Memory does not grow with the beams: a batch's arrays go, when it is appended, to the log's
 `ScanStore`, an append-only temporary file (deleted when the last version of the log goes),
 which only the most recent `CACHE_BATCHES` batches also keep in memory (what the mapper reads:
-the batches since its last update). A version holds its count, its parent, its record's offset
-and the running count of returns, about 100 bytes a batch. Versions of one log, and so the
-Contexts cloned from one another, share its store: a record never changes once written, and
-each version reaches only its own records. An empty log has no store; its first append opens
-one, so a fresh Context shares nothing with an earlier run. Reading an old batch (an octree
-rebuilt for a copied Context, `points.ply`) reads its record back.
+the batches since its last update). Nor with the batches, beyond 8 bytes each: a version holds
+its count, its record's offset, the running count of returns and its history, which is the
+chain of the versions since the last multiple of `CHUNK_BATCHES` batches (one small object per
+batch, at most `CHUNK_BATCHES` of them) and, before that, frozen chunks of `CHUNK_BATCHES`
+record offsets (an int64 array each, linked newest first). So the versions older than the
+current chunk are no longer objects (176 B a batch when each was: 51 MB for the 290,000
+batches of a 4 h dive); what still reaches them is their offsets. A record's offset is unique
+in its store (each append writes a new record), so a version is in another's past exactly when
+the other's history holds its newest offset at its count: that is how `since` knows a consumer's
+version without keeping it. Versions of one log, and so the Contexts cloned from one another,
+share its store: a record never changes once written, and each version reaches only its own
+records. An empty log has no store; its first append opens one, so a fresh Context shares
+nothing with an earlier run. Reading an old batch (an octree rebuilt for a copied Context,
+`points.ply`) reads its record back.
 
 Frame: the navigation frame (the world as the vehicle believes it), metres, seconds.
 """
@@ -31,6 +39,7 @@ import numpy as np
 
 SOURCES = ("multibeam", "profiler", "dvl")
 CACHE_BATCHES = 64  # the newest batches a store also keeps in memory
+CHUNK_BATCHES = 1024  # record offsets frozen into one array of a version's history
 # A record: this header, then the directions (n, 3) and ranges (n,) as little-endian float32.
 _HEADER = np.dtype([("time", "<f8"), ("source", "<i8"), ("origin", "<f8", (3,)),
                     ("max_range", "<f8"), ("n", "<i8")])
@@ -150,15 +159,28 @@ class _Batches:
 
 
 @dataclass(frozen=True, eq=False, slots=True)
+class _Chunk:
+    """`CHUNK_BATCHES` consecutive record offsets of a log's history (read-only int64), the
+    older ones in `parent`; `count`: the batches up to and including this chunk's last."""
+
+    offsets: np.ndarray
+    parent: "_Chunk | None"
+    count: int
+
+
+@dataclass(frozen=True, eq=False, slots=True)
 class ScanLog:
-    """A version of the log: `count` batches, the newest in `store` at `offset`, the older ones
-    in `parent`; `returns`: the beams with a return (finite range) of all `count` batches."""
+    """A version of the log: `count` batches, the newest in `store` at `offset`; `returns`: the
+    beams with a return (finite range) of all `count` batches. Its history: `parent`, the
+    previous version while it lies in the current chunk (None at a multiple of
+    `CHUNK_BATCHES`), and `chunk`, the frozen offsets of the batches before that."""
 
     count: int = 0
     parent: "ScanLog | None" = None
     store: ScanStore | None = None
     offset: int = -1
     returns: int = 0
+    chunk: _Chunk | None = None
 
     def __deepcopy__(self, memo):
         return self  # immutable, and so are the versions it points to
@@ -170,19 +192,45 @@ class ScanLog:
 
     def append(self, batch: ScanBatch) -> "ScanLog":
         store = self.store if self.store is not None else ScanStore()
-        return ScanLog(self.count + 1, self, store, store.put(batch),
-                       self.returns + int(np.count_nonzero(np.isfinite(batch.ranges))))
+        offset = store.put(batch)
+        returns = self.returns + int(np.count_nonzero(np.isfinite(batch.ranges)))
+        count = self.count + 1
+        if count % CHUNK_BATCHES:
+            return ScanLog(count, self, store, offset, returns, self.chunk)
+        # The chunk is full: its offsets become one array, and its versions can go.
+        node, tail = self, [offset]
+        while node.count > count - CHUNK_BATCHES:
+            tail.append(node.offset)
+            node = node.parent
+        return ScanLog(count, None, store, offset, returns,
+                       _Chunk(_frozen(tail[::-1], np.int64), self.chunk, count))
 
     def _offsets_since(self, older: "ScanLog | None") -> list[int] | None:
-        older_count = 0 if older is None else older.count
-        node, out = self, []
-        while node.count > older_count:
-            out.append(node.offset)
-            node = node.parent
-        if older is not None and older.count > 0 and node is not older:
+        """The offsets of the batches after version `older`, oldest first (None when `older`
+        is not in this version's past: another store, or another newest offset at its count).
+        Walks only the versions and chunks after `older`."""
+        low = 0 if older is None else older.count
+        if low > self.count or (low > 0 and older.store is not self.store):
             return None
-        out.reverse()
-        return out
+        node, tail = self, []
+        while node.count > low and node.parent is not None:
+            tail.append(node.offset)
+            node = node.parent
+        parts, before = [], node.offset  # `before`: the offset of batch `low` - 1
+        if node.count > low:  # a chunk boundary: the rest lies in the chunks
+            chunk = node.chunk
+            while chunk is not None and chunk.count > low:
+                first = chunk.count - len(chunk.offsets)
+                parts.append(chunk.offsets[max(low - first, 0):])
+                if first < low:
+                    before = int(chunk.offsets[low - first - 1])
+                    break
+                chunk = chunk.parent
+            else:
+                before = int(chunk.offsets[-1]) if chunk is not None else -1
+        if low > 0 and before != older.offset:
+            return None
+        return np.concatenate(parts[::-1]).tolist() + tail[::-1] if parts else tail[::-1]
 
     def since(self, older: "ScanLog | None") -> list[ScanBatch] | None:
         """The batches appended after version `older`, oldest first; None when `older` is not
