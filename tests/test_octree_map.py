@@ -4,6 +4,7 @@
 import numpy as np
 import pytest
 import trimesh
+from scipy.spatial import cKDTree
 
 from drake_auv.mapping.octree_map import OctreeMap
 
@@ -249,3 +250,47 @@ def test_returns_on_a_voxel_face_are_occupied_where_octomap_keys_them():
     m.insert_scan([1.0, 0.0, -10.0], directions, np.full(4, 23.094011), 80.0)
     occupied = m.occupied_points()
     assert len(occupied) == 4 and np.all(m.labels(occupied) == 1)
+
+
+def test_candidates_read_as_free_leave_the_index_and_every_answer_stays_the_same():
+    # A wall scanned with noisy ranges from a drifting vehicle, then moved (a navigation jump):
+    # many voxels are hit once and cleared by later beams. Every answer must equal reading the
+    # label of every voxel ever hit (tracked here, keyed as OctoMap keys them), while the index
+    # holds far fewer candidates than were ever hit, and re-hit voxels come back.
+    rng = np.random.default_rng(8)
+    omap = OctreeMap(resolution=0.5)
+    ever: set[tuple] = set()
+    queries = 0
+    for k in range(240):
+        wall = trimesh.creation.box(extents=(1.0, 30.0, 12.0))
+        wall.apply_translation((10.0 if k < 120 else 11.5, 0.0, -6.0))
+        origin = np.array([0.0, -10.0 + 0.08 * (k % 120), -6.0]) + rng.normal(0.0, 0.3, 3)
+        d = _fan(n=160, aperture=np.radians(100.0), tilt=rng.uniform(-0.4, 0.4))
+        r = _cast(wall, origin, d, 20.0)
+        r += rng.normal(0.0, 0.4, len(r))  # noise spreads the returns over several voxels
+        omap.insert_scan(origin, d, r, 20.0)
+        hit = np.isfinite(r) & (r <= 20.0)
+        ends = (origin + d[hit] * r[hit, None]).astype(np.float32).astype(float)
+        ever.update(map(tuple, np.floor(ends / 0.5).astype(int).tolist()))
+        if k % 5 == 4:  # the replanner's box around the vehicle
+            lo, hi = origin - [1.0, 8.0, 6.0], origin + [16.0, 8.0, 6.0]
+            everything = (np.array(sorted(ever)) + 0.5) * 0.5
+            inside = everything[np.all((everything >= lo) & (everything <= hi), axis=1)]
+            want = inside[np.asarray(omap.tree.getLabels(inside)) == 1]
+            got, log_odds = omap.occupied_points(lo, hi, log_odds=True)
+            assert sorted(map(tuple, got)) == sorted(map(tuple, want))
+            np.testing.assert_array_equal(log_odds, [omap.tree.search(p).getLogOdds()
+                                                     for p in got])
+            queries += len(want)
+    everything = (np.array(sorted(ever)) + 0.5) * 0.5
+    want = everything[np.asarray(omap.tree.getLabels(everything)) == 1]
+    assert queries > 1000 and len(want) > 200
+    assert sorted(map(tuple, omap.occupied_points())) == sorted(map(tuple, want))
+    # The index: the occupied voxels and the unread, not every voxel ever hit.
+    centres, unread = omap.candidates()
+    memory = omap.memory()
+    assert memory["candidates"] == len(centres) == len(want) + np.count_nonzero(unread)
+    assert memory["candidates"] < 0.7 * len(ever)  # 3,851 of 5,803: the cleared ones left
+    assert omap._count < 0.8 * len(ever)  # rows left by free voxels were taken again
+    np.testing.assert_allclose(omap.distance(everything[:50]), cKDTree(want).query(
+        everything[:50])[0])

@@ -19,7 +19,14 @@ same value, and a pruned node is expanded with that value when a later scan touc
 casts towards voxel centres, so beams without a return no longer clear exactly along the beam:
 not used.)
 
-Occupied voxels are found among the candidates (voxels ever hit), whose labels are cached:
+Occupied voxels are found among the candidates, whose labels are cached. A candidate is a
+voxel hit since its label was last read as free: a voxel becomes occupied only by a hit on it
+(a miss lowers its log-odds, pruning and clamping change no label), so a candidate read as
+free leaves the index (its code, its row, which a later candidate reuses, its tile entry) and
+a later hit brings it back. The index thus holds the occupied voxels (the map, which grows with
+the surveyed surface) and those hit since the last reads, not every voxel ever hit: on a long
+dive, noise and navigation drift spread the returns over many voxels that later beams cross
+and clear. Labels are cached:
 a scan can change only the voxels its rays cross, and the rays of one sonar update lie in a
 plane through the sensor (a multibeam fan, the profiler's head plane), so a cached label is
 read again from the octree only when the voxel lies within a voxel of the plane of a scan
@@ -44,6 +51,7 @@ _MASK = (1 << 21) - 1
 _SCAN_WINDOW = 40  # scans remembered for the label cache; older labels are read again
 _TILE = 16  # voxels along a tile's edge (the candidates' spatial index)
 _LIMIT = 1e9  # m, where an unbounded box is clipped
+_LEFT = np.iinfo(np.int64).max  # the revision of a row whose candidate left the index
 
 
 def _encode(idx: np.ndarray) -> np.ndarray:
@@ -87,12 +95,14 @@ class OctreeMap:
     def clear(self) -> None:
         """Forgets everything: the whole map becomes unknown."""
         self.tree.clear()
-        self._candidates: set[int] = set()  # voxels ever hit: a superset of the occupied ones
-        # The candidates as arrays (insertion order; the first `_count` rows of a buffer that
-        # doubles, so adding costs what is added): centres, cached label and the revision at
-        # which it was read from the octree (-1: never). `_tiles`: per tile of `_TILE` voxels
-        # a side, the indices of its candidates, so a box query visits only the box's tiles.
+        self._candidates: set[int] = set()  # codes of the candidates: a superset of the occupied
+        # The candidates as rows of arrays (the first `_count` rows of a buffer that doubles,
+        # so adding costs what is added; rows left by candidates read as free, in `_vacant`,
+        # are taken first): centres, cached label and the revision at which it was read from
+        # the octree (-1: never; `_LEFT`: a vacant row). `_tiles`: per tile of `_TILE` voxels
+        # a side, the rows of its candidates, so a box query visits only the box's tiles.
         self._count = 0
+        self._vacant: list[np.ndarray] = []
         self._centres = np.zeros((0, 3))
         self._label = np.zeros(0, dtype=bool)
         self._checked = np.zeros(0, dtype=np.int64)
@@ -167,12 +177,22 @@ class OctreeMap:
         del self._scans[:-_SCAN_WINDOW]
 
     def _materialise(self) -> None:
-        """Moves the newly hit codes into the candidate arrays (labels unread) and tiles."""
+        """Moves the newly hit codes into the candidate arrays (labels unread) and tiles,
+        into vacant rows first."""
         if not self._new_codes:
             return
         codes = np.concatenate(self._new_codes)
         self._new_codes = []
-        start, stop = self._count, self._count + len(codes)
+        taken, need = [], len(codes)
+        while need and self._vacant:
+            last = self._vacant.pop()
+            if len(last) > need:
+                self._vacant.append(last[need:])
+                last = last[:need]
+            taken.append(last)
+            need -= len(last)
+        start, stop = self._count, self._count + need
+        rows = np.concatenate(taken + [np.arange(start, stop)])
         if stop > len(self._label):
             size = max(stop, 2 * len(self._label), 1024)
             self._centres = np.resize(self._centres, (size, 3))
@@ -180,14 +200,14 @@ class OctreeMap:
             self._checked = np.resize(self._checked, size)
             self._log_odds = np.resize(self._log_odds, size)
         idx = _decode(codes)
-        self._centres[start:stop] = (idx + 0.5) * self.resolution
-        self._label[start:stop] = False
-        self._checked[start:stop] = -1
+        self._centres[rows] = (idx + 0.5) * self.resolution
+        self._label[rows] = False
+        self._checked[rows] = -1
         self._count = stop
         tiles = _encode(np.floor_divide(idx, _TILE))
         order = np.argsort(tiles, kind="stable")
         keys, first = np.unique(tiles[order], return_index=True)
-        for key, part in zip(keys.tolist(), np.split(order + start, first[1:])):
+        for key, part in zip(keys.tolist(), np.split(rows[order], first[1:])):
             old = self._tiles.get(key)
             self._tiles[key] = part if old is None else np.concatenate([old, part])
 
@@ -239,6 +259,25 @@ class OctreeMap:
                 (search(p).getLogOdds() for p in self._centres[occupied]), dtype=float,
                 count=len(occupied))
         self._checked[stale] = self.revision
+        if len(read):
+            self._leave(read[~self._label[read]])
+
+    def _leave(self, rows: np.ndarray) -> None:
+        """Takes the candidates of `rows`, read as free, out of the index: their codes, their
+        tiles' entries; the rows become vacant (never stale, never occupied)."""
+        if len(rows) == 0:
+            return
+        idx = np.floor(self._centres[rows] * (1.0 / self.resolution)).astype(np.int64)
+        self._candidates.difference_update(_encode(idx).tolist())
+        self._checked[rows] = _LEFT
+        self._vacant.append(rows)
+        for key in np.unique(_encode(np.floor_divide(idx, _TILE))).tolist():
+            part = self._tiles[key]
+            part = part[self._checked[part] != _LEFT]
+            if len(part):
+                self._tiles[key] = part
+            else:
+                del self._tiles[key]
 
     @staticmethod
     def _swept(centres: np.ndarray, checked: np.ndarray, scans: np.ndarray) -> np.ndarray:
@@ -299,11 +338,13 @@ class OctreeMap:
         return self._centres[occupied]
 
     def candidates(self) -> tuple[np.ndarray, np.ndarray]:
-        """The voxels ever hit (a superset of the occupied ones), in insertion order: their
-        centres (n, 3), m, and whether each one's label was never read from the octree (n,)
-        (a box query reads only the voxels in its box)."""
+        """The voxels hit since their label was last read as free (a superset of the occupied
+        ones), by row: their centres (n, 3), m, and whether each one's label was never read
+        from the octree (n,) (a box query reads only the voxels in its box)."""
         self._materialise()
-        return self._centres[:self._count].copy(), self._checked[:self._count] == -1
+        checked = self._checked[:self._count]
+        live = checked != _LEFT
+        return self._centres[:self._count][live], checked[live] == -1
 
     @property
     def kdtree(self) -> cKDTree | None:
@@ -327,13 +368,14 @@ class OctreeMap:
 
     def memory(self) -> dict:
         """The map's memory, MB: the OctoMap tree's own (`memoryUsage`, its leaves counted)
-        and the candidates' index (arrays, tiles and the set of codes, estimated)."""
+        and the candidates' index (arrays, tiles and the set of codes, estimated); the
+        candidates now in the index."""
         index = (self._centres.nbytes + self._label.nbytes + self._checked.nbytes
                  + self._log_odds.nbytes
                  + sum(t.nbytes + 100 for t in self._tiles.values())
                  + 60 * len(self._candidates))
         return dict(resolution_m=self.resolution, leaves=int(self.tree.getNumLeafNodes()),
-                    octree_mb=self.tree.memoryUsage() / 2**20, candidates=self._count,
+                    octree_mb=self.tree.memoryUsage() / 2**20, candidates=len(self._candidates),
                     index_mb=index / 2**20)
 
     def labels(self, points) -> np.ndarray:
