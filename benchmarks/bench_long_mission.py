@@ -27,13 +27,16 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from _reference import machine
-from drake_auv.mapping.mapper import OnlineMap
-from drake_auv.mission.config import BUILTIN_DIR, mission_from_dict
-from drake_auv.mission.report import summarise
-from drake_auv.mission.runner import run_mission
-from drake_auv.reconstruction.products import write_points
-from drake_auv.signals import ReplanningStep
+# This checkout's package first: the venv's editable install may point at another one.
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _reference import machine  # noqa: E402
+from drake_auv.mapping.mapper import OnlineMap  # noqa: E402
+from drake_auv.mapping.scan_log import ScanLog  # noqa: E402
+from drake_auv.mission.config import BUILTIN_DIR, mission_from_dict  # noqa: E402
+from drake_auv.mission.report import summarise  # noqa: E402
+from drake_auv.mission.runner import run_mission  # noqa: E402
+from drake_auv.reconstruction.products import write_points  # noqa: E402
+from drake_auv.signals import ReplanningStep  # noqa: E402
 
 HOUR = 3600.0
 
@@ -55,9 +58,13 @@ def peak_mb() -> float:
 
 def octree_memory() -> dict:
     """`OctreeMap.memory()` of the dive's map, found among the live objects (the runner's
-    probe sees only the Context; the mapper's cache holds one `OnlineMap`)."""
-    maps = [o for o in gc.get_objects() if isinstance(o, OnlineMap) and o.version is not None]
-    return max((m.map.memory() for m in maps), key=lambda m: m["leaves"], default={})
+    probe sees only the Context; the mapper's cache holds one `OnlineMap`), with the number
+    of live `ScanLog` versions (`versions`: bounded by the log's chunk, not the dive)."""
+    live = gc.get_objects()
+    maps = [o for o in live if isinstance(o, OnlineMap) and o.version is not None]
+    versions = sum(isinstance(o, ScanLog) for o in live)
+    best = max((m.map.memory() for m in maps), key=lambda m: m["leaves"], default={})
+    return dict(best, versions=versions)
 
 
 class Probe:
@@ -68,7 +75,8 @@ class Probe:
         self.every, self.next = every, 0.0
         self.map_every = map_every
         self.rows: list[tuple] = []  # (sim s, wall s, rss MB, peak MB)
-        self.maps: list[tuple] = []  # (sim s, leaves, octree MB, candidates' index MB)
+        # (sim s, leaves, octree MB, candidates' index MB, candidates, ScanLog versions)
+        self.maps: list[tuple] = []
         self.start = time.perf_counter()
 
     def __call__(self, context) -> None:
@@ -79,7 +87,8 @@ class Probe:
             if t % self.map_every < self.every and t > 0:
                 m = octree_memory()
                 self.maps.append((t, m.get("leaves", 0), m.get("octree_mb", 0.0),
-                                  m.get("index_mb", 0.0)))
+                                  m.get("index_mb", 0.0), m.get("candidates", 0),
+                                  m["versions"]))
             if len(self.rows) > 1 and t % HOUR < self.every:  # an hour done: progress line
                 leaves, octree = self.maps[-1][1:3]
                 print(f"  {t:.0f} s simulated, {self.rows[-1][1]:.0f} s wall, RSS "
@@ -92,7 +101,7 @@ def per_hour(result, probe: Probe) -> list[dict]:
     steps = ReplanningStep(result.replanning)
     t_step, wall = steps.time, 1e3 * steps.wall_time
     samples = np.array(probe.rows)
-    maps = np.array(probe.maps).reshape(-1, 4)
+    maps = np.array(probe.maps).reshape(-1, 6)
     rows = []
     for h in range(int(np.ceil(result.duration_s / HOUR))):
         mine = wall[(t_step >= h * HOUR) & (t_step < (h + 1) * HOUR)]
@@ -108,7 +117,9 @@ def per_hour(result, probe: Probe) -> list[dict]:
                          rss_end_mb=float(inside[-1, 2]), peak_mb=float(inside[-1, 3]),
                          octree_leaves=int(last[1]) if last is not None else 0,
                          octree_mb=float(last[2]) if last is not None else 0.0,
-                         index_mb=float(last[3]) if last is not None else 0.0))
+                         index_mb=float(last[3]) if last is not None else 0.0,
+                         candidates=int(last[4]) if last is not None else 0,
+                         versions=int(last[5]) if last is not None else 0))
     return rows
 
 
@@ -152,13 +163,13 @@ def main() -> None:
           f"candidate voxels, index {m['index_mb']:.0f} MB; {m['batches']} batches, "
           f"{m['returns']} returns, scan file {m['scan_file_mb']:.0f} MB (on disk)")
     print("\n| hour | steps | step median (ms) | step p95 (ms) | real-time factor | RSS at end "
-          "(MB) | peak RSS (MB) | octree leaves | octree (MB) | index (MB) |\n"
-          "|---|---|---|---|---|---|---|---|---|---|")
+          "(MB) | peak RSS (MB) | octree leaves | octree (MB) | index (MB) | candidates | "
+          "ScanLog versions |\n|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['hour']} | {r['steps']} | {r['step_median_ms']:.1f} | "
               f"{r['step_p95_ms']:.1f} | {r['real_time_factor']:.1f} | {r['rss_end_mb']:.0f} | "
               f"{r['peak_mb']:.0f} | {r['octree_leaves']} | {r['octree_mb']:.1f} | "
-              f"{r['index_mb']:.1f} |")
+              f"{r['index_mb']:.1f} | {r['candidates']} | {r['versions']} |")
     with tempfile.TemporaryDirectory() as folder:
         t0 = time.perf_counter()
         n = write_points(result, Path(folder) / "points.ply")
