@@ -279,14 +279,40 @@ class OctreeMap:
             else:
                 del self._tiles[key]
 
-    @staticmethod
-    def _swept(centres: np.ndarray, checked: np.ndarray, scans: np.ndarray) -> np.ndarray:
+    def _swept(self, centres: np.ndarray, checked: np.ndarray, scans: np.ndarray) -> np.ndarray:
         """(m,) True where a voxel centre lies in the plane slab and the reach of a scan
-        (rows of `_scans`) inserted after its label was read (`checked`)."""
+        (rows of `_scans`) inserted after its label was read (`checked`).
+
+        Tiles first: a scan can sweep a voxel only if its slab and its sphere meet the
+        voxel's tile (the tile's box widened by the slab's projection of it), so each voxel
+        is tested only against the scans that reach its tile, and a voxel of a tile no scan
+        reaches (most of a query's box: one second of pings sweeps a strip) not at all."""
         scans = scans[scans[:, 0] > checked.min()]
         out = np.zeros(len(centres), bool)
         if len(scans) == 0:
             return out
+        origins, normals, tolerance, reach = scans[:, 1:4], scans[:, 4:7], scans[:, 7], scans[:, 8]
+        edge = _TILE * self.resolution
+        keys, tile_of = np.unique(_encode(np.floor(centres * (1.0 / edge))), return_inverse=True)
+        half = 0.5 * edge * (1.0 + 1e-9)
+        middle = (_decode(keys) + 0.5) * edge  # (T, 3) tile centres
+        gap = np.maximum(np.abs(middle[:, None, :] - origins[None]) - half, 0.0)  # (T, S, 3)
+        reaches = np.einsum("tsk,tsk->ts", gap, gap) <= reach ** 2
+        along = np.abs(middle @ normals.T - np.einsum("sk,sk->s", origins, normals))
+        reaches &= along <= tolerance + half * np.abs(normals).sum(axis=1)
+        pairs = reaches[tile_of] & (scans[:, 0] > checked[:, None])  # (m, S)
+        test = np.flatnonzero(pairs.any(axis=1))
+        if len(test) == 0:
+            return out
+        offsets = np.einsum("sk,sk->s", origins, normals)
+        origin_sq = np.einsum("sk,sk->s", origins, origins)
+        for chunk in range(0, len(test), 8192):  # (8192, S) blocks bound the memory
+            rows = test[chunk:chunk + 8192]
+            c = centres[rows]
+            plane = np.abs(c @ normals.T - offsets) <= tolerance
+            dist_sq = np.einsum("mk,mk->m", c, c)[:, None] - 2.0 * (c @ origins.T) + origin_sq
+            out[rows] = (plane & (dist_sq <= reach ** 2) & pairs[rows]).any(axis=1)
+        return out
         origins, normals = scans[:, 1:4], scans[:, 4:7]
         offsets = np.einsum("sk,sk->s", origins, normals)
         origin_sq = np.einsum("sk,sk->s", origins, origins)
