@@ -20,19 +20,20 @@ casts towards voxel centres, so beams without a return no longer clear exactly a
 not used.)
 
 Occupied voxels are found among the candidates, whose labels are cached. A candidate is a
-voxel hit since its label was last read as free: a voxel becomes occupied only by a hit on it
-(a miss lowers its log-odds, pruning and clamping change no label), so a candidate read as
-free leaves the index (its code, its row, which a later candidate reuses, its tile entry) and
-a later hit brings it back. The index thus holds the occupied voxels (the map, which grows with
-the surveyed surface) and those hit since the last reads, not every voxel ever hit: on a long
-dive, noise and navigation drift spread the returns over many voxels that later beams cross
-and clear. Labels are cached:
-a scan can change only the voxels its rays cross, and the rays of one sonar update lie in a
-plane through the sensor (a multibeam fan, the profiler's head plane), so a cached label is
-read again from the octree only when the voxel lies within a voxel of the plane of a scan
-inserted since (and within its reach); labels older than the last `_SCAN_WINDOW` scans
-are read again. Scans whose rays are not coplanar mark their whole reach. A 1 Hz box query
-thus reads the few voxels the last second of pings swept, not every voxel in the box.
+voxel hit and not read as free since: a voxel becomes occupied only by a hit on it (a miss
+lowers its log-odds, pruning and clamping change no label), so a candidate read as free leaves
+the index (its code, its tile entry, its row, which a later candidate takes) and a later hit
+brings it back. The index thus holds the occupied voxels (the map, which grows with the
+surveyed surface) and those hit since their last read, not every voxel ever hit: on a long
+dive noise and navigation drift spread the returns over many voxels that later beams cross and
+clear (at 1,800 s of `monterey_wall`, 68,570 candidates instead of 168,095). Answers come in
+row order, not in the order of the hits. A scan can change only the voxels its rays cross, and
+the rays of one sonar update lie in a plane through the sensor (a multibeam fan, the
+profiler's head plane), so a cached label is read again from the octree only when the voxel
+lies within a voxel of the plane of a scan inserted since (and within its reach), tested
+tile by tile first; labels older than the last `_SCAN_WINDOW` scans are read again. Scans
+whose rays are not coplanar mark their whole reach. A 1 Hz box query thus reads the few voxels
+the last second of pings swept, not every voxel in the box.
 
 Distance queries go through a KD-tree of occupied voxel centres that is rebuilt lazily, only
 when the map changed since the last build, so the 1 Hz replanner pays for it once per step.
