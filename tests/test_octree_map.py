@@ -294,3 +294,25 @@ def test_candidates_read_as_free_leave_the_index_and_every_answer_stays_the_same
     assert omap._count < 0.8 * len(ever)  # rows left by free voxels were taken again
     np.testing.assert_allclose(omap.distance(everything[:50]), cKDTree(want).query(
         everything[:50])[0])
+
+
+def test_a_beam_without_an_echo_clears_only_no_return_clear_m():
+    """No echo is not proof of water: with `no_return_clear_m` 5 m a beam without an echo
+    clears 5 m and leaves the water beyond unknown, while a beam with an echo in the same scan
+    still clears up to its echo; by default (OctoMap's way) both clear to their end."""
+    origin = np.array([0.0, 0.0, -20.0])
+    directions = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    ranges = np.array([np.nan, 12.0])  # +x: no echo; +y: an echo at 12 m
+    probe = np.array([[3.2, 0.1, -19.9], [8.2, 0.1, -19.9], [0.1, 8.2, -19.9],
+                      [0.1, 12.1, -19.9]])
+    limited = OctreeMap(0.5, no_return_clear_m=5.0)
+    limited.insert_scan(origin, directions, ranges, 20.0)
+    assert limited.labels(probe).tolist() == [0, -1, 0, 1]
+    full = OctreeMap(0.5)
+    full.insert_scan(origin, directions, ranges, 20.0)
+    assert full.labels(probe).tolist() == [0, 0, 0, 1]
+    alone = OctreeMap(0.5, no_return_clear_m=5.0)
+    alone.insert_scan(origin, directions[:1], ranges[:1], 20.0)
+    assert alone.labels(probe[:2]).tolist() == [0, -1]
+    with pytest.raises(ValueError, match="no_return_clear_m must be > 0"):
+        OctreeMap(0.5, no_return_clear_m=0.0)

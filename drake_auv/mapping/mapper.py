@@ -34,12 +34,12 @@ class OnlineMap:
     version, so the copy holds an equal map of its own, never a second owner of this one.
     """
 
-    def __init__(self, resolution: float):
-        self.map = OctreeMap(resolution)
+    def __init__(self, resolution: float, no_return_clear_m: float = np.inf):
+        self.map = OctreeMap(resolution, no_return_clear_m=no_return_clear_m)
         self.version: ScanLog | None = None
 
     def __deepcopy__(self, memo):
-        clone = OnlineMap(self.map.resolution)
+        clone = OnlineMap(self.map.resolution, self.map.no_return_clear_m)
         if self.version is not None:
             clone.catch_up(self.version)
         return clone
@@ -75,9 +75,12 @@ class OctreeMapper(LeafSystem):
             (same `sequence`) are skipped, so a period shorter than the sensors' is harmless,
             a longer one drops the pings in between.
         multibeam_stride: record every n-th multibeam beam (profiler beams are all kept).
+        no_return_clear_m: how far a beam without an echo clears free water in the map, m
+            (`OctreeMap`; inf: to the sonar's range).
     """
 
-    def __init__(self, resolution: float = 0.5, period: float = 0.1, multibeam_stride: int = 2):
+    def __init__(self, resolution: float = 0.5, period: float = 0.1, multibeam_stride: int = 2,
+                 no_return_clear_m: float = np.inf):
         super().__init__()
         if not (np.isfinite(period) and 0.01 <= period <= 10.0):
             raise ValueError(f"OctreeMapper period must be in [0.01, 10] s, got {period}")
@@ -85,7 +88,11 @@ class OctreeMapper(LeafSystem):
             raise ValueError(f"multibeam_stride must be an integer >= 1, got {multibeam_stride}")
         if not (np.isfinite(resolution) and 0.01 < resolution <= 10.0):
             raise ValueError(f"OctreeMapper resolution must be in (0.01, 10] m, got {resolution}")
+        if not no_return_clear_m > 0:
+            raise ValueError(f"OctreeMapper no_return_clear_m must be > 0 m (inf: the sonar's "
+                             f"range), got {no_return_clear_m}")
         self.resolution = float(resolution)
+        self.no_return_clear_m = float(no_return_clear_m)
         self.period = float(period)
         self.multibeam_stride = int(multibeam_stride)
         model = AbstractValue.Make(SonarReturns.empty(20.0))
@@ -97,7 +104,8 @@ class OctreeMapper(LeafSystem):
         self._sequences = self.DeclareDiscreteState(np.array([-1.0, -1.0, -1.0]))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_log)
         self.map_output = self.DeclareAbstractOutputPort(
-            "map", lambda: AbstractValue.Make(OnlineMap(self.resolution)), self._calc_map,
+            "map", lambda: AbstractValue.Make(OnlineMap(self.resolution, self.no_return_clear_m)),
+            self._calc_map,
             prerequisites_of_calc={self.abstract_state_ticket(self._log_index)})
         self.scan_log_output = self.DeclareStateOutputPort("scan_log", self._log_index)
 

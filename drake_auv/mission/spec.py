@@ -40,6 +40,7 @@ REALISTIC_NOISE = dict(range_sigma=0.1, dropout_prob=0.05, spurious_prob=0.02,
                        surface_prob=0.5, side_lobe_deg=20.0, side_lobe_gain=0.08,
                        echo_threshold=0.05)
 
+NO_RETURN_CLEAR_M = 12.0  # m, explore's free-water clearing by beams without an echo
 SCENARIOS = tuple(name for name, _ in list_scenarios())
 _FILE = "a file path, relative to the mission file"
 _DEPTH = dict(low=0.0, high=11000.0, low_open=True, unit="m", nullable=True)
@@ -341,6 +342,10 @@ class ExploreStep:
         strategy: "gain" (surface newly seen against travel), "nearest" (nearest frontier
             first) or "random" (a random frontier, seeded by the mission seed).
         min_gain_m2: exploring ends when no viewpoint would newly see this, m^2.
+        no_return_clear_m: how far a sonar beam without an echo clears free water in the
+            on-line map while the mission explores, m (`mapping.OctreeMap`; the sonar's range
+            or more: cleared to it). No echo is not proof of water, and explore's paths
+            cross only the water the map holds.
     """
 
     KIND: ClassVar[str] = "explore"
@@ -351,6 +356,7 @@ class ExploreStep:
     clearance_m: float = like(ExploreParameters, "clearance")
     strategy: str = like(ExploreParameters, "strategy")
     min_gain_m2: float = like(ExploreParameters, "min_gain_m2")
+    no_return_clear_m: float = param(NO_RETURN_CLEAR_M, low=0.0, low_open=True, unit="m")
 
     def __post_init__(self):
         validate(self)
