@@ -3,6 +3,7 @@ short explore dive on the boulder in the one mission Diagram."""
 
 from __future__ import annotations
 
+import copy
 import numpy as np
 import pytest
 import yaml
@@ -15,6 +16,7 @@ from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mapping.scan_log import SOURCES, ScanLog
 from drake_auv.mission.config import MissionFileError, load_mission, mission_from_dict
 from drake_auv.mission.plan import plan_mission
+from drake_auv.mission.spec import NO_RETURN_CLEAR_M
 from drake_auv.mission.site import load_site
 
 from test_exploration import scanned_wall  # noqa: E402  (tests/ is on sys.path)
@@ -141,6 +143,10 @@ def test_explore_dive_gains_coverage_without_contact():
     # the DVL's beams reach the map: the seabed under the vehicle is in the scan log
     dvl = [b for b in result.scan_log.batches() if b.source == SOURCES.index("dvl")]
     assert len(dvl) > 100 and all(len(b.ranges) == 4 for b in dvl)
+    # explore's map (and its copies) clears along a beam without an echo only 12 m
+    assert spec.steps[0].no_return_clear_m == NO_RETURN_CLEAR_M == 12.0
+    assert result.online_map.map.no_return_clear_m == NO_RETURN_CLEAR_M
+    assert copy.deepcopy(result.online_map).map.no_return_clear_m == NO_RETURN_CLEAR_M
 
 
 def test_explore_leg_ends_when_the_planner_says_finished():

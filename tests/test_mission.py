@@ -74,6 +74,8 @@ def test_two_contexts_of_one_diagram_have_their_own_maps():
     other = mapper.GetMyContextFromRoot(untouched)
     assert mapper.scan_log(other).count == 0
     assert len(mapper.map_output.Eval(other).map.occupied_points()) == 0
+    # a survey's map clears along a beam without an echo to the sonar's range (OctoMap's way)
+    assert fed.map.no_return_clear_m == np.inf
 
 
 def test_the_multibeam_is_scored_at_every_ping():

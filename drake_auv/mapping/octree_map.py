@@ -157,16 +157,15 @@ class OctreeMap:
         clear = min(float(max_range), self.no_return_clear_m)
         length = np.where(hit, ranges, clear + 2.0 * self.resolution)
         endpoints = origin + directions * length[:, None]
-        if clear < max_range and np.any(hit) and not np.all(hit):
-            # OctoMap truncates at one maxrange per cloud: the beams without an echo apart
-            self.tree.insertPointCloud(endpoints[hit], origin, maxrange=float(max_range),
-                                       lazy_eval=False)
-            self.tree.insertPointCloud(endpoints[~hit], origin, maxrange=clear,
-                                       lazy_eval=False)
-        else:
-            self.tree.insertPointCloud(endpoints, origin,
-                                       maxrange=float(max_range if np.any(hit) else clear),
-                                       lazy_eval=False)
+        # OctoMap truncates at one maxrange per cloud: beams without an echo cleared less go
+        # in a cloud of their own (a voxel one of them crosses and another beam of the scan
+        # hits is then updated by both, not the hit's alone)
+        clouds = ([(hit, float(max_range)), (~hit, clear)] if clear < max_range
+                  else [(slice(None), float(max_range))])
+        for beams, reach in clouds:
+            cloud = endpoints[beams]
+            if len(cloud):
+                self.tree.insertPointCloud(cloud, origin, maxrange=reach, lazy_eval=False)
         if np.any(hit):
             # OctoMap keys single-precision points (floor(float(p) / resolution)): keyed in
             # float64, an end on a voxel face (a flat seabed at z = -30 m) lands one voxel off.
@@ -312,20 +311,21 @@ class OctreeMap:
         out = np.zeros(len(centres), bool)
         if len(scans) == 0:
             return out
-        origins, normals, tolerance, reach = scans[:, 1:4], scans[:, 4:7], scans[:, 7], scans[:, 8]
+        origins, normals = scans[:, 1:4], scans[:, 4:7]
+        tolerance, reach = scans[:, 7], scans[:, 8]
+        offsets = np.einsum("sk,sk->s", origins, normals)
         edge = _TILE * self.resolution
         keys, tile_of = np.unique(_encode(np.floor(centres * (1.0 / edge))), return_inverse=True)
         half = 0.5 * edge * (1.0 + 1e-9)
         middle = (_decode(keys) + 0.5) * edge  # (T, 3) tile centres
         gap = np.maximum(np.abs(middle[:, None, :] - origins[None]) - half, 0.0)  # (T, S, 3)
         reaches = np.einsum("tsk,tsk->ts", gap, gap) <= reach ** 2
-        along = np.abs(middle @ normals.T - np.einsum("sk,sk->s", origins, normals))
+        along = np.abs(middle @ normals.T - offsets)
         reaches &= along <= tolerance + half * np.abs(normals).sum(axis=1)
         pairs = reaches[tile_of] & (scans[:, 0] > checked[:, None])  # (m, S)
         test = np.flatnonzero(pairs.any(axis=1))
         if len(test) == 0:
             return out
-        offsets = np.einsum("sk,sk->s", origins, normals)
         origin_sq = np.einsum("sk,sk->s", origins, origins)
         for chunk in range(0, len(test), 8192):  # (8192, S) blocks bound the memory
             rows = test[chunk:chunk + 8192]
@@ -333,17 +333,6 @@ class OctreeMap:
             plane = np.abs(c @ normals.T - offsets) <= tolerance
             dist_sq = np.einsum("mk,mk->m", c, c)[:, None] - 2.0 * (c @ origins.T) + origin_sq
             out[rows] = (plane & (dist_sq <= reach ** 2) & pairs[rows]).any(axis=1)
-        return out
-        origins, normals = scans[:, 1:4], scans[:, 4:7]
-        offsets = np.einsum("sk,sk->s", origins, normals)
-        origin_sq = np.einsum("sk,sk->s", origins, origins)
-        for chunk in range(0, len(centres), 8192):  # (8192, S) blocks bound the memory
-            part = slice(chunk, chunk + 8192)
-            c = centres[part]
-            plane = np.abs(c @ normals.T - offsets) <= scans[:, 7]
-            dist_sq = np.einsum("mk,mk->m", c, c)[:, None] - 2.0 * (c @ origins.T) + origin_sq
-            near = plane & (dist_sq <= scans[:, 8] ** 2) & (scans[:, 0] > checked[part, None])
-            out[part] = near.any(axis=1)
         return out
 
     def insert_returns(self, returns) -> None:
