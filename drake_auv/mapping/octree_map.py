@@ -107,11 +107,12 @@ class OctreeMap:
         """Forgets everything: the whole map becomes unknown."""
         self.tree.clear()
         self._candidates: set[int] = set()  # codes of the candidates: a superset of the occupied
-        # The candidates as rows of arrays (the first `_count` rows of a buffer that doubles,
-        # so adding costs what is added; rows left by candidates read as free, in `_vacant`,
-        # are taken first): centres, cached label and the revision at which it was read from
-        # the octree (-1: never; `_LEFT`: a vacant row). `_tiles`: per tile of `_TILE` voxels
-        # a side, the rows of its candidates, so a box query visits only the box's tiles.
+        # The candidates as rows of arrays (the first `_count` rows of a buffer that grows by a
+        # quarter, so adding costs what is added and memory grows in small steps; rows left by
+        # candidates read as free, in `_vacant`, are taken first): centres, cached label and
+        # the revision at which it was read from the octree (-1: never; `_LEFT`: a vacant
+        # row). `_tiles`: per tile of `_TILE` voxels a side, the rows of its candidates, so a
+        # box query visits only the box's tiles.
         self._count = 0
         self._vacant: list[np.ndarray] = []
         self._centres = np.zeros((0, 3))
@@ -120,9 +121,10 @@ class OctreeMap:
         self._log_odds = np.zeros(0)  # of the occupied ones, read with their label
         self._tiles: dict[int, np.ndarray] = {}
         self._new_codes: list[np.ndarray] = []  # hit, not yet in the arrays
-        # The last `_SCAN_WINDOW` scans: revision, origin, plane normal, plane tolerance and
-        # reach (m), as rows.
-        self._scans: list[tuple] = []
+        # The scans as rows (revision, origin, plane normal, plane tolerance and reach, m) of
+        # a buffer of twice `_SCAN_WINDOW`, the last `_SCAN_WINDOW` kept when it fills.
+        self._scan_rows = np.zeros((2 * _SCAN_WINDOW, 9))
+        self._num_scan_rows = 0
         self._occupied = np.zeros((0, 3))
         self._kdtree: cKDTree | None = None
         self._dirty = False
@@ -193,8 +195,18 @@ class OctreeMap:
                   else np.linalg.eigh(directions.T @ directions)[1][:, 0])
         reach = float(lengths.max()) + self.resolution
         tolerance = self.resolution + reach * float(np.abs(directions @ normal).max())
-        self._scans.append((self.revision, *origin, *normal, tolerance, reach))
-        del self._scans[:-_SCAN_WINDOW]
+        if self._num_scan_rows == len(self._scan_rows):
+            self._scan_rows[:_SCAN_WINDOW - 1] = self._scan_rows[-(_SCAN_WINDOW - 1):]
+            self._num_scan_rows = _SCAN_WINDOW - 1
+        row = self._scan_rows[self._num_scan_rows]
+        row[0], row[1:4], row[4:7], row[7], row[8] = self.revision, origin, normal, tolerance, reach
+        self._num_scan_rows += 1
+
+    @property
+    def _scans(self) -> np.ndarray:
+        """(<= `_SCAN_WINDOW`, 9) the last scans' rows, oldest first (a view)."""
+        n = self._num_scan_rows
+        return self._scan_rows[max(n - _SCAN_WINDOW, 0):n]
 
     def _materialise(self) -> None:
         """Moves the newly hit codes into the candidate arrays (labels unread) and tiles,
@@ -214,7 +226,7 @@ class OctreeMap:
         start, stop = self._count, self._count + need
         rows = np.concatenate(taken + [np.arange(start, stop)])
         if stop > len(self._label):
-            size = max(stop, 2 * len(self._label), 1024)
+            size = max(stop, len(self._label) + len(self._label) // 4, 1024)
             self._centres = np.resize(self._centres, (size, 3))
             self._label = np.resize(self._label, size)
             self._checked = np.resize(self._checked, size)
@@ -231,34 +243,49 @@ class OctreeMap:
             old = self._tiles.get(key)
             self._tiles[key] = part if old is None else np.concatenate([old, part])
 
-    def _box_index(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    def _box_index(self, lo: np.ndarray, hi: np.ndarray):
         """Indices of the candidates inside the box [lo, hi] (m), found through the tiles the
-        box overlaps (or, for a box of more tiles than the map holds, through every tile)."""
+        box overlaps (or, for a box of more tiles than the map holds, through every tile);
+        with the codes of those tiles and each candidate's position among them."""
         edge = _TILE * self.resolution
         t0 = np.floor(np.maximum(lo, -_LIMIT) / edge).astype(np.int64)
         t1 = np.floor(np.minimum(hi, _LIMIT) / edge).astype(np.int64)
+        none = np.zeros(0, dtype=np.int64)
         if np.any(t1 < t0) or not self._tiles:
-            return np.zeros(0, dtype=np.int64)
-        if np.prod((t1 - t0 + 1).astype(float)) > len(self._tiles):
-            parts = list(self._tiles.values())
+            return none, (none, none)
+        tiles = self._tiles
+        if np.prod((t1 - t0 + 1).astype(float)) > len(tiles):
+            keys = list(tiles)
         else:
-            grid = np.stack(np.meshgrid(*(np.arange(a, b + 1) for a, b in zip(t0, t1)),
-                                        indexing="ij"), axis=-1).reshape(-1, 3)
-            parts = [self._tiles[k] for k in _encode(grid).tolist() if k in self._tiles]
-        if not parts:
-            return np.zeros(0, dtype=np.int64)
+            # _encode's fields do not overlap: a tile's code is the sum of its axes' codes.
+            x, y, z = (np.arange(a, b + 1, dtype=np.int64) + _OFFSET for a, b in zip(t0, t1))
+            codes = (x[:, None, None] << 42) + (y[None, :, None] << 21) + z[None, None, :]
+            keys = [k for k in codes.ravel().tolist() if k in tiles]
+        if not keys:
+            return none, (none, none)
+        parts = [tiles[k] for k in keys]
         index = np.concatenate(parts)
+        tile_of = np.repeat(np.arange(len(parts)), [len(p) for p in parts])
         c = self._centres[index]
-        return index[np.all((c >= lo) & (c <= hi), axis=1)]
+        inside = np.all((c >= lo) & (c <= hi), axis=1)
+        return index[inside], (np.array(keys, dtype=np.int64), tile_of[inside])
 
-    def _read_labels(self, index: np.ndarray) -> None:
+    def _read_labels(self, index: np.ndarray, tiles=None) -> None:
         """Brings the cached labels of candidates `index` up to the current revision, reading
-        from the octree only those a scan since their last read may have changed."""
-        stale = index[self._checked[index] < self.revision]
+        from the octree only those a scan since their last read may have changed. `tiles`:
+        the (codes, position of each candidate's among them) `_box_index` gives, or None."""
+        is_stale = self._checked[index] < self.revision
+        stale = index[is_stale]
         if len(stale) == 0:
             return
+        if tiles is None:
+            keys, tile_of = np.unique(_encode(np.floor_divide(
+                np.floor(self._centres[stale] * (1.0 / self.resolution)), _TILE)),
+                return_inverse=True)
+        else:
+            keys, tile_of = tiles[0], tiles[1][is_stale]
         checked = self._checked[stale]
-        scans = np.array(self._scans).reshape(-1, 9)
+        scans = self._scans
         # Read before the oldest remembered scan (or never): read again.
         swept = checked < scans[0, 0] - 1 if len(scans) else np.ones(len(stale), bool)
         test = np.flatnonzero(~swept)
@@ -268,8 +295,8 @@ class OctreeMap:
             latest = checked[test] == checked[test].max()
             for group in (test[latest], test[~latest]):
                 if len(group):
-                    swept[group] = self._swept(self._centres[stale[group]], checked[group],
-                                               scans)
+                    swept[group] = self._swept(stale[group], checked[group], scans, keys,
+                                               tile_of[group])
         read = stale[swept]
         if len(read):
             self._label[read] = np.asarray(self.tree.getLabels(self._centres[read])) == 1
@@ -299,40 +326,41 @@ class OctreeMap:
             else:
                 del self._tiles[key]
 
-    def _swept(self, centres: np.ndarray, checked: np.ndarray, scans: np.ndarray) -> np.ndarray:
-        """(m,) True where a voxel centre lies in the plane slab and the reach of a scan
-        (rows of `_scans`) inserted after its label was read (`checked`).
+    def _swept(self, rows: np.ndarray, checked: np.ndarray, scans: np.ndarray,
+               keys: np.ndarray, tile_of: np.ndarray) -> np.ndarray:
+        """(m,) True where the centre of candidate `rows` (m,) lies in the plane slab and the
+        reach of a scan (rows of `_scans`) inserted after its label was read (`checked`);
+        `keys` are tile codes and `tile_of` (m,) the position of each one's tile among them.
 
         Tiles first: a scan can sweep a voxel only if its slab and its sphere meet the
         voxel's tile (the tile's box widened by the slab's projection of it), so each voxel
         is tested only against the scans that reach its tile, and a voxel of a tile no scan
         reaches (most of a query's box: one second of pings sweeps a strip) not at all."""
         scans = scans[scans[:, 0] > checked.min()]
-        out = np.zeros(len(centres), bool)
+        out = np.zeros(len(rows), bool)
         if len(scans) == 0:
             return out
         origins, normals = scans[:, 1:4], scans[:, 4:7]
         tolerance, reach = scans[:, 7], scans[:, 8]
         offsets = np.einsum("sk,sk->s", origins, normals)
         edge = _TILE * self.resolution
-        keys, tile_of = np.unique(_encode(np.floor(centres * (1.0 / edge))), return_inverse=True)
         half = 0.5 * edge * (1.0 + 1e-9)
         middle = (_decode(keys) + 0.5) * edge  # (T, 3) tile centres
         gap = np.maximum(np.abs(middle[:, None, :] - origins[None]) - half, 0.0)  # (T, S, 3)
         reaches = np.einsum("tsk,tsk->ts", gap, gap) <= reach ** 2
         along = np.abs(middle @ normals.T - offsets)
         reaches &= along <= tolerance + half * np.abs(normals).sum(axis=1)
-        pairs = reaches[tile_of] & (scans[:, 0] > checked[:, None])  # (m, S)
-        test = np.flatnonzero(pairs.any(axis=1))
-        if len(test) == 0:
-            return out
+        test = np.flatnonzero(reaches.any(axis=1)[tile_of])  # in a tile some scan reaches
+        pairs = reaches[tile_of[test]] & (scans[:, 0] > checked[test, None])  # (m', S)
+        some = pairs.any(axis=1)
+        test, pairs = test[some], pairs[some]
         origin_sq = np.einsum("sk,sk->s", origins, origins)
         for chunk in range(0, len(test), 8192):  # (8192, S) blocks bound the memory
-            rows = test[chunk:chunk + 8192]
-            c = centres[rows]
+            part = slice(chunk, chunk + 8192)
+            c = self._centres[rows[test[part]]]
             plane = np.abs(c @ normals.T - offsets) <= tolerance
             dist_sq = np.einsum("mk,mk->m", c, c)[:, None] - 2.0 * (c @ origins.T) + origin_sq
-            out[rows] = (plane & (dist_sq <= reach ** 2) & pairs[rows]).any(axis=1)
+            out[test[part]] = (plane & (dist_sq <= reach ** 2) & pairs[part]).any(axis=1)
         return out
 
     def insert_returns(self, returns) -> None:
@@ -366,8 +394,8 @@ class OctreeMap:
         lo = np.full(3, -np.inf) if lo is None else np.asarray(lo, dtype=float)
         hi = np.full(3, np.inf) if hi is None else np.asarray(hi, dtype=float)
         self._materialise()
-        inside = self._box_index(lo, hi)
-        self._read_labels(inside)
+        inside, tiles = self._box_index(lo, hi)
+        self._read_labels(inside, tiles)
         occupied = inside[self._label[inside]]
         if log_odds:
             return self._centres[occupied], self._log_odds[occupied]
