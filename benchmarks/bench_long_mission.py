@@ -3,11 +3,14 @@ window of a Monterey Bay tile, 1 m world, the ~10 m survey as prior, Omega 10 m,
 replanned survey, about 3.8 h of dive), its cost per simulated hour.
 
 Per simulated hour: the replanning step's median and p95 (wall, ms) and its map query's
-median, the real-time factor, the process's resident memory at the hour's end and its peak so
-far (MB); the octree's leaves, own memory, candidates' index (MB, candidates) and the live
-`ScanLog` versions at the hour's end (`OctreeMap.memory()`, a search of live objects); the mission's coverage, true distance and
-contact. Acceptance (docs/benchmarks.md, "Survey-scale dives"): step median <= 10 ms and p95 <= 25 ms in every hour, the last hour's median within
-1.5x of the first's, resident memory growing by less than 100 MB per hour after the first.
+median; STOMP's iterations and the box's occupied voxels (medians) and the step less its query
+per iteration (median, ms), what a step's cost follows; the real-time factor, the process's
+resident memory at the hour's end and its peak so far (MB); the octree's leaves, own memory,
+candidates' index (MB, candidates) and the live `ScanLog` versions at the hour's end
+(`OctreeMap.memory()`, a search of live objects); the mission's coverage, true distance and
+contact. Acceptance (docs/benchmarks.md, "Survey-scale dives"): step median <= 10 ms and p95
+<= 25 ms in every hour, the last hour's median within 1.5x of the first's, resident memory
+growing by less than 100 MB per hour after the first.
 `--surveys N` flies the replanned survey N times in the dive (the single one is already 3.8 h);
 `--max-time S` stops it after S simulated seconds.
 
@@ -101,6 +104,10 @@ def per_hour(result, probe: Probe) -> list[dict]:
     """One row per simulated hour (the last one partial): steps, real-time factor, memory."""
     steps = ReplanningStep(result.replanning)
     t_step, wall, query = steps.time, 1e3 * steps.wall_time, 1e3 * steps.query_time
+    iterations = steps.iterations
+    # What a STOMP iteration costs (the step less its map query, per iteration): flat over
+    # the dive when the step's cost follows the optimisation's work, not the dive's length.
+    per_iteration = np.where(iterations > 0, (wall - query) / np.maximum(iterations, 1), np.nan)
     samples = np.array(probe.rows)
     maps = np.array(probe.maps).reshape(-1, 6)
     rows = []
@@ -116,6 +123,10 @@ def per_hour(result, probe: Probe) -> list[dict]:
                          step_median_ms=float(np.median(mine)),
                          step_p95_ms=float(np.percentile(mine, 95)),
                          query_median_ms=float(np.median(query[hour])),
+                         iterations_median=float(np.median(iterations[hour])),
+                         map_voxels_median=float(np.median(steps.map_voxels[hour])),
+                         iteration_median_ms=float(np.nanmedian(per_iteration[hour]))
+                         if np.any(iterations[hour] > 0) else float("nan"),
                          real_time_factor=float((t1 - t0) / max(w1 - w0, 1e-9)),
                          rss_end_mb=float(inside[-1, 2]), peak_mb=float(inside[-1, 3]),
                          octree_leaves=int(last[1]) if last is not None else 0,
@@ -166,12 +177,15 @@ def main() -> None:
           f"candidate voxels, index {m['index_mb']:.0f} MB; {m['batches']} batches, "
           f"{m['returns']} returns, scan file {m['scan_file_mb']:.0f} MB (on disk)")
     print("\n| hour | steps | step median (ms) | step p95 (ms) | map query median (ms) | "
+          "STOMP iterations median | box voxels median | per iteration median (ms) | "
           "real-time factor | RSS at end "
           "(MB) | peak RSS (MB) | octree leaves | octree (MB) | index (MB) | candidates | "
-          "ScanLog versions |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "ScanLog versions |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['hour']} | {r['steps']} | {r['step_median_ms']:.1f} | "
               f"{r['step_p95_ms']:.1f} | {r['query_median_ms']:.1f} | "
+              f"{r['iterations_median']:.0f} | {r['map_voxels_median']:.0f} | "
+              f"{r['iteration_median_ms']:.2f} | "
               f"{r['real_time_factor']:.1f} | {r['rss_end_mb']:.0f} | "
               f"{r['peak_mb']:.0f} | {r['octree_leaves']} | {r['octree_mb']:.1f} | "
               f"{r['index_mb']:.1f} | {r['candidates']} | {r['versions']} |")

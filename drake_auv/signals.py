@@ -117,9 +117,11 @@ ReplannerProgress = _signal(
     "The replanner's `progress` group (4): leg flown (-1 none yet), next waypoint, steps of "
     "this leg, finished (0/1).")
 ReplanningStep = _signal(
-    "ReplanningStep", ("time", "wall_time", "query_time", "next_index", "planned"),
-    "`Replanner.step` (5): sim time of the last step (s), its wall time and its map query's "
-    "(s), the next waypoint, whether a section was planned (0/1).")
+    "ReplanningStep", ("time", "wall_time", "query_time", "next_index", "planned", "iterations",
+                       "map_voxels"),
+    "`Replanner.step` (7): sim time of the last step (s), its wall time and its map query's "
+    "(s), the next waypoint, whether a section was planned (0/1), STOMP's iterations and the "
+    "occupied voxels the query gave (what the step's cost follows).")
 PilotStatus = _signal(
     "PilotStatus", ("leg", "finished", "item"),
     "`AutopilotPilot.status` (3): leg (-1 before any), finished (0/1), current item.")

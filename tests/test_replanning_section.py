@@ -92,7 +92,8 @@ def test_replan_section_keeps_the_offset_from_a_wall_and_ignores_the_seabed():
     assert np.all(np.abs(traj[far, 0] - params.omega) < 0.6)
     assert abs(traj[-1, 0] - params.omega) < 0.4 and traj[-1, 1] > 2.5
     assert np.all(np.abs(traj[:, 2] + 5.0) < 0.3)  # the seabed 5 m below does not pull
-    assert plan.cost < 0.2 * plan.initial_cost
+    assert plan.cost < 0.2 * plan.initial_cost and plan.iterations >= 1
+    assert 0 < plan.map_voxels < len(_wall())  # the wall's voxels in the section's box
     # The wall (x = 0) lies in -x from every point: facing it is a yaw of pi.
     assert np.allclose(np.abs(np.angle(np.exp(1j * (plan.facing - np.pi)))), 0.0, atol=0.1)
     # Progress along the plan marks waypoints visited.

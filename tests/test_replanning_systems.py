@@ -121,6 +121,7 @@ def test_replanner_flies_towards_the_waypoints_at_survey_speed():
     assert replanner.section(context).indices.tolist() == [0, 1, 2, 3]
     step = ReplanningStep(replanner.step_output.Eval(context))
     assert step.planned == 1.0 and step.time == 0.0 and step.wall_time > 0
+    assert step.iterations >= 1 and step.map_voxels == 0  # STOMP ran; the map is empty
     assert replanner.status_output.Eval(context).tolist() == [0.0, 0.0, 0.0]
 
 

@@ -52,7 +52,7 @@ class MissionResult:
         phases: the legs grouped by phase, on one time axis; outcomes: per leg ("goal",
             "timed out", "flying" when the time cap stopped it).
         camera_best, multibeam_best: (T,) best viewing angle per target face, rad, NaN unseen.
-        replanning: (k, 5) replanning steps (columns `signals.ReplanningStep`), planned ones
+        replanning: (k, 7) replanning steps (columns `signals.ReplanningStep`), planned ones
             only.
         scan_log: the returns recorded by the mapper; online_map: its final octree.
         profile: (n, 7) the profile-following controller's `profile` output (columns

@@ -171,7 +171,9 @@ class Replanner(LeafSystem):
         step = ReplanningStep.zeros()
         step.time, step.wall_time, step.next_index, step.planned = (
             t, wall, next_index, float(plan is not None))
-        step.query_time = plan.query_time if plan is not None else 0.0
+        if plan is not None:
+            step.query_time, step.iterations, step.map_voxels = (
+                plan.query_time, plan.iterations, plan.map_voxels)
         state.get_mutable_discrete_state(self._last_step).set_value(step[:])
 
     def _timed(self, plan: SectionPlan, x: np.ndarray, t: float) -> PiecewisePolynomial:

@@ -200,6 +200,7 @@ class SectionPlan:
         waypoint_arclength: (len(indices),) where each waypoint falls along `trajectory`, m.
         initial_cost, cost, iterations: STOMP's (iterations 0 with optimizer "none").
         query_time: wall time of the map query (voxels and their log-odds in the box), s.
+        map_voxels: the occupied voxels the query gave (before the log-odds threshold).
         facing: (N,) yaw of the horizontal direction from each trajectory point to its nearest
             mapped voxel of the depth band, rad; NaN where none lies within 2 Omega.
     """
@@ -213,6 +214,7 @@ class SectionPlan:
     iterations: int
     query_time: float
     facing: np.ndarray
+    map_voxels: int
 
     def next_index(self, travelled: float, capture_radius: float = 0.5) -> int:
         """The first waypoint not passed after flying `travelled` metres of the trajectory.
@@ -319,4 +321,4 @@ def replan_section(position, waypoints, next_index: int, occupied,
         to = slice_map.band_points[nearest[seen], :2] - trajectory[seen, :2]
         facing[seen] = np.arctan2(to[:, 1], to[:, 0])
     return SectionPlan(idx, theta0, trajectory, at, initial_cost, final_cost, iterations,
-                       query_time, facing)
+                       query_time, facing, len(local))
