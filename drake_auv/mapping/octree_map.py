@@ -60,6 +60,11 @@ def _encode(idx: np.ndarray) -> np.ndarray:
     return (idx[:, 0] << 42) | (idx[:, 1] << 21) | idx[:, 2]
 
 
+def _tile_codes(idx: np.ndarray) -> np.ndarray:
+    """Codes of the tiles holding voxels of index `idx` (n, 3)."""
+    return _encode(np.floor_divide(idx, _TILE))
+
+
 def _decode(codes: np.ndarray) -> np.ndarray:
     return np.stack([(codes >> 42) & _MASK, (codes >> 21) & _MASK, codes & _MASK],
                     axis=1) - _OFFSET
@@ -236,7 +241,7 @@ class OctreeMap:
         self._label[rows] = False
         self._checked[rows] = -1
         self._count = stop
-        tiles = _encode(np.floor_divide(idx, _TILE))
+        tiles = _tile_codes(idx)
         order = np.argsort(tiles, kind="stable")
         keys, first = np.unique(tiles[order], return_index=True)
         for key, part in zip(keys.tolist(), np.split(rows[order], first[1:])):
@@ -279,9 +284,8 @@ class OctreeMap:
         if len(stale) == 0:
             return
         if tiles is None:
-            keys, tile_of = np.unique(_encode(np.floor_divide(
-                np.floor(self._centres[stale] * (1.0 / self.resolution)), _TILE)),
-                return_inverse=True)
+            keys, tile_of = np.unique(_tile_codes(
+                np.floor(self._centres[stale] * (1.0 / self.resolution))), return_inverse=True)
         else:
             keys, tile_of = tiles[0], tiles[1][is_stale]
         checked = self._checked[stale]
@@ -318,7 +322,7 @@ class OctreeMap:
         self._candidates.difference_update(_encode(idx).tolist())
         self._checked[rows] = _LEFT
         self._vacant.append(rows)
-        for key in np.unique(_encode(np.floor_divide(idx, _TILE))).tolist():
+        for key in np.unique(_tile_codes(idx)).tolist():
             part = self._tiles[key]
             part = part[self._checked[part] != _LEFT]
             if len(part):
