@@ -1,0 +1,217 @@
+"""What a replanning step of a survey-scale dive spends its time on, replayed (issue 21).
+
+Flies the built-in `monterey_wall` mission to `--until` simulated seconds and records every
+replanning step that starts inside the `--windows` (the inputs of `replan_section` and the
+box's voxels and log-odds that its map query returned), then replays the recorded steps
+through `replan_section` with the box given as arrays: the same trajectories bit for bit
+(checked), without the dive's other work in between. Per window: the box's voxels, the
+dive's step and map query (medians, ms), the replayed step without the query (median and p95,
+the least of `--repeats` runs), its STOMP part and what is left (the fields, trees, tube and
+warm start), STOMP's iterations and one iteration's cost; then the same steps with other
+STOMP budgets (rollouts, iteration cap, patience) and how much of the initial cost each
+removes (median of 1 - cost / initial cost). The budgets are compared open loop, from the
+recorded warm starts: what the closed loop covers decides (docs/replanning.md).
+
+    .venv/bin/python benchmarks/bench_step_replay.py [--until 3400] [--windows 300:700,3000:3400]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _reference import machine  # noqa: E402
+from bench_long_mission import long_mission  # noqa: E402
+import drake_auv.replanning.replanner as replanner_module  # noqa: E402
+from drake_auv.mission.runner import run_mission  # noqa: E402
+from drake_auv.replanning import section as section_module  # noqa: E402
+
+BUDGETS = {  # STOMP's budget of the replay's other rows: overrides of `StompParameters`
+    "20 rollouts, at most 20 iterations": dict(num_rollouts=20, max_iterations=20),
+    "30 rollouts, at most 15 iterations": dict(num_rollouts=30, max_iterations=15),
+    "10 rollouts, at most 20 iterations": dict(max_iterations=20),
+    "10 rollouts, patience 4": dict(patience=4),
+}
+
+
+class RecordedBox:
+    """The map query of a recorded step: `occupied_points` gives the box's recorded voxels
+    (and log-odds) whatever box it is asked for (the replay asks for the same one)."""
+
+    def __init__(self, voxels: np.ndarray, log_odds: np.ndarray, resolution: float):
+        self.voxels, self.log_odds, self.resolution = voxels, log_odds, resolution
+
+    def occupied_points(self, lo, hi, log_odds: bool = False):
+        return (self.voxels, self.log_odds) if log_odds else self.voxels
+
+
+class StepRecorder:
+    """Wraps the Replanner's `replan_section` while in use: records the steps that start in
+    `windows` ((start, end) s), with their wall and query times. `probe` (the mission's
+    probe, or a Simulator monitor's) tells it the simulated time."""
+
+    def __init__(self, windows):
+        self.windows, self.steps, self._now = windows, [], 0.0
+        self._replan = replanner_module.replan_section
+
+    def probe(self, context) -> None:
+        self._now = context.get_time()
+
+    def __enter__(self):
+        replanner_module.replan_section = self._record
+        return self
+
+    def __exit__(self, *exc):
+        replanner_module.replan_section = self._replan
+
+    def _record(self, position, waypoints, next_index, occupied, params, **kwargs):
+        if not (hasattr(occupied, "occupied_points")
+                and any(a <= self._now < b for a, b in self.windows)):
+            return self._replan(position, waypoints, next_index, occupied, params, **kwargs)
+        got = {}
+
+        def query(lo, hi, log_odds=False):
+            got["box"] = tuple(np.array(a) for a in occupied.occupied_points(
+                lo, hi, log_odds=True))  # copies: the map's buffers change as it grows
+            return got["box"] if log_odds else got["box"][0]
+
+        box = RecordedBox(None, None, occupied.resolution)
+        box.occupied_points = query
+        start = time.perf_counter()
+        plan = self._replan(position, waypoints, next_index, box, params, **kwargs)
+        wall = time.perf_counter() - start
+        if plan is not None:
+            self.steps.append(dict(
+                time=self._now, args=(np.array(position), np.array(waypoints), next_index),
+                params=params, kwargs=kwargs, box=RecordedBox(*got["box"], occupied.resolution),
+                wall=wall, query=plan.query_time, trajectory=plan.trajectory))
+        return plan
+
+
+class StompTimer:
+    """Times `stomp` inside `replan_section` (the step's optimisation, apart from its
+    fields, trees and warm start)."""
+
+    def __init__(self):
+        self.total, self._stomp = 0.0, section_module.stomp
+
+    def __enter__(self):
+        def timed(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return self._stomp(*args, **kwargs)
+            finally:
+                self.total += time.perf_counter() - start
+
+        section_module.stomp = timed
+        return self
+
+    def __exit__(self, *exc):
+        section_module.stomp = self._stomp
+
+
+def replay(step, params=None, repeats: int = 1):
+    """(plan, least wall time, its STOMP part) of one recorded step, s."""
+    position, waypoints, next_index = step["args"]
+    best = (np.inf, 0.0)
+    for _ in range(repeats):
+        with StompTimer() as timer:
+            start = time.perf_counter()
+            plan = section_module.replan_section(position, waypoints, next_index, step["box"],
+                                                 params or step["params"], **step["kwargs"])
+            wall = time.perf_counter() - start
+        best = min(best, (wall, timer.total))
+    return plan, best[0], best[1]
+
+
+def with_budget(params, overrides):
+    return dataclasses.replace(params, stomp=dataclasses.replace(params.stomp, **overrides))
+
+
+def parse_windows(text: str):
+    try:
+        windows = [tuple(float(v) for v in part.split(":")) for part in text.split(",")]
+    except ValueError:
+        windows = []
+    if not windows or any(len(w) != 2 or not 0 <= w[0] < w[1] for w in windows):
+        raise SystemExit(f"--windows: give START:END pairs (0 <= START < END, s) separated by "
+                         f"commas, got {text!r}")
+    return windows
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--until", type=float, default=3400.0,
+                        help="simulated seconds of the dive (> 0)")
+    parser.add_argument("--windows", default="300:700,3000:3400",
+                        help="START:END,... simulated seconds whose steps are recorded")
+    parser.add_argument("--repeats", type=int, default=3, help="replays of each step (>= 1)")
+    args = parser.parse_args(argv)
+    windows = parse_windows(args.windows)
+    if not args.until > 0 or args.repeats < 1:
+        raise SystemExit(f"--until must be > 0 s and --repeats >= 1, got {args.until}, "
+                         f"{args.repeats}")
+    print(machine())
+    spec = long_mission("monterey_wall", 0, 1, args.until)
+    start = time.perf_counter()
+    with StepRecorder(windows) as recorder:
+        run_mission(spec, progress=True, probe=recorder.probe)
+    print(f"monterey_wall to {args.until:.0f} s: {time.perf_counter() - start:.0f} s wall, "
+          f"{len(recorder.steps)} steps recorded in {args.windows}")
+    by_window = {w: [s for s in recorder.steps if w[0] <= s["time"] < w[1]] for w in windows}
+    print("| window (s) | steps | box voxels | dive: step / query (ms) | replayed without the "
+          "query: median / p95 (ms) | of which STOMP / the rest (ms) | iterations | one "
+          "iteration (ms) |")
+    print("|---|---|---|---|---|---|---|---|")
+    identical = 0
+    for (a, b), steps in by_window.items():
+        if not steps:
+            print(f"| {a:.0f}-{b:.0f} | 0 | | | | | | |")
+            continue
+        rows = []
+        for step in tqdm(steps, desc=f"replay {a:.0f}-{b:.0f} s", leave=False):
+            plan, wall, stomp_s = replay(step, repeats=args.repeats)
+            identical += np.array_equal(plan.trajectory, step["trajectory"])
+            rows.append((wall, stomp_s, plan.iterations))
+        wall, stomp_s, iterations = (np.array(c, dtype=float) for c in zip(*rows))
+        per_iteration = stomp_s[iterations > 0] / iterations[iterations > 0]
+        print(f"| {a:.0f}-{b:.0f} | {len(steps)} | "
+              f"{np.median([len(s['box'].voxels) for s in steps]):.0f} | "
+              f"{1e3 * np.median([s['wall'] for s in steps]):.2f} / "
+              f"{1e3 * np.median([s['query'] for s in steps]):.2f} | "
+              f"{1e3 * np.median(wall):.2f} / {1e3 * np.percentile(wall, 95):.2f} | "
+              f"{1e3 * np.median(stomp_s):.2f} / {1e3 * np.median(wall - stomp_s):.2f} | "
+              f"{np.median(iterations):.1f} | "
+              f"{1e3 * np.median(per_iteration) if len(per_iteration) else float('nan'):.3f} |")
+    print(f"replayed trajectories identical to the dive's: {identical} of "
+          f"{len(recorder.steps)}")
+    print("\n| STOMP budget | window (s) | replayed median / p95 (ms) | iterations | cost "
+          "removed, median |")
+    print("|---|---|---|---|---|")
+    budgets = {"10 rollouts, at most 40 iterations (the default)": {}, **BUDGETS}
+    for label, overrides in budgets.items():
+        for (a, b), steps in by_window.items():
+            if not steps:
+                continue
+            rows = []
+            for step in steps:
+                plan, wall, _ = replay(step, with_budget(step["params"], overrides))
+                gain = 1.0 - plan.cost / plan.initial_cost if plan.initial_cost > 0 else 0.0
+                rows.append((wall, plan.iterations, gain))
+            wall, iterations, gain = (np.array(c, dtype=float) for c in zip(*rows))
+            print(f"| {label} | {a:.0f}-{b:.0f} | {1e3 * np.median(wall):.2f} / "
+                  f"{1e3 * np.percentile(wall, 95):.2f} | {np.median(iterations):.1f} | "
+                  f"{statistics.median(gain):.3f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
