@@ -12,9 +12,15 @@ contact. Acceptance (docs/benchmarks.md, "Survey-scale dives"): step median <= 1
 <= 25 ms in every hour, the last hour's median within 1.5x of the first's, resident memory
 growing by less than 100 MB per hour after the first.
 `--surveys N` flies the replanned survey N times in the dive (the single one is already 3.8 h);
-`--max-time S` stops it after S simulated seconds.
+`--max-time S` stops it after S simulated seconds. `--trace-python A:B` splits the growth of
+resident memory from A to B simulated seconds into the OctoMap tree's (`memoryUsage`), the
+Python heap's (`tracemalloc`, with the lines that allocated most of it) and the rest (native
+memory that neither counts: the allocator's overhead on the tree's many small nodes, Drake's
+logs, libraries); tracing Python's allocations makes the dive several times slower, so its
+timings do not count.
 
     .venv/bin/python benchmarks/bench_long_mission.py [--surveys 2] [--max-time S] [--json F]
+        [--trace-python A:B]
 """
 
 from __future__ import annotations
@@ -26,6 +32,7 @@ import resource
 import sys
 import tempfile
 import time
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -75,9 +82,11 @@ class Probe:
     """Samples wall time and memory every `every` simulated seconds (the runner's probe), and
     the octree's memory every `map_every` s (a search of the live objects: not every step)."""
 
-    def __init__(self, every: float = 60.0, map_every: float = 600.0):
+    def __init__(self, every: float = 60.0, map_every: float = 600.0, trace=None):
         self.every, self.next = every, 0.0
         self.map_every = map_every
+        self.trace = trace  # (A, B) simulated s: `tracemalloc` snapshots there, see `traced`
+        self.snapshots: list[tuple] = []  # (sim s, snapshot, RSS MB, octree MB)
         self.rows: list[tuple] = []  # (sim s, wall s, rss MB, peak MB)
         # (sim s, leaves, octree MB, candidates' index MB, candidates, ScanLog versions)
         self.maps: list[tuple] = []
@@ -85,6 +94,10 @@ class Probe:
 
     def __call__(self, context) -> None:
         t = context.get_time()
+        if self.trace is not None and len(self.snapshots) < 2 and t >= self.trace[
+                len(self.snapshots)]:
+            self.snapshots.append((t, tracemalloc.take_snapshot(), rss_mb(),
+                                   octree_memory().get("octree_mb", 0.0)))
         if t >= self.next:
             self.rows.append((t, time.perf_counter() - self.start, rss_mb(), peak_mb()))
             self.next += self.every
@@ -98,6 +111,19 @@ class Probe:
                 print(f"  {t:.0f} s simulated, {self.rows[-1][1]:.0f} s wall, RSS "
                       f"{self.rows[-1][2]:.0f} MB, octree {leaves} leaves {octree:.0f} MB",
                       flush=True)
+
+
+def traced(probe: Probe, top: int = 8) -> dict:
+    """The growth of resident memory between the probe's two snapshots, MB: the OctoMap
+    tree's `memoryUsage`, the Python heap (traced) and the rest, with the `top` source lines
+    whose allocations grew most."""
+    (t0, first, rss0, tree0), (t1, second, rss1, tree1) = probe.snapshots
+    stats = second.compare_to(first, "lineno")
+    python = sum(stat.size_diff for stat in stats) / 2**20
+    lines = [dict(where=f"{Path(stat.traceback[0].filename).name}:{stat.traceback[0].lineno}",
+                  mb=stat.size_diff / 2**20) for stat in stats[:top]]
+    return dict(from_s=t0, to_s=t1, rss_mb=rss1 - rss0, octree_mb=tree1 - tree0,
+                python_mb=python, rest_mb=rss1 - rss0 - (tree1 - tree0) - python, lines=lines)
 
 
 def per_hour(result, probe: Probe) -> list[dict]:
@@ -150,6 +176,18 @@ def long_mission(name: str, seed: int, surveys: int = 1, max_time: float | None 
     return mission_from_dict(raw, path.parent, path.name, source=path)
 
 
+def parse_trace(text: str) -> tuple[float, float]:
+    """`A:B` -> (A, B) simulated s, 0 <= A < B; one line naming the problem otherwise."""
+    try:
+        a, b = (float(v) for v in text.split(":"))
+    except ValueError:
+        a = b = float("nan")
+    if not 0 <= a < b:
+        raise SystemExit(f"--trace-python: give A:B simulated seconds with 0 <= A < B, got "
+                         f"{text!r}")
+    return a, b
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--mission", default="monterey_wall")
@@ -158,10 +196,15 @@ def main() -> None:
     parser.add_argument("--max-time", type=float, default=None, help="simulated s cap")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", help="write the figures to this file")
+    parser.add_argument("--trace-python", metavar="A:B",
+                        help="split the memory growth from A to B simulated s (slow)")
     args = parser.parse_args()
+    trace = parse_trace(args.trace_python) if args.trace_python else None
     print(machine())
     spec = long_mission(args.mission, args.seed, args.surveys, args.max_time)
-    probe = Probe()
+    if trace is not None:
+        tracemalloc.start()
+    probe = Probe(trace=trace)
     start = time.perf_counter()
     result = run_mission(spec, progress=False, probe=probe)
     wall = time.perf_counter() - start
@@ -189,6 +232,20 @@ def main() -> None:
               f"{r['real_time_factor']:.1f} | {r['rss_end_mb']:.0f} | "
               f"{r['peak_mb']:.0f} | {r['octree_leaves']} | {r['octree_mb']:.1f} | "
               f"{r['index_mb']:.1f} | {r['candidates']} | {r['versions']} |")
+    memory = None
+    if trace is not None:
+        if len(probe.snapshots) < 2:
+            print(f"\n--trace-python: the dive ended at {result.duration_s:.0f} s, before "
+                  f"{trace[1]:.0f} s: nothing to compare")
+        else:
+            memory = traced(probe)
+            print(f"\nmemory from {memory['from_s']:.0f} to {memory['to_s']:.0f} s: RSS "
+                  f"+{memory['rss_mb']:.1f} MB = OctoMap tree (memoryUsage) "
+                  f"+{memory['octree_mb']:.1f} + Python heap (traced) "
+                  f"+{memory['python_mb']:.1f} + the rest {memory['rest_mb']:+.1f}; the "
+                  f"Python lines that grew most:")
+            for line in memory["lines"]:
+                print(f"  {line['mb']:+.2f} MB {line['where']}")
     with tempfile.TemporaryDirectory() as folder:
         t0 = time.perf_counter()
         n = write_points(result, Path(folder) / "points.ply")
@@ -199,7 +256,7 @@ def main() -> None:
         Path(args.json).write_text(json.dumps(dict(
             machine=machine(), duration_s=result.duration_s, wall_s=wall, hours=rows,
             coverage=summary["coverage"], distance=summary["distance_to_target"],
-            contact=summary["contact"], map=summary["map"]), indent=1))
+            contact=summary["contact"], map=summary["map"], memory=memory), indent=1))
 
 
 if __name__ == "__main__":
