@@ -14,10 +14,10 @@ growing by less than 100 MB per hour after the first.
 `--surveys N` flies the replanned survey N times in the dive (the single one is already 3.8 h);
 `--max-time S` stops it after S simulated seconds. `--trace-python A:B` splits the growth of
 resident memory from A to B simulated seconds into the OctoMap tree's (`memoryUsage`), the
-Python heap's (`tracemalloc`, with the lines that allocated most of it) and the rest (native
-memory that neither counts: the allocator's overhead on the tree's many small nodes, Drake's
-logs, libraries); tracing Python's allocations makes the dive several times slower, so its
-timings do not count.
+Python heap's (`tracemalloc`, with the lines that allocated most of it), tracemalloc's own
+and the rest (native memory that none of them counts: the allocator's overhead on the tree's
+many small nodes, Drake's logs, libraries); tracing Python's allocations makes the dive
+several times slower, so its timings do not count.
 
     .venv/bin/python benchmarks/bench_long_mission.py [--surveys 2] [--max-time S] [--json F]
         [--trace-python A:B]
@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import gc
 import json
+import os
 import resource
 import sys
 import tempfile
@@ -86,7 +87,13 @@ class Probe:
         self.every, self.next = every, 0.0
         self.map_every = map_every
         self.trace = trace  # (A, B) simulated s: `tracemalloc` snapshots there, see `traced`
-        self.snapshots: list[tuple] = []  # (sim s, snapshot, RSS MB, octree MB)
+        # (sim s, snapshot (the first dumped to a file, so it takes no memory meanwhile), RSS
+        # MB, octree MB, tracemalloc's own MB)
+        self.snapshots: list[tuple] = []
+        self._dump = None
+        if trace is not None:
+            handle, self._dump = tempfile.mkstemp(prefix="drake_auv-trace-")
+            os.close(handle)
         self.rows: list[tuple] = []  # (sim s, wall s, rss MB, peak MB)
         # (sim s, leaves, octree MB, candidates' index MB, candidates, ScanLog versions)
         self.maps: list[tuple] = []
@@ -96,8 +103,13 @@ class Probe:
         t = context.get_time()
         if self.trace is not None and len(self.snapshots) < 2 and t >= self.trace[
                 len(self.snapshots)]:
-            self.snapshots.append((t, tracemalloc.take_snapshot(), rss_mb(),
-                                   octree_memory().get("octree_mb", 0.0)))
+            rss, own = rss_mb(), tracemalloc.get_tracemalloc_memory() / 2**20
+            octree = octree_memory().get("octree_mb", 0.0)
+            snapshot = tracemalloc.take_snapshot()
+            if not self.snapshots:
+                snapshot.dump(self._dump)
+                snapshot = None
+            self.snapshots.append((t, snapshot, rss, octree, own))
         if t >= self.next:
             self.rows.append((t, time.perf_counter() - self.start, rss_mb(), peak_mb()))
             self.next += self.every
@@ -117,13 +129,16 @@ def traced(probe: Probe, top: int = 8) -> dict:
     """The growth of resident memory between the probe's two snapshots, MB: the OctoMap
     tree's `memoryUsage`, the Python heap (traced) and the rest, with the `top` source lines
     whose allocations grew most."""
-    (t0, first, rss0, tree0), (t1, second, rss1, tree1) = probe.snapshots
+    (t0, _, rss0, tree0, own0), (t1, second, rss1, tree1, own1) = probe.snapshots
+    first = tracemalloc.Snapshot.load(probe._dump)
+    Path(probe._dump).unlink()
     stats = second.compare_to(first, "lineno")
     python = sum(stat.size_diff for stat in stats) / 2**20
     lines = [dict(where=f"{Path(stat.traceback[0].filename).name}:{stat.traceback[0].lineno}",
                   mb=stat.size_diff / 2**20) for stat in stats[:top]]
     return dict(from_s=t0, to_s=t1, rss_mb=rss1 - rss0, octree_mb=tree1 - tree0,
-                python_mb=python, rest_mb=rss1 - rss0 - (tree1 - tree0) - python, lines=lines)
+                python_mb=python, tracemalloc_mb=own1 - own0,
+                rest_mb=rss1 - rss0 - (tree1 - tree0) - python - (own1 - own0), lines=lines)
 
 
 def per_hour(result, probe: Probe) -> list[dict]:
@@ -242,7 +257,8 @@ def main() -> None:
             print(f"\nmemory from {memory['from_s']:.0f} to {memory['to_s']:.0f} s: RSS "
                   f"+{memory['rss_mb']:.1f} MB = OctoMap tree (memoryUsage) "
                   f"+{memory['octree_mb']:.1f} + Python heap (traced) "
-                  f"+{memory['python_mb']:.1f} + the rest {memory['rest_mb']:+.1f}; the "
+                  f"+{memory['python_mb']:.1f} + tracemalloc's own "
+                  f"+{memory['tracemalloc_mb']:.1f} + the rest {memory['rest_mb']:+.1f}; the "
                   f"Python lines that grew most:")
             for line in memory["lines"]:
                 print(f"  {line['mb']:+.2f} MB {line['where']}")

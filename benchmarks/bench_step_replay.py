@@ -8,11 +8,15 @@ through `replan_section` with the box given as arrays: the same trajectories bit
 dive's step and map query (medians, ms), the replayed step without the query (median and p95,
 the least of `--repeats` runs), its STOMP part and what is left (the fields, trees, tube and
 warm start), STOMP's iterations and one iteration's cost; then the same steps with other
-STOMP budgets (rollouts, iteration cap, patience) and how much of the initial cost each
-removes (median of 1 - cost / initial cost). The budgets are compared open loop, from the
-recorded warm starts: what the closed loop covers decides (docs/replanning.md).
+STOMP budgets (rollouts, iteration cap, patience; every budget in turn on each step, the
+least of the repeats) and how much of the initial cost each removes (median of 1 - cost /
+initial cost). The budgets are compared open loop, from the recorded warm starts: what the
+closed loop covers decides (docs/replanning.md). The replayed medians are also given in
+vehicle-seconds (times the vehicle-only reference of `_reference.py`, measured in the same
+run), the figure to compare across machines.
 
-    .venv/bin/python benchmarks/bench_step_replay.py [--until 3400] [--windows 300:700,3000:3400]
+    .venv/bin/python benchmarks/bench_step_replay.py [--until 3400]
+        [--windows 300:700,3000:3400] [--repeats 3]
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 from tqdm import tqdm
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from _reference import machine  # noqa: E402
+from _reference import machine, print_reference, reference_factor  # noqa: E402
 from bench_long_mission import long_mission  # noqa: E402
 import drake_auv.replanning.replanner as replanner_module  # noqa: E402
 from drake_auv.mission.runner import run_mission  # noqa: E402
@@ -160,6 +164,8 @@ def main(argv=None) -> int:
         raise SystemExit(f"--until must be > 0 s and --repeats >= 1, got {args.until}, "
                          f"{args.repeats}")
     print(machine())
+    reference = reference_factor()
+    print_reference(reference)
     spec = long_mission("monterey_wall", 0, 1, args.until)
     start = time.perf_counter()
     with StepRecorder(windows) as recorder:
@@ -168,13 +174,13 @@ def main(argv=None) -> int:
           f"{len(recorder.steps)} steps recorded in {args.windows}")
     by_window = {w: [s for s in recorder.steps if w[0] <= s["time"] < w[1]] for w in windows}
     print("| window (s) | steps | box voxels | dive: step / query (ms) | replayed without the "
-          "query: median / p95 (ms) | of which STOMP / the rest (ms) | iterations | one "
-          "iteration (ms) |")
-    print("|---|---|---|---|---|---|---|---|")
+          "query: median / p95 (ms) | the same in vehicle-seconds | of which STOMP / the "
+          "rest (ms) | iterations | one iteration (ms) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     identical = 0
     for (a, b), steps in by_window.items():
         if not steps:
-            print(f"| {a:.0f}-{b:.0f} | 0 | | | | | | |")
+            print(f"| {a:.0f}-{b:.0f} | 0 | | | | | | | |")
             continue
         rows = []
         for step in tqdm(steps, desc=f"replay {a:.0f}-{b:.0f} s", leave=False):
@@ -188,6 +194,7 @@ def main(argv=None) -> int:
               f"{1e3 * np.median([s['wall'] for s in steps]):.2f} / "
               f"{1e3 * np.median([s['query'] for s in steps]):.2f} | "
               f"{1e3 * np.median(wall):.2f} / {1e3 * np.percentile(wall, 95):.2f} | "
+              f"{reference * np.median(wall):.2f} / {reference * np.percentile(wall, 95):.2f} | "
               f"{1e3 * np.median(stomp_s):.2f} / {1e3 * np.median(wall - stomp_s):.2f} | "
               f"{np.median(iterations):.1f} | "
               f"{1e3 * np.median(per_iteration) if len(per_iteration) else float('nan'):.3f} |")
@@ -197,16 +204,20 @@ def main(argv=None) -> int:
           "removed, median |")
     print("|---|---|---|---|---|")
     budgets = {"10 rollouts, at most 40 iterations (the default)": {}, **BUDGETS}
-    for label, overrides in budgets.items():
-        for (a, b), steps in by_window.items():
-            if not steps:
-                continue
-            rows = []
-            for step in steps:
-                plan, wall, _ = replay(step, with_budget(step["params"], overrides))
+    for (a, b), steps in by_window.items():
+        # Budgets in turn on each step (the least of the repeats), so a change of the
+        # machine's load falls on all of them alike.
+        rows = {label: [] for label in budgets}
+        for step in tqdm(steps, desc=f"budgets {a:.0f}-{b:.0f} s", leave=False):
+            for label, overrides in budgets.items():
+                plan, wall, _ = replay(step, with_budget(step["params"], overrides),
+                                       args.repeats)
                 gain = 1.0 - plan.cost / plan.initial_cost if plan.initial_cost > 0 else 0.0
-                rows.append((wall, plan.iterations, gain))
-            wall, iterations, gain = (np.array(c, dtype=float) for c in zip(*rows))
+                rows[label].append((wall, plan.iterations, gain))
+        for label, values in rows.items():
+            if not values:
+                continue
+            wall, iterations, gain = (np.array(c, dtype=float) for c in zip(*values))
             print(f"| {label} | {a:.0f}-{b:.0f} | {1e3 * np.median(wall):.2f} / "
                   f"{1e3 * np.percentile(wall, 95):.2f} | {np.median(iterations):.1f} | "
                   f"{statistics.median(gain):.3f} |")
