@@ -57,6 +57,20 @@ class RecordedBox:
         return (self.voxels, self.log_odds) if log_odds else self.voxels
 
 
+class CopyingBox:
+    """The on-line map as `replan_section` reads it, keeping a copy of what its box query
+    returned (`got`, a `RecordedBox`: the map's buffers change as it grows)."""
+
+    def __init__(self, online):
+        self.online, self.resolution, self.got = online, online.resolution, None
+
+    def occupied_points(self, lo, hi, log_odds: bool = False):
+        voxels, values = (np.array(a) for a in self.online.occupied_points(lo, hi,
+                                                                           log_odds=True))
+        self.got = RecordedBox(voxels, values, self.resolution)
+        return (voxels, values) if log_odds else voxels
+
+
 class StepRecorder:
     """Wraps the Replanner's `replan_section` while in use: records the steps that start in
     `windows` ((start, end) s), with their wall and query times. `probe` (the mission's
@@ -80,23 +94,15 @@ class StepRecorder:
         if not (hasattr(occupied, "occupied_points")
                 and any(a <= self._now < b for a, b in self.windows)):
             return self._replan(position, waypoints, next_index, occupied, params, **kwargs)
-        got = {}
-
-        def query(lo, hi, log_odds=False):
-            got["box"] = tuple(np.array(a) for a in occupied.occupied_points(
-                lo, hi, log_odds=True))  # copies: the map's buffers change as it grows
-            return got["box"] if log_odds else got["box"][0]
-
-        box = RecordedBox(None, None, occupied.resolution)
-        box.occupied_points = query
+        box = CopyingBox(occupied)
         start = time.perf_counter()
         plan = self._replan(position, waypoints, next_index, box, params, **kwargs)
         wall = time.perf_counter() - start
         if plan is not None:
             self.steps.append(dict(
                 time=self._now, args=(np.array(position), np.array(waypoints), next_index),
-                params=params, kwargs=kwargs, box=RecordedBox(*got["box"], occupied.resolution),
-                wall=wall, query=plan.query_time, trajectory=plan.trajectory))
+                params=params, kwargs=kwargs, box=box.got, wall=wall, query=plan.query_time,
+                trajectory=plan.trajectory))
         return plan
 
 
@@ -129,8 +135,9 @@ def replay(step, params=None, repeats: int = 1):
     for _ in range(repeats):
         with StompTimer() as timer:
             start = time.perf_counter()
-            plan = section_module.replan_section(position, waypoints, next_index, step["box"],
-                                                 params or step["params"], **step["kwargs"])
+            plan = section_module.replan_section(
+                position, waypoints, next_index, step["box"],
+                step["params"] if params is None else params, **step["kwargs"])
             wall = time.perf_counter() - start
         best = min(best, (wall, timer.total))
     return plan, best[0], best[1]
