@@ -90,9 +90,9 @@ class Probe:
         # (sim s, snapshot (the first dumped to a file, so it takes no memory meanwhile), RSS
         # MB, octree MB, tracemalloc's own MB)
         self.snapshots: list[tuple] = []
-        self._dump = None
+        self.dump_path = None
         if trace is not None:
-            handle, self._dump = tempfile.mkstemp(prefix="drake_auv-trace-")
+            handle, self.dump_path = tempfile.mkstemp(prefix="drake_auv-trace-")
             os.close(handle)
         self.rows: list[tuple] = []  # (sim s, wall s, rss MB, peak MB)
         # (sim s, leaves, octree MB, candidates' index MB, candidates, ScanLog versions)
@@ -107,7 +107,7 @@ class Probe:
             octree = octree_memory().get("octree_mb", 0.0)
             snapshot = tracemalloc.take_snapshot()
             if not self.snapshots:
-                snapshot.dump(self._dump)
+                snapshot.dump(self.dump_path)
                 snapshot = None
             self.snapshots.append((t, snapshot, rss, octree, own))
         if t >= self.next:
@@ -130,8 +130,7 @@ def traced(probe: Probe, top: int = 8) -> dict:
     tree's `memoryUsage`, the Python heap (traced) and the rest, with the `top` source lines
     whose allocations grew most."""
     (t0, _, rss0, tree0, own0), (t1, second, rss1, tree1, own1) = probe.snapshots
-    first = tracemalloc.Snapshot.load(probe._dump)
-    Path(probe._dump).unlink()
+    first = tracemalloc.Snapshot.load(probe.dump_path)
     stats = second.compare_to(first, "lineno")
     python = sum(stat.size_diff for stat in stats) / 2**20
     lines = [dict(where=f"{Path(stat.traceback[0].filename).name}:{stat.traceback[0].lineno}",
@@ -191,14 +190,17 @@ def long_mission(name: str, seed: int, surveys: int = 1, max_time: float | None 
     return mission_from_dict(raw, path.parent, path.name, source=path)
 
 
-def parse_trace(text: str) -> tuple[float, float]:
-    """`A:B` -> (A, B) simulated s, 0 <= A < B; one line naming the problem otherwise."""
+def parse_trace(text: str, until: float | None = None) -> tuple[float, float]:
+    """`A:B` -> (A, B) simulated s, 0 <= A < B <= `until` (`--max-time`, when given: the dive
+    would end before B); one line naming the problem otherwise."""
     try:
         a, b = (float(v) for v in text.split(":"))
     except ValueError:
         a = b = float("nan")
-    if not 0 <= a < b:
-        raise SystemExit(f"--trace-python: give A:B simulated seconds with 0 <= A < B, got "
+    limit = np.inf if until is None else until
+    if not 0 <= a < b <= limit:
+        raise SystemExit(f"--trace-python: give A:B simulated seconds with 0 <= A < B"
+                         f"{'' if until is None else f' <= --max-time {until:g}'}, got "
                          f"{text!r}")
     return a, b
 
@@ -214,7 +216,7 @@ def main() -> None:
     parser.add_argument("--trace-python", metavar="A:B",
                         help="split the memory growth from A to B simulated s (slow)")
     args = parser.parse_args()
-    trace = parse_trace(args.trace_python) if args.trace_python else None
+    trace = parse_trace(args.trace_python, args.max_time) if args.trace_python else None
     print(machine())
     spec = long_mission(args.mission, args.seed, args.surveys, args.max_time)
     if trace is not None:
@@ -249,11 +251,12 @@ def main() -> None:
               f"{r['index_mb']:.1f} | {r['candidates']} | {r['versions']} |")
     memory = None
     if trace is not None:
-        if len(probe.snapshots) < 2:
+        memory = traced(probe) if len(probe.snapshots) == 2 else None
+        Path(probe.dump_path).unlink()
+        if memory is None:
             print(f"\n--trace-python: the dive ended at {result.duration_s:.0f} s, before "
                   f"{trace[1]:.0f} s: nothing to compare")
         else:
-            memory = traced(probe)
             print(f"\nmemory from {memory['from_s']:.0f} to {memory['to_s']:.0f} s: RSS "
                   f"+{memory['rss_mb']:.1f} MB = OctoMap tree (memoryUsage) "
                   f"+{memory['octree_mb']:.1f} + Python heap (traced) "

@@ -147,14 +147,16 @@ def with_budget(params, overrides):
     return dataclasses.replace(params, stomp=dataclasses.replace(params.stomp, **overrides))
 
 
-def parse_windows(text: str):
+def parse_windows(text: str, until: float = np.inf):
+    """`START:END,...` -> [(START, END), ...] s, 0 <= START < END <= `until` (the dive's
+    end: a window after it would record nothing); one line naming the problem otherwise."""
     try:
         windows = [tuple(float(v) for v in part.split(":")) for part in text.split(",")]
     except ValueError:
         windows = []
-    if not windows or any(len(w) != 2 or not 0 <= w[0] < w[1] for w in windows):
-        raise SystemExit(f"--windows: give START:END pairs (0 <= START < END, s) separated by "
-                         f"commas, got {text!r}")
+    if not windows or any(len(w) != 2 or not 0 <= w[0] < w[1] <= until for w in windows):
+        raise SystemExit(f"--windows: give START:END pairs (0 <= START < END <= --until "
+                         f"{until:g} s) separated by commas, got {text!r}")
     return windows
 
 
@@ -166,10 +168,10 @@ def main(argv=None) -> int:
                         help="START:END,... simulated seconds whose steps are recorded")
     parser.add_argument("--repeats", type=int, default=3, help="replays of each step (>= 1)")
     args = parser.parse_args(argv)
-    windows = parse_windows(args.windows)
     if not args.until > 0 or args.repeats < 1:
         raise SystemExit(f"--until must be > 0 s and --repeats >= 1, got {args.until}, "
                          f"{args.repeats}")
+    windows = parse_windows(args.windows, args.until)
     print(machine())
     reference = reference_factor()
     print_reference(reference)

@@ -74,7 +74,8 @@ def test_wrappers_come_off_and_budgets_apply():
     assert bench.replay(step, capped)[0].iterations == 1
 
 
-@pytest.mark.parametrize("text", ["5:1", "abc", "1:2:3", "-1:4", ""])
-def test_bad_windows_get_one_line(text):
+@pytest.mark.parametrize("text, until", [("5:1", np.inf), ("abc", np.inf), ("1:2:3", np.inf),
+                                         ("-1:4", np.inf), ("", np.inf), ("300:700", 500.0)])
+def test_bad_windows_get_one_line(text, until):
     with pytest.raises(SystemExit, match="--windows: give START:END pairs"):
-        bench.parse_windows(text)
+        bench.parse_windows(text, until)
