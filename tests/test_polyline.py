@@ -31,3 +31,4 @@ def test_project_gives_arclength_and_distance_of_the_nearest_point():
     s2, d2 = Polyline(L_SHAPE).project(batch)
     assert s2.shape == (2, 4) and np.allclose(s2[1], s) and np.allclose(d2[0], d)
     assert Polyline(L_SHAPE).length == pytest.approx(7.0)
+    assert np.array_equal(Polyline(L_SHAPE).arclength(batch), s2)  # the same numbers, no d

@@ -240,6 +240,22 @@ def test_cost_is_the_weighted_sum_of_its_terms_with_the_terminal_goal_on_the_las
 
 
 
+def test_a_band_off_the_box_grid_maps_no_offset_and_costs_none():
+    """Horizontal metric: band voxels outside the box's grid give an offset of inf everywhere
+    (`offset_mapped` False) and an offset term of 0, as where nothing is mapped at all."""
+    params = ReplanningParameters(omega=3.0)  # 5 m from the wall in reach: a cost
+    wall = np.column_stack([np.linspace(-5, 5, 50), np.full(50, 40.0), np.zeros(50)])
+    box = (np.array([-10.0, -10.0, -5.0]), np.array([10.0, 10.0, 5.0]))
+    initial = np.column_stack([np.linspace(-3, 3, 8), np.zeros(8), np.zeros(8)])
+    for voxels, mapped in ((wall, False), (wall - [0.0, 35.0, 0.0], True)):
+        slice_map = SliceMap(voxels, (-1.0, 1.0), params.depth_band, params.clearance, box=box)
+        assert slice_map.offset_mapped == mapped
+        cost = ReplanningCost(slice_map, initial[[0, -1]], initial, params)
+        offset = cost.terms(initial[None])["offset"]
+        assert np.all(offset == 0) != mapped
+        assert np.all(np.isinf(slice_map.offset(initial))) != mapped
+
+
 def test_3d_offset_near_the_trajectory_is_interpolated_and_exact_elsewhere():
     """Metric "3d": after `prepare_tube` the offset within the tube is the trilinear read of
     exact node distances (within 2 cm of the KD-tree's at 5-8 m from a curved face), and

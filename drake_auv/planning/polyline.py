@@ -85,8 +85,9 @@ class Polyline:
         self.a_sq = np.einsum("mk,mk->m", self.a, self.a)
         self._ab_a = np.vstack([self.ab, -2.0 * self.a]).T  # (3, 2m): p.ab and -2 p.a at once
 
-    def project(self, points: np.ndarray):
-        flat = points.reshape(-1, 3)
+    def _nearest(self, flat: np.ndarray):
+        """For points (n, 3): the nearest segment's index (n,), the parameter t (n, m) of
+        every segment's nearest point and |p - nearest|^2 - |p|^2 (n, m)."""
         # |p - a - t ab|^2 = |p|^2 - 2 p.a + |a|^2 - 2 t (p - a).ab + t^2 |ab|^2 from one
         # (n, 3) x (3, 2m) product (the segments' a and ab are fixed); |p|^2 is the same for
         # every segment, so it is added after the nearest segment is chosen.
@@ -97,12 +98,23 @@ class Polyline:
         np.minimum(t, 1.0, out=t)
         np.maximum(t, 0.0, out=t)
         gap = products[:, m:] + self.a_sq + t * (t * self.seg_sq - 2.0 * u)
-        best = np.argmin(gap, axis=1)
+        return np.argmin(gap, axis=1), t, gap
+
+    def project(self, points: np.ndarray):
+        flat = points.reshape(-1, 3)
+        best, t, gap = self._nearest(flat)
         rows = np.arange(len(best))
         s = self.s0[best] + t[rows, best] * self.seg_len[best]
         gap_sq = gap[rows, best] + np.einsum("nk,nk->n", flat, flat)
         return (s.reshape(points.shape[:-1]),
                 np.sqrt(np.maximum(gap_sq, 0.0)).reshape(points.shape[:-1]))
+
+    def arclength(self, points: np.ndarray) -> np.ndarray:
+        """`project`'s arclength alone (m), without the distance."""
+        flat = points.reshape(-1, 3)
+        best, t, _ = self._nearest(flat)
+        s = self.s0[best] + t[np.arange(len(best)), best] * self.seg_len[best]
+        return s.reshape(points.shape[:-1])
 
 
 def polyline_progress(points: np.ndarray, polyline: np.ndarray):

@@ -60,22 +60,28 @@ class ReplanningCost:
             depth[self.keep] = 0.0  # the offset along the normal sets the depth there
         self.depth_weight = depth
 
-    def terms(self, trajectories: np.ndarray) -> dict:
-        """The unweighted per-point terms (K, N) of `trajectories` (K, N, 3)."""
+    def _offset(self, points: np.ndarray) -> np.ndarray:
+        """The offset term of `points` (..., 3); 0 where nothing is mapped."""
+        d = self.slice_map.offset(points)
+        if not self.slice_map.offset_mapped:  # inf everywhere
+            return np.zeros(d.shape)
+        return _huber(d - self.params.omega, self.params.huber)
+
+    def _terms(self, trajectories: np.ndarray) -> tuple:
+        """The terms of `terms`, in its order; route None where every point keeps the offset
+        (it is 0 there)."""
         p = self.params
         shape = trajectories.shape[:-1]
+        c = self.slice_map.clearance(trajectories, p.clearance)
         if self._keep_all:  # contours: every point keeps the offset, none follows the route
-            d = self.slice_map.offset(trajectories)
-            offset = np.where(np.isfinite(d), _huber(d - p.omega, p.huber), 0.0)
+            offset = self._offset(trajectories)
+            s, route = self.route.arclength(trajectories), None
         else:
             offset = np.zeros(shape)
             if self.keep.any():
-                d = self.slice_map.offset(trajectories[..., self.keep, :])
-                offset[..., self.keep] = np.where(np.isfinite(d), _huber(d - p.omega, p.huber),
-                                                  0.0)
-        c = self.slice_map.clearance(trajectories, p.clearance)
-        s, gap = self.route.project(trajectories)
-        route = np.zeros(shape) if self._keep_all else np.where(self.keep, 0.0, gap * gap)
+                offset[..., self.keep] = self._offset(trajectories[..., self.keep, :])
+            s, gap = self.route.project(trajectories)
+            route = np.where(self.keep, 0.0, gap * gap)
         lag = self.s_ref - s
         np.maximum(lag, 0.0, out=lag)
         obstacle = p.clearance - c
@@ -85,16 +91,23 @@ class ReplanningCost:
         spacing[..., 0] = 0.0
         spacing[..., 1:] = (np.sqrt(np.einsum("...k,...k->...", step, step)) - p.spacing) ** 2
         depth = trajectories[..., 2] - self.z_ref
-        return dict(offset=offset, obstacle=obstacle * obstacle, depth=depth * depth,
-                    route=route, progress=lag * lag, spacing=spacing)
+        return offset, obstacle * obstacle, depth * depth, route, lag * lag, spacing
+
+    def terms(self, trajectories: np.ndarray) -> dict:
+        """The unweighted per-point terms (K, N) of `trajectories` (K, N, 3)."""
+        offset, obstacle, depth, route, progress, spacing = self._terms(trajectories)
+        return dict(offset=offset, obstacle=obstacle, depth=depth,
+                    route=np.zeros(offset.shape) if route is None else route,
+                    progress=progress, spacing=spacing)
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
-        p, t = self.params, self.terms(trajectories)
-        cost = (p.offset_weight * t["offset"] + p.obstacle_weight * t["obstacle"]
-                + self.depth_weight * t["depth"] + p.progress_weight * t["progress"]
-                + p.spacing_weight * t["spacing"])
-        if not self._keep_all:
-            cost += p.route_weight * t["route"]
-        cost[..., -1] += p.terminal_weight * (p.offset_weight * t["offset"][..., -1]
-                                              + p.progress_weight * t["progress"][..., -1])
+        p = self.params
+        offset, obstacle, depth, route, progress, spacing = self._terms(trajectories)
+        cost = (p.offset_weight * offset + p.obstacle_weight * obstacle
+                + self.depth_weight * depth + p.progress_weight * progress
+                + p.spacing_weight * spacing)
+        if route is not None:
+            cost += p.route_weight * route
+        cost[..., -1] += p.terminal_weight * (p.offset_weight * offset[..., -1]
+                                              + p.progress_weight * progress[..., -1])
         return cost

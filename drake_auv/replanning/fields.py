@@ -38,8 +38,9 @@ class _DistanceField2D:
         cells = cells[np.all((cells >= 0) & (cells < shape), axis=1)]
         free = np.ones(shape, bool)
         free[cells[:, 0], cells[:, 1]] = False
-        self.field = (ndimage.distance_transform_edt(free, sampling=resolution) if len(cells)
-                      else np.full(shape, np.inf))
+        self.empty = len(cells) == 0  # no column in the box: inf everywhere
+        self.field = (np.full(shape, np.inf) if self.empty
+                      else ndimage.distance_transform_edt(free, sampling=resolution))
         self._last = (np.array(shape) - 1)[:, None]  # the largest cell index per axis
 
     def _coords(self, points: np.ndarray) -> np.ndarray:
@@ -147,6 +148,10 @@ class SliceMap:
         self.slab_tree_3d = _kdtree(slab) if len(slab) else None
         self._tube = None
         self.resolution = resolution
+        # The offset is finite everywhere (a band voxel in reach: the 3D tree's, or a column
+        # on the 2D field's grid) or inf everywhere.
+        self.offset_mapped = self.band_tree is not None and (
+            self._field is None or not self._field.empty)
 
     def prepare_tube(self, trajectory: np.ndarray, pad: float) -> None:
         """Metric "3d": precomputes the offset on the grid nodes within `pad` m of
