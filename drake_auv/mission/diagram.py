@@ -76,7 +76,8 @@ class MissionHandles:
     camera_coverage: CoverageRecorder
     multibeam_coverage: CoverageRecorder
     logs: dict  # name -> VectorLogSink: state, estimated_state, reference, leg, response,
-    # profile, replanning
+    # profile, replanning; `run_mission` spools them to disk as the dive runs (after it, a log
+    # holds its last samples only; `MissionResult` holds the whole dive)
     faults: dict  # fault name -> the system injecting it (only the mission's faults)
     autopilot: AutopilotPilot | None = None  # with a fly step: the pilot
     dvl: DvlAltimeter | None = None  # with a fly or an explore step

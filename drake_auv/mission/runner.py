@@ -2,9 +2,10 @@
 
 `run_mission(spec)` simulates until the `MissionSupervisor`'s monitor ends the dive (every leg
 done) or the time cap (`limits.max_time_s`, default the sum of the legs' budgets). The monitor
-also advances the progress bar. `MissionResult` holds what the report needs, read from the
-Diagram's logs and the systems' Contexts after the run; true distances come from the exact
-point-to-mesh distance, on the true world.
+also advances the progress bar and moves the logs' samples to disk every `LOG_SPOOL_S`
+(`mission.log_spool`: their memory does not grow with the dive). `MissionResult` holds what
+the report needs, read from the logs and the systems' Contexts after the run; true distances
+come from the exact point-to-mesh distance, on the true world.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from drake_auv.geometry.distance import mesh_distance
 from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.mission.config import MissionSpec
 from drake_auv.mission.diagram import MissionHandles, build_mission_diagram
+from drake_auv.mission.log_spool import LogSpool
 from drake_auv.mission.plan import MissionPlan, plan_mission
 from drake_auv.mission.site import Site, load_site, check_against_site
 from drake_auv.mission.supervisor import responses_from_log
@@ -28,6 +30,7 @@ from drake_auv.signals import (LegSignal, Profile, ReplanningStep, VehicleState,
                                annotate_graphviz)
 
 VEHICLE_RADIUS = 1.0  # m, a sphere around the GIRONA 500's hulls for the contact check
+LOG_SPOOL_S = 300.0  # s of simulated time between moves of the logs' samples to disk
 
 
 @dataclass
@@ -139,28 +142,34 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
     bar = tqdm(total=int(np.ceil(cap)), unit="s sim", desc=f"mission {spec.name}",
                disable=not progress)
     supervisor = handles.supervisor
+    spool = LogSpool(handles.logs, LOG_SPOOL_S)
 
     def monitor(root_context) -> EventStatus:
         now = int(root_context.get_time())
         if now > bar.n:
             bar.update(now - bar.n)
+        spool.spool(root_context)
         if probe is not None:
             probe(root_context)
         return supervisor.monitor(root_context)
 
     simulator.set_monitor(monitor)
-    wall = time.perf_counter()
-    status = simulator.AdvanceTo(cap)
-    wall = time.perf_counter() - wall
-    bar.update(bar.total - bar.n)  # a dive that ends before the cap ends the bar at 100 %
-    bar.close()
-    completed = status.reason() == SimulatorStatus.ReturnReason.kReachedTerminationCondition
-    return _collect(spec, site, plan, diagram, handles, context, completed, wall)
+    try:
+        wall = time.perf_counter()
+        status = simulator.AdvanceTo(cap)
+        wall = time.perf_counter() - wall
+        bar.update(bar.total - bar.n)  # a dive that ends before the cap ends the bar at 100 %
+        bar.close()
+        completed = status.reason() == SimulatorStatus.ReturnReason.kReachedTerminationCondition
+        logs = {name: spool.read(name, context) for name in handles.logs}
+    finally:
+        spool.close()
+    return _collect(spec, site, plan, diagram, handles, context, completed, wall, logs)
 
 
 def _collect(spec, site, plan, diagram, handles: MissionHandles, context, completed: bool,
-             wall: float) -> MissionResult:
-    logs = {name: log.FindLog(context) for name, log in handles.logs.items()}
+             wall: float, logs: dict) -> MissionResult:
+    """`logs`: each of `handles.logs`' samples over the whole dive (`LogSpool.read`)."""
     times = logs["state"].sample_times()
     state = logs["state"].data().T.copy()
     estimated = logs["estimated_state"].data().T.copy()
