@@ -6,6 +6,7 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
+from drake_auv.mapping import octree_map
 from drake_auv.mapping.octree_map import OctreeMap
 
 
@@ -316,3 +317,27 @@ def test_a_beam_without_an_echo_clears_only_no_return_clear_m():
     assert alone.labels(probe[:2]).tolist() == [0, -1]
     with pytest.raises(ValueError, match="no_return_clear_m must be > 0"):
         OctreeMap(0.5, no_return_clear_m=0.0)
+
+
+def test_code_set_matches_a_python_set_through_merges(monkeypatch):
+    """The candidates' `_CodeSet` against a Python set, with merges every 8 codes: codes
+    added, removed, removed from the bulk and added back."""
+    monkeypatch.setattr(octree_map, "_MERGE", 8)
+    rng = np.random.default_rng(7)
+    codes, want = octree_map._CodeSet(), set()
+    for _ in range(400):
+        batch = np.unique(rng.integers(0, 200, rng.integers(1, 12)))
+        if rng.random() < 0.6:
+            new = batch[~codes.contains(batch)]
+            assert set(new.tolist()) == set(batch.tolist()) - want
+            codes.add(new)
+            want.update(new.tolist())
+        else:
+            gone = batch[codes.contains(batch)]
+            assert set(gone.tolist()) == set(batch.tolist()) & want
+            codes.remove(gone)
+            want.difference_update(gone.tolist())
+        assert len(codes) == len(want)
+    every = np.arange(200)
+    assert set(every[codes.contains(every)].tolist()) == want and len(want) > 20
+    assert len(codes._bulk) > 8  # merged, not only the small arrays

@@ -53,6 +53,70 @@ _SCAN_WINDOW = 40  # scans remembered for the label cache; older labels are read
 _TILE = 16  # voxels along a tile's edge (the candidates' spatial index)
 _LIMIT = 1e9  # m, where an unbounded box is clipped
 _LEFT = np.iinfo(np.int64).max  # the revision of a row whose candidate left the index
+_MERGE = 4096  # codes added or removed before `_CodeSet` merges them into its bulk
+
+
+class _CodeSet:
+    """A set of int64 voxel codes in sorted arrays, 8 bytes a code (a Python set of them takes
+    ~60): the bulk, the codes added since its last merge and those of the bulk since removed,
+    the last two at most `_MERGE` each, so adding and removing cost what changes (and one
+    pass over the bulk every `_MERGE` codes) and a lookup is three binary searches."""
+
+    def __init__(self):
+        none = np.zeros(0, dtype=np.int64)
+        self._bulk, self._added, self._removed = none, none, none
+
+    def __len__(self) -> int:
+        return len(self._bulk) - len(self._removed) + len(self._added)
+
+    @property
+    def nbytes(self) -> int:
+        return self._bulk.nbytes + self._added.nbytes + self._removed.nbytes
+
+    @staticmethod
+    def _in(sorted_codes: np.ndarray, codes: np.ndarray) -> np.ndarray:
+        if len(sorted_codes) == 0:
+            return np.zeros(len(codes), bool)
+        at = np.minimum(np.searchsorted(sorted_codes, codes), len(sorted_codes) - 1)
+        return sorted_codes[at] == codes
+
+    def contains(self, codes: np.ndarray) -> np.ndarray:
+        """(n,) whether each of `codes` (n,) is in the set."""
+        return ((self._in(self._bulk, codes) & ~self._in(self._removed, codes))
+                | self._in(self._added, codes))
+
+    def add(self, codes: np.ndarray) -> None:
+        """Adds `codes` (unique, none in the set)."""
+        back = self._in(self._removed, codes)  # removed from the bulk, still there
+        if back.any():
+            self._removed = self._removed[~self._in(np.sort(codes[back]), self._removed)]
+        added = np.concatenate([self._added, codes[~back]])
+        added.sort()
+        if len(added) > _MERGE:
+            self._bulk = np.insert(self._bulk, np.searchsorted(self._bulk, added), added)
+            added = added[:0]
+        self._added = added
+
+    def remove(self, codes: np.ndarray) -> None:
+        """Removes `codes` (unique, all in the set)."""
+        codes = np.sort(codes)
+        fresh = self._in(self._added, codes)
+        if fresh.any():
+            self._added = self._added[~self._in(codes[fresh], self._added)]
+        removed = np.concatenate([self._removed, codes[~fresh]])
+        removed.sort()
+        if len(removed) > _MERGE:
+            self._bulk = self._bulk[~self._in(removed, self._bulk)]
+            removed = removed[:0]
+        self._removed = removed
+
+
+def _grown(rows: np.ndarray, size: int) -> np.ndarray:
+    """`rows` in a buffer of `size` rows, the new ones unwritten (so not resident until used;
+    `np.resize` would fill them with copies)."""
+    out = np.empty((size,) + rows.shape[1:], dtype=rows.dtype)
+    out[:len(rows)] = rows
+    return out
 
 
 def _encode(idx: np.ndarray) -> np.ndarray:
@@ -111,7 +175,7 @@ class OctreeMap:
     def clear(self) -> None:
         """Forgets everything: the whole map becomes unknown."""
         self.tree.clear()
-        self._candidates: set[int] = set()  # codes of the candidates: a superset of the occupied
+        self._candidates = _CodeSet()  # codes of the candidates: a superset of the occupied
         # The candidates as rows of arrays (the first `_count` rows of a buffer that grows by a
         # quarter, so adding costs what is added and memory grows in small steps; rows left by
         # candidates read as free, in `_vacant`, are taken first): centres, cached label and
@@ -178,10 +242,11 @@ class OctreeMap:
             # float64, an end on a voxel face (a flat seabed at z = -30 m) lands one voxel off.
             idx = np.floor(endpoints[hit].astype(np.float32).astype(float)
                            * (1.0 / self.resolution))
-            new = set(_encode(idx).tolist()) - self._candidates
-            if new:
-                self._candidates.update(new)
-                self._new_codes.append(np.fromiter(new, dtype=np.int64, count=len(new)))
+            codes = np.unique(_encode(idx))
+            new = codes[~self._candidates.contains(codes)]
+            if len(new):
+                self._candidates.add(new)
+                self._new_codes.append(new)
         self._dirty = True
         self.revision += 1
         self.num_scans += 1
@@ -232,10 +297,9 @@ class OctreeMap:
         rows = np.concatenate(taken + [np.arange(start, stop)])
         if stop > len(self._label):
             size = max(stop, len(self._label) + len(self._label) // 4, 1024)
-            self._centres = np.resize(self._centres, (size, 3))
-            self._label = np.resize(self._label, size)
-            self._checked = np.resize(self._checked, size)
-            self._log_odds = np.resize(self._log_odds, size)
+            self._centres, self._label, self._checked, self._log_odds = (
+                _grown(a, size) for a in (self._centres, self._label, self._checked,
+                                          self._log_odds))
         idx = _decode(codes)
         self._centres[rows] = (idx + 0.5) * self.resolution
         self._label[rows] = False
@@ -319,7 +383,7 @@ class OctreeMap:
         if len(rows) == 0:
             return
         idx = np.floor(self._centres[rows] * (1.0 / self.resolution)).astype(np.int64)
-        self._candidates.difference_update(_encode(idx).tolist())
+        self._candidates.remove(_encode(idx))
         self._checked[rows] = _LEFT
         self._vacant.append(rows)
         for key in np.unique(_tile_codes(idx)).tolist():
@@ -441,7 +505,7 @@ class OctreeMap:
         index = (self._centres.nbytes + self._label.nbytes + self._checked.nbytes
                  + self._log_odds.nbytes
                  + sum(t.nbytes + 100 for t in self._tiles.values())
-                 + 60 * len(self._candidates))
+                 + self._candidates.nbytes)
         return dict(resolution_m=self.resolution, leaves=int(self.tree.getNumLeafNodes()),
                     octree_mb=self.tree.memoryUsage() / 2**20, candidates=len(self._candidates),
                     index_mb=index / 2**20)
