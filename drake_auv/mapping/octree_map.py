@@ -105,8 +105,8 @@ class _CodeSet:
             self._added = self._added[~self._in(codes[fresh], self._added)]
         removed = np.concatenate([self._removed, codes[~fresh]])
         removed.sort()
-        if len(removed) > _MERGE:
-            self._bulk = self._bulk[~self._in(removed, self._bulk)]
+        if len(removed) > _MERGE:  # each a code of the bulk, once
+            self._bulk = np.delete(self._bulk, np.searchsorted(self._bulk, removed))
             removed = removed[:0]
         self._removed = removed
 
