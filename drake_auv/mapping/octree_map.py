@@ -500,7 +500,7 @@ class OctreeMap:
 
     def memory(self) -> dict:
         """The map's memory, MB: the OctoMap tree's own (`memoryUsage`, its leaves counted)
-        and the candidates' index (arrays, tiles and the set of codes, estimated); the
+        and the candidates' index (its arrays and codes, its tiles estimated); the
         candidates now in the index."""
         index = (self._centres.nbytes + self._label.nbytes + self._checked.nbytes
                  + self._log_odds.nbytes

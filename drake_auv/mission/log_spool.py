@@ -31,9 +31,6 @@ class SpooledLog:
     def data(self) -> np.ndarray:
         return self._data
 
-    def num_samples(self) -> int:
-        return len(self._times)
-
 
 class LogSpool:
     """Moves the samples of `sinks` ({name: `VectorLogSink`}) of one root Context to disk every
