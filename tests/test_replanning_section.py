@@ -175,6 +175,26 @@ def test_slice_map_clearance_is_the_exact_3d_distance_within_the_bound():
     assert np.all(np.isinf(got[~within]))
 
 
+def test_slice_map_within_rules_a_batch_out_only_when_no_point_is_near():
+    """`within`'s one box test of the slab's field is at most every point's own bound, so it
+    never rules out a batch with a point inside the clearance (the cost then skips the
+    obstacle term)."""
+    rng = np.random.default_rng(7)
+    slice_map = SliceMap(_wall(), (-5.0, -5.0), depth_band=1.5, clearance=3.0)
+    field = slice_map._slab_field
+    for _ in range(200):
+        centre = rng.uniform([-30, -30, -6], [40, 50, -4])
+        batch = centre + rng.normal(0.0, rng.uniform(0.1, 5.0), (11, 12, 3))
+        flat = batch.reshape(-1, 3)
+        assert field.box_lower_bound(flat) <= field.lower_bound(flat).min() + 1e-12
+        near = np.isfinite(slice_map.clearance(batch, 3.0)).any()
+        assert slice_map.within(batch, 3.0) or not near
+    far = np.stack([np.full(5, 9.0), np.linspace(0, 20, 5), np.full(5, -5.0)], axis=1)
+    assert not slice_map.within(far, 3.0)  # 8.75 m from the wall
+    assert slice_map.within(np.vstack([far, [[1.0, 10.0, -5.0]]]), 3.0)
+    assert not SliceMap(np.zeros((0, 3)), (-5.0, -5.0), 1.5, 3.0).within(far, 3.0)
+
+
 def test_only_points_marked_keep_offset_keep_it_the_others_follow_the_route():
     nominal = WAYPOINTS + [4.5, 0.0, 0.0]  # 1.5 m inside the offset, outside the clearance
     x = np.array([4.5, 0.0, -5.0])
@@ -287,3 +307,55 @@ def test_3d_offset_near_the_trajectory_is_interpolated_and_exact_elsewhere():
     tree.points = 0
     np.testing.assert_array_equal(slice_map.offset(far), tree.tree.query(far)[0])
     assert tree.points == len(far)
+
+
+class _CountingTree:
+    """A KD-tree counting the points queried."""
+
+    def __init__(self, tree):
+        self.tree, self.points = tree, 0
+
+    def query(self, x, *args, **kwargs):
+        self.points += len(x)
+        return self.tree.query(x, *args, **kwargs)
+
+
+def test_the_tube_reuses_the_last_steps_node_offsets_and_gives_a_full_querys_numbers():
+    """`prepare_tube(reuse=...)` after the map changed (voxels gone, the nearest of many
+    nodes among them; voxels added, nearer than some nodes' nearest) and the trajectory moved
+    on: the same node offsets as a tube built afresh, bit for bit, each at the distance of the
+    voxel it names, for fewer queries of the band's KD-tree than the nodes."""
+    rng = np.random.default_rng(11)
+    u = rng.normal(size=(6000, 3))
+    idx = np.unique(np.floor(5.0 * u / np.linalg.norm(u, axis=1, keepdims=True) / 0.5), axis=0)
+    voxels = (idx + 0.5) * 0.5  # centres of 0.5 m voxels of a 5 m boulder
+    a = np.linspace(0.0, 1.5, 20)
+    arc = np.column_stack([11.0 * np.cos(a), 11.0 * np.sin(a), np.zeros(20)])
+
+    def tube(points, trajectory, reuse=None):
+        slice_map = SliceMap(points, (-12.0, 12.0), 1.5, 3.0, metric="3d", resolution=0.5)
+        slice_map.band_tree = tree = _CountingTree(slice_map.band_tree)
+        return slice_map.prepare_tube(trajectory, pad=1.0, reuse=reuse), tree.points
+
+    last, _ = tube(voxels, arc)
+    gone = np.linalg.norm(voxels - [5.5, 2.0, 0.0], axis=1) < 2.0  # the face nearest the arc
+    bump = voxels[gone & (voxels[:, 0] > 3.5)] * 1.1  # pushed out: nearer than before
+    bump = (np.floor(bump / 0.5) + 0.5) * 0.5
+    hole = np.linalg.norm(voxels - [1.1, 4.9, 0.0], axis=1) < 1.2  # gone, not replaced
+    changed = np.unique(np.vstack([voxels[~gone & ~hole], bump]), axis=0)
+    moved = arc[2:] + [0.2, 0.0, 0.1]
+    reused, queried = tube(changed, moved, reuse=last)
+    fresh, fresh_queries = tube(changed, moved)
+    np.testing.assert_array_equal(reused.nodes, fresh.nodes)
+    np.testing.assert_array_equal(reused.distance, fresh.distance)
+    np.testing.assert_array_equal(reused.voxels, fresh.voxels)
+    decode = np.stack([(reused.nearest >> s) & ((1 << 21) - 1) for s in (42, 21, 0)], 1)
+    at = (decode - (1 << 20) + 0.5) * 0.5
+    nodes = np.stack([(reused.nodes >> s) & ((1 << 21) - 1) for s in (42, 21, 0)], 1)
+    np.testing.assert_allclose(np.linalg.norm((nodes - (1 << 20)) * 0.5 - at, axis=1),
+                               reused.distance, rtol=1e-12)
+    assert fresh_queries == len(fresh.nodes) and 0 < queried < 0.6 * fresh_queries
+    _, mine, theirs = np.intersect1d(reused.nodes, last.nodes, return_indices=True)
+    change = reused.distance[mine] - last.distance[theirs]
+    assert (change < -0.05).any() and (change > 0.05).any()  # both changes were exercised
+    assert tube(np.vstack([voxels, voxels[:1]]), arc)[0] is None  # a point twice: no codes

@@ -59,6 +59,7 @@ class ReplanningCost:
         if params.offset_metric == "3d":
             depth[self.keep] = 0.0  # the offset along the normal sets the depth there
         self.depth_weight = depth
+        self._depth_any = bool(depth.any())
 
     def _offset(self, points: np.ndarray) -> np.ndarray:
         """The offset term of `points` (..., 3); 0 where nothing is mapped."""
@@ -67,12 +68,13 @@ class ReplanningCost:
             return np.zeros(d.shape)
         return _huber(d - self.params.omega, self.params.huber)
 
-    def _terms(self, trajectories: np.ndarray) -> tuple:
-        """The terms of `terms`, in its order; route None where every point keeps the offset
-        (it is 0 there)."""
+    def _terms(self, trajectories: np.ndarray, weighted: bool = False) -> tuple:
+        """The terms of `terms`, in its order; None for a term that is 0 everywhere: route
+        where every point keeps the offset, obstacle where no point can be within the
+        clearance (`SliceMap.within`), and with `weighted` depth where its weights are all 0
+        (so the cost skips them: adding an exact 0 changes no sum)."""
         p = self.params
         shape = trajectories.shape[:-1]
-        c = self.slice_map.clearance(trajectories, p.clearance)
         if self._keep_all:  # contours: every point keeps the offset, none follows the route
             offset = self._offset(trajectories)
             s, route = self.route.arclength(trajectories), None
@@ -84,28 +86,38 @@ class ReplanningCost:
             route = np.where(self.keep, 0.0, gap * gap)
         lag = self.s_ref - s
         np.maximum(lag, 0.0, out=lag)
-        obstacle = p.clearance - c
-        np.maximum(obstacle, 0.0, out=obstacle)
+        obstacle = None
+        if self.slice_map.within(trajectories, p.clearance):
+            obstacle = p.clearance - self.slice_map.clearance(trajectories, p.clearance)
+            np.maximum(obstacle, 0.0, out=obstacle)
+            obstacle *= obstacle
         step = trajectories[..., 1:, :] - trajectories[..., :-1, :]
         spacing = np.empty(shape)
         spacing[..., 0] = 0.0
         spacing[..., 1:] = (np.sqrt(np.einsum("...k,...k->...", step, step)) - p.spacing) ** 2
-        depth = trajectories[..., 2] - self.z_ref
-        return offset, obstacle * obstacle, depth * depth, route, lag * lag, spacing
+        depth = None
+        if self._depth_any or not weighted:
+            depth = trajectories[..., 2] - self.z_ref
+            depth *= depth
+        return offset, obstacle, depth, route, lag * lag, spacing
 
     def terms(self, trajectories: np.ndarray) -> dict:
         """The unweighted per-point terms (K, N) of `trajectories` (K, N, 3)."""
-        offset, obstacle, depth, route, progress, spacing = self._terms(trajectories)
-        return dict(offset=offset, obstacle=obstacle, depth=depth,
-                    route=np.zeros(offset.shape) if route is None else route,
-                    progress=progress, spacing=spacing)
+        terms = dict(zip(("offset", "obstacle", "depth", "route", "progress", "spacing"),
+                         self._terms(trajectories)))
+        return {k: np.zeros(terms["offset"].shape) if v is None else v
+                for k, v in terms.items()}
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
         p = self.params
-        offset, obstacle, depth, route, progress, spacing = self._terms(trajectories)
-        cost = (p.offset_weight * offset + p.obstacle_weight * obstacle
-                + self.depth_weight * depth + p.progress_weight * progress
-                + p.spacing_weight * spacing)
+        offset, obstacle, depth, route, progress, spacing = self._terms(trajectories, True)
+        cost = p.offset_weight * offset
+        if obstacle is not None:
+            cost += p.obstacle_weight * obstacle
+        if depth is not None:
+            cost += self.depth_weight * depth
+        cost += p.progress_weight * progress
+        cost += p.spacing_weight * spacing
         if route is not None:
             cost += p.route_weight * route
         cost[..., -1] += p.terminal_weight * (p.offset_weight * offset[..., -1]

@@ -8,6 +8,8 @@ voxels in the section's box.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -51,6 +53,18 @@ class _DistanceField2D:
         return ndimage.map_coordinates(self.field, self._coords(points), order=1,
                                        mode="nearest")
 
+    def box_lower_bound(self, points: np.ndarray) -> float:
+        """At most `lower_bound` of every one of `points` (n >= 1, >= 2): the least value of
+        the cells nearest to their bounding box (an index is monotonic in its coordinate), so
+        one slice stands for n reads when the batch is far from every column."""
+        coords = points[:, :2]
+        (x0, y0), (x1, y1) = coords.min(axis=0).tolist(), coords.max(axis=0).tolist()
+        (ox, oy), cell, (nx, ny) = self.origin.tolist(), self.cell, self._last[:, 0].tolist()
+        # round() is rint's half-to-even, on the same float64 operations as `_coords`.
+        i0, i1 = (min(max(round((v - ox) / cell), 0), nx) for v in (x0, x1))
+        j0, j1 = (min(max(round((v - oy) / cell), 0), ny) for v in (y0, y1))
+        return float(self.field[i0:i1 + 1, j0:j1 + 1].min()) - cell * math.sqrt(0.5)
+
     def lower_bound(self, points: np.ndarray) -> np.ndarray:
         """(n,) at most the distance from `points` (inside the box) to the nearest column:
         the nearest cell's value less half a cell diagonal."""
@@ -71,29 +85,104 @@ def _ball_offsets(radius: float) -> np.ndarray:
     return offsets[np.einsum("ij,ij->i", offsets, offsets) <= reach * reach]
 
 
+_OFFSET = 1 << 20  # lattice index offset: indices encode as non-negative 21-bit fields
+
+
+def _codes(idx: np.ndarray) -> np.ndarray:
+    """(n,) int64 codes of integer lattice indices (n, 3), |index| < 2^20."""
+    idx = idx.astype(np.int64) + _OFFSET
+    return (idx[:, 0] << 42) | (idx[:, 1] << 21) | idx[:, 2]
+
+
+def _member(sorted_codes: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """(n,) whether each of `codes` is in `sorted_codes` (sorted, unique)."""
+    if len(sorted_codes) == 0:
+        return np.zeros(len(codes), bool)
+    at = np.minimum(np.searchsorted(sorted_codes, codes), len(sorted_codes) - 1)
+    return sorted_codes[at] == codes
+
+
+@dataclass(frozen=True)
+class TubeNodes:
+    """One step's exact offsets at its tube's grid nodes, kept so that the next step
+    computes only what changed (`_TubeField3D`): the codes of the voxels they were measured
+    to (sorted), of the nodes (sorted; node g lies at g * `cell`), each node's distance (m)
+    and the code of its nearest voxel. Never modified; holds one tube's nodes, not the
+    dive's."""
+
+    cell: float
+    resolution: float
+    voxels: np.ndarray
+    nodes: np.ndarray
+    distance: np.ndarray
+    nearest: np.ndarray
+
+
 class _TubeField3D:
-    """The exact 3D distance to a KD-tree's points at the grid nodes (spacing `cell`, m)
-    around a trajectory (N, 3), read by trilinear interpolation: NaN where a point's cell has
-    a corner that was not computed (more than `pad` m from every trajectory point).
+    """The exact 3D distance to `points` (m, 3) (voxel centres, `tree` their KD-tree) at the
+    grid nodes (spacing `cell`, m) around a trajectory (N, 3), read by trilinear
+    interpolation: NaN where a point's cell has a corner that was not computed (more than
+    `pad` m from every trajectory point).
 
     STOMP's rollouts stay near the trajectory it starts from, and exact nearest-voxel queries
     from 6-10 m away cost ~3 us a point (1 ms for 11 rollouts of 30 points, 40 times a step
     on the boulder); computing the nodes once and interpolating costs one query per node.
     The distance field is smooth away from the surface, so at 0.5 m nodes the interpolation
-    error is millimetres at the offset."""
+    error is millimetres at the offset.
 
-    def __init__(self, tree: cKDTree, trajectory: np.ndarray, pad: float, cell: float):
+    With `reuse`, the last step's `TubeNodes`, a node it measured keeps its distance unless
+    its nearest voxel is gone, lowered to the distance of a voxel added since when that one
+    is nearer; only the other nodes query `tree`. The distances are the ones a full query
+    gives (the same pairs, the same arithmetic), at a fraction of its cost: consecutive steps
+    share most of their nodes and voxels. `nodes` is this step's `TubeNodes` (None when the
+    points are not distinct voxel centres of `resolution`, whose codes would not name them).
+    """
+
+    def __init__(self, tree: cKDTree, points: np.ndarray, trajectory: np.ndarray, pad: float,
+                 cell: float, resolution: float, reuse: TubeNodes | None = None):
         self.cell = cell
-        self.origin = np.floor((trajectory.min(axis=0) - pad) / cell) * cell - cell
+        first = np.floor((trajectory.min(axis=0) - pad) / cell) - 1.0
+        self.origin = first * cell
         self.shape = tuple(np.floor((trajectory.max(axis=0) + pad - self.origin) / cell)
                            .astype(int) + 3)
         centres = np.rint((trajectory - self.origin) / cell).astype(int)
         nodes = (centres[:, None, :] + _ball_offsets(pad / cell)[None]).reshape(-1, 3)
         nodes = nodes[np.all((nodes >= 0) & (nodes < self.shape), axis=1)]
         flat = np.unique(np.ravel_multi_index(nodes.T, self.shape))
+        lattice = np.column_stack(np.unravel_index(flat, self.shape)) + first.astype(np.int64)
+        node_points = lattice * cell
+        voxel_idx = np.floor(points / resolution)
+        voxel_codes = voxels = None
+        if len(points) and np.array_equal((voxel_idx + 0.5) * resolution, points):
+            voxel_codes = _codes(voxel_idx)
+            order = np.argsort(voxel_codes)
+            voxels = voxel_codes[order]
+            if np.any(voxels[1:] == voxels[:-1]):
+                voxels = None  # two points in one voxel: codes do not name points
+        distance = np.empty(len(flat))
+        nearest = np.empty(len(flat), dtype=np.int64)
+        node_codes = _codes(lattice)  # sorted: flat is, and the codes keep its order
+        fresh = np.ones(len(flat), bool)
+        if (reuse is not None and voxels is not None and reuse.cell == cell
+                and reuse.resolution == resolution and len(reuse.nodes)):
+            at = np.minimum(np.searchsorted(reuse.nodes, node_codes), len(reuse.nodes) - 1)
+            kept = (reuse.nodes[at] == node_codes) & _member(voxels, reuse.nearest[at])
+            distance[kept], nearest[kept] = reuse.distance[at[kept]], reuse.nearest[at[kept]]
+            added = order[~_member(reuse.voxels, voxels)]  # sorted queries: faster
+            if len(added) and kept.any():
+                d, i = cKDTree(points[added]).query(node_points[kept])
+                lower = d < distance[kept]
+                rows = np.flatnonzero(kept)[lower]
+                distance[rows], nearest[rows] = d[lower], voxel_codes[added[i[lower]]]
+            fresh = ~kept
+        if fresh.any():
+            distance[fresh], i = tree.query(node_points[fresh])
+            if voxel_codes is not None:
+                nearest[fresh] = voxel_codes[i]
         self.field = np.full(self.shape, np.nan)
-        node_points = np.column_stack(np.unravel_index(flat, self.shape)) * cell + self.origin
-        self.field.flat[flat] = tree.query(node_points)[0]
+        self.field.flat[flat] = distance
+        self.nodes = None if voxels is None else TubeNodes(cell, resolution, voxels,
+                                                            node_codes, distance, nearest)
 
     def interpolate(self, points: np.ndarray) -> np.ndarray:
         """(n,) trilinear interpolation at `points` (n, 3); NaN outside the computed nodes."""
@@ -153,19 +242,31 @@ class SliceMap:
         self.offset_mapped = self.band_tree is not None and (
             self._field is None or not self._field.empty)
 
-    def prepare_tube(self, trajectory: np.ndarray, pad: float) -> None:
+    def prepare_tube(self, trajectory: np.ndarray, pad: float,
+                     reuse: TubeNodes | None = None) -> TubeNodes | None:
         """Metric "3d": precomputes the offset on the grid nodes within `pad` m of
-        `trajectory` (N, 3) (`_TubeField3D`); `offset` interpolates there and queries the
-        KD-tree exactly elsewhere. No effect for the horizontal metric (already a field)."""
+        `trajectory` (N, 3) (`_TubeField3D`, from the last step's `reuse`); `offset`
+        interpolates there and queries the KD-tree exactly elsewhere. Returns the nodes for
+        the next step (None: no tube, or for the horizontal metric, already a field)."""
         if self.dims == 3 and self.band_tree is not None:
-            self._tube = _TubeField3D(self.band_tree, np.asarray(trajectory, dtype=float),
-                                      pad, self.resolution)
+            self._tube = _TubeField3D(self.band_tree, self.band_points,
+                                      np.asarray(trajectory, dtype=float), pad,
+                                      self.resolution, self.resolution, reuse)
+            return self._tube.nodes
+        return None
+
+    def within(self, points: np.ndarray, upper_bound: float) -> bool:
+        """False when no point of `points` (..., 3) can lie within `upper_bound` m of a
+        counted voxel (one test of their bounding box on the slab's field); True may be a
+        false alarm."""
+        return self._slab_field is not None and points.size > 0 and (
+            self._slab_field.box_lower_bound(points.reshape(-1, 3)) < upper_bound)
 
     def clearance(self, points: np.ndarray, upper_bound: float) -> np.ndarray:
         """3D distance to the nearest counted voxel centre, inf beyond `upper_bound`, m."""
         flat = points.reshape(-1, 3)
         d = np.full(len(flat), np.inf)
-        if self._slab_field is None:
+        if not self.within(flat, upper_bound):
             return d.reshape(points.shape[:-1])
         near = self._slab_field.lower_bound(flat) < upper_bound
         if near.any():

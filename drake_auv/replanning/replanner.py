@@ -6,8 +6,9 @@ the next section (waypoints within R, at most K), optimises it with STOMP agains
 octree map, warm-started from the last plan (`drake_auv.replanning.section.replan_section`;
 `optimizer` "none" flies the section's initial trajectory unoptimised) and times it at the
 survey speed as a `PiecewisePolynomial` of [x, y, z, yaw], which the `reference` output
-evaluates. After the last waypoint it holds the end of the last plan and reports the leg
-finished.
+evaluates. The plan also carries the offsets at its tube's nodes, which the next step reuses
+where the map left them as they were (`SectionPlan.tube`). After the last waypoint it holds
+the end of the last plan and reports the leg finished.
 
 The nominal plan is an input (`nominal`, a `Path` from a source system), the map another
 (`map`, the mapper's `OnlineMap`). State, all in the Context: the plan and its trajectory
@@ -47,7 +48,8 @@ from drake_auv.vehicle.path_reference import trajectory_reference
 class _Plan:
     """The current section and its timed trajectory (None before the first step of a leg): a
     step stores a new one. Drake's copies of it at each step (once a second) are plain deep
-    copies of a few dozen points and segments."""
+    copies of a few dozen points and segments, and of the section's tube nodes (a few
+    thousand codes and distances: the tube's, not the dive's)."""
 
     plan: SectionPlan | None = None
     trajectory: PiecewisePolynomial | None = None
@@ -155,7 +157,8 @@ class Replanner(LeafSystem):
                               online.map if online is not None else np.zeros((0, 3)),
                               self.params, seed=self.seed + int(steps), keep_offset=keep_offset,
                               optimizer=self.optimizer,
-                              previous=None if current.plan is None else current.plan.trajectory)
+                              previous=None if current.plan is None else current.plan.trajectory,
+                              tube=None if current.plan is None else current.plan.tube)
         wall = time.perf_counter() - start
         if plan is None:  # every waypoint visited: hold the end of the last plan
             finished, next_index = 1.0, len(nominal.points)

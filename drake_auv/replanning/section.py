@@ -37,7 +37,7 @@ import numpy as np
 from drake_auv.params import nested, param, validate
 from drake_auv.planning.polyline import Polyline, arc_length, length, project, resample
 from drake_auv.replanning.cost import ReplanningCost
-from drake_auv.replanning.fields import DEPTH_MARGIN, SliceMap
+from drake_auv.replanning.fields import DEPTH_MARGIN, SliceMap, TubeNodes
 from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 
 OPTIMIZERS = ("stomp", "none")
@@ -203,6 +203,8 @@ class SectionPlan:
         map_voxels: the occupied voxels the query gave (before the log-odds threshold).
         facing: (N,) yaw of the horizontal direction from each trajectory point to its nearest
             mapped voxel of the depth band, rad; NaN where none lies within 2 Omega.
+        tube: the offsets at the tube's nodes (`fields.TubeNodes`), for the next step's
+            `replan_section(tube=...)`; None without a 3D tube.
     """
 
     indices: np.ndarray
@@ -215,6 +217,7 @@ class SectionPlan:
     query_time: float
     facing: np.ndarray
     map_voxels: int
+    tube: TubeNodes | None = None
 
     def next_index(self, travelled: float, capture_radius: float = 0.5) -> int:
         """The first waypoint not passed after flying `travelled` metres of the trajectory.
@@ -229,7 +232,8 @@ class SectionPlan:
 def replan_section(position, waypoints, next_index: int, occupied,
                    params: ReplanningParameters = ReplanningParameters(),
                    seed: int = 0, keep_offset=None, optimizer: str = "stomp",
-                   log_odds=None, previous=None) -> SectionPlan | None:
+                   log_odds=None, previous=None,
+                   tube: TubeNodes | None = None) -> SectionPlan | None:
     """One replanning step: section, initial trajectory, STOMP against the on-line map.
 
     `occupied` is the on-line map (an `OctreeMap`, queried in the section's box only, with
@@ -240,7 +244,9 @@ def replan_section(position, waypoints, next_index: int, occupied,
     nominal route shape the trajectory, and the yaw follows the motion. `optimizer` "none"
     returns the initial trajectory (the polyline through the section's waypoints)
     unoptimised; with "stomp", `previous` (the last step's optimised trajectory, (N', 3))
-    warm-starts STOMP (`warm_start`). Returns None when every waypoint was visited.
+    warm-starts STOMP (`warm_start`), and `tube` (the last step's `SectionPlan.tube`) spares
+    the offsets at the tube's nodes that the map's changes since left as they were (the same
+    numbers, `fields._TubeField3D`). Returns None when every waypoint was visited.
     """
     if optimizer not in OPTIMIZERS:
         raise ValueError(f"optimizer must be one of {OPTIMIZERS}, got {optimizer!r}")
@@ -298,10 +304,11 @@ def replan_section(position, waypoints, next_index: int, occupied,
                                   len(keep) - 1)]
     cost = ReplanningCost(slice_map, route, theta0, params, keep_points,
                           goal=float(waypoint_s[-1]))
+    nodes = None
     if optimizer == "stomp":
         if keep_points.any():  # the rollouts' reach: twice the largest per-point noise
-            slice_map.prepare_tube(theta0[keep_points],
-                                   2.0 * float(np.max(params.stomp.noise_std)))
+            nodes = slice_map.prepare_tube(theta0[keep_points],
+                                           2.0 * float(np.max(params.stomp.noise_std)), tube)
         result = stomp(theta0, cost, params.stomp, seed=seed, matrices=_matrices(len(theta0)),
                        free_end=True)
         trajectory, initial_cost = result.trajectory, result.initial_cost
@@ -321,4 +328,4 @@ def replan_section(position, waypoints, next_index: int, occupied,
         to = slice_map.band_points[nearest[seen], :2] - trajectory[seen, :2]
         facing[seen] = np.arctan2(to[:, 1], to[:, 0])
     return SectionPlan(idx, theta0, trajectory, at, initial_cost, final_cost, iterations,
-                       query_time, facing, len(local))
+                       query_time, facing, len(local), nodes)

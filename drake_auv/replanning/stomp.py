@@ -121,11 +121,17 @@ def accelerations(trajectories: np.ndarray) -> np.ndarray:
     return acc
 
 
+def _interior_smoothness(trajectories: np.ndarray, weight: float) -> np.ndarray:
+    """(..., N, D) -> (..., N - 2) `smoothness_costs` at the interior timesteps."""
+    a = trajectories[..., :-2, :] - 2.0 * trajectories[..., 1:-1, :]
+    a += trajectories[..., 2:, :]
+    return 0.5 * weight * np.einsum("...d,...d->...", a, a)
+
+
 def smoothness_costs(trajectories: np.ndarray, weight: float) -> np.ndarray:
     """(..., N, D) -> (..., N) per-timestep smoothness cost 0.5 * weight * |acceleration|^2."""
     out = np.zeros(trajectories.shape[:-1])
-    a = trajectories[..., :-2, :] - 2.0 * trajectories[..., 1:-1, :] + trajectories[..., 2:, :]
-    out[..., 1:-1] = 0.5 * weight * np.einsum("...d,...d->...", a, a)
+    out[..., 1:-1] = _interior_smoothness(trajectories, weight)
     return out
 
 
@@ -164,11 +170,12 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
     K, w = params.num_rollouts, params.smoothness_weight
 
     def costs_of(trajectories):
-        costs = np.asarray(state_cost(trajectories), dtype=float)
-        if costs.shape != trajectories.shape[:2] or not np.all(np.isfinite(costs)):
+        costs = np.array(state_cost(trajectories), dtype=float)  # a copy: added to below
+        if costs.shape != trajectories.shape[:2] or not np.isfinite(costs).all():
             raise ValueError(f"state_cost must return finite costs of shape (K, N) = "
                              f"{trajectories.shape[:2]}, got {costs.shape}")
-        return costs + smoothness_costs(trajectories, w)
+        costs[:, 1:-1] += _interior_smoothness(trajectories, w)  # `smoothness_costs`' sum
+        return costs
 
     def total_cost(traj):
         return float(costs_of(traj[None]).sum())
@@ -189,7 +196,7 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
         if iterations <= params.max_iterations:
             # Rollout noise eps[k] ~ N(0, R^-1) per dimension.
             z = rng.standard_normal((K, len(matrices.R), dim))
-            eps[:, var, :] = (matrices.noise_factor @ z) * std
+            np.multiply(matrices.noise_factor @ z, std, out=eps[:, var, :])
             np.add(theta, eps, out=batch[:K])
             batch_costs = costs_of(batch if pending else batch[:K])
         else:
@@ -207,8 +214,9 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
                 iterations -= 1
                 break
         costs = batch_costs[:K]  # (K, N)
-        lo, hi = costs.min(axis=0), costs.max(axis=0)
-        spread = np.where(hi - lo > 0, hi - lo, 1.0)
+        lo = costs.min(axis=0)
+        spread = costs.max(axis=0) - lo
+        spread[spread <= 0] = 1.0
         prob = np.exp(-params.h * (costs - lo) / spread)
         prob /= prob.sum(axis=0, keepdims=True)
         dtheta = np.einsum("ki,kid->id", prob, eps)[var]
