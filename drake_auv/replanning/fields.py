@@ -102,6 +102,20 @@ def _member(sorted_codes: np.ndarray, codes: np.ndarray) -> np.ndarray:
     return sorted_codes[at] == codes
 
 
+def _voxel_codes(points: np.ndarray, resolution: float):
+    """The codes (m,) of voxel centres `points` (m, 3) of `resolution` m, with the order that
+    sorts them; (None, None) when the points are not distinct voxel centres (codes would
+    not name them)."""
+    idx = np.floor(points / resolution)
+    if not (len(points) and np.array_equal((idx + 0.5) * resolution, points)):
+        return None, None
+    codes = _codes(idx)
+    order = np.argsort(codes)
+    if np.any(codes[order[1:]] == codes[order[:-1]]):  # two points in one voxel
+        return None, None
+    return codes, order
+
+
 @dataclass(frozen=True)
 class TubeNodes:
     """One step's exact offsets at its tube's grid nodes, kept so that the next step
@@ -151,19 +165,13 @@ class _TubeField3D:
         flat = np.unique(np.ravel_multi_index(nodes.T, self.shape))
         lattice = np.column_stack(np.unravel_index(flat, self.shape)) + first.astype(np.int64)
         node_points = lattice * cell
-        voxel_idx = np.floor(points / resolution)
-        voxel_codes = voxels = None
-        if len(points) and np.array_equal((voxel_idx + 0.5) * resolution, points):
-            voxel_codes = _codes(voxel_idx)
-            order = np.argsort(voxel_codes)
-            voxels = voxel_codes[order]
-            if np.any(voxels[1:] == voxels[:-1]):
-                voxels = None  # two points in one voxel: codes do not name points
+        codes, order = _voxel_codes(points, resolution)
+        voxels = None if codes is None else codes[order]
         distance = np.empty(len(flat))
         nearest = np.empty(len(flat), dtype=np.int64)
         node_codes = _codes(lattice)  # sorted: flat is, and the codes keep its order
         fresh = np.ones(len(flat), bool)
-        if (reuse is not None and voxels is not None and reuse.cell == cell
+        if (reuse is not None and codes is not None and reuse.cell == cell
                 and reuse.resolution == resolution and len(reuse.nodes)):
             at = np.minimum(np.searchsorted(reuse.nodes, node_codes), len(reuse.nodes) - 1)
             kept = (reuse.nodes[at] == node_codes) & _member(voxels, reuse.nearest[at])
@@ -173,16 +181,16 @@ class _TubeField3D:
                 d, i = cKDTree(points[added]).query(node_points[kept])
                 lower = d < distance[kept]
                 rows = np.flatnonzero(kept)[lower]
-                distance[rows], nearest[rows] = d[lower], voxel_codes[added[i[lower]]]
+                distance[rows], nearest[rows] = d[lower], codes[added[i[lower]]]
             fresh = ~kept
         if fresh.any():
             distance[fresh], i = tree.query(node_points[fresh])
-            if voxel_codes is not None:
-                nearest[fresh] = voxel_codes[i]
+            if codes is not None:
+                nearest[fresh] = codes[i]
         self.field = np.full(self.shape, np.nan)
         self.field.flat[flat] = distance
-        self.nodes = None if voxels is None else TubeNodes(cell, resolution, voxels,
-                                                            node_codes, distance, nearest)
+        self.nodes = None if codes is None else TubeNodes(cell, resolution, voxels,
+                                                          node_codes, distance, nearest)
 
     def interpolate(self, points: np.ndarray) -> np.ndarray:
         """(n,) trilinear interpolation at `points` (n, 3); NaN outside the computed nodes."""
