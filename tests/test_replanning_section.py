@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from drake_auv.mapping.lattice import decode
 from drake_auv.replanning.cost import ReplanningCost
 from drake_auv.replanning.fields import DEPTH_MARGIN, SliceMap
 from drake_auv.replanning.section import (ReplanningParameters, collect_section,
@@ -349,10 +350,8 @@ def test_the_tube_reuses_the_last_steps_node_offsets_and_gives_a_full_querys_num
     np.testing.assert_array_equal(reused.nodes, fresh.nodes)
     np.testing.assert_array_equal(reused.distance, fresh.distance)
     np.testing.assert_array_equal(reused.voxels, fresh.voxels)
-    decode = np.stack([(reused.nearest >> s) & ((1 << 21) - 1) for s in (42, 21, 0)], 1)
-    at = (decode - (1 << 20) + 0.5) * 0.5
-    nodes = np.stack([(reused.nodes >> s) & ((1 << 21) - 1) for s in (42, 21, 0)], 1)
-    np.testing.assert_allclose(np.linalg.norm((nodes - (1 << 20)) * 0.5 - at, axis=1),
+    at = (decode(reused.nearest) + 0.5) * 0.5  # each node's nearest voxel centre
+    np.testing.assert_allclose(np.linalg.norm(decode(reused.nodes) * 0.5 - at, axis=1),
                                reused.distance, rtol=1e-12)
     assert fresh_queries == len(fresh.nodes) and 0 < queried < 0.6 * fresh_queries
     _, mine, theirs = np.intersect1d(reused.nodes, last.nodes, return_indices=True)

@@ -47,8 +47,8 @@ import numpy as np
 import octomap
 from scipy.spatial import cKDTree
 
-_OFFSET = 1 << 20  # voxel index offset so indices encode as non-negative 21-bit fields
-_MASK = (1 << 21) - 1
+from drake_auv.mapping.lattice import OFFSET, decode, encode, in_sorted
+
 _SCAN_WINDOW = 40  # scans remembered for the label cache; older labels are read again
 _TILE = 16  # voxels along a tile's edge (the candidates' spatial index)
 _LIMIT = 1e9  # m, where an unbounded box is clipped
@@ -73,23 +73,16 @@ class _CodeSet:
     def nbytes(self) -> int:
         return self._bulk.nbytes + self._added.nbytes + self._removed.nbytes
 
-    @staticmethod
-    def _in(sorted_codes: np.ndarray, codes: np.ndarray) -> np.ndarray:
-        if len(sorted_codes) == 0:
-            return np.zeros(len(codes), bool)
-        at = np.minimum(np.searchsorted(sorted_codes, codes), len(sorted_codes) - 1)
-        return sorted_codes[at] == codes
-
     def contains(self, codes: np.ndarray) -> np.ndarray:
         """(n,) whether each of `codes` (n,) is in the set."""
-        return ((self._in(self._bulk, codes) & ~self._in(self._removed, codes))
-                | self._in(self._added, codes))
+        return ((in_sorted(self._bulk, codes) & ~in_sorted(self._removed, codes))
+                | in_sorted(self._added, codes))
 
     def add(self, codes: np.ndarray) -> None:
         """Adds `codes` (unique, none in the set)."""
-        back = self._in(self._removed, codes)  # removed from the bulk, still there
+        back = in_sorted(self._removed, codes)  # removed from the bulk, still there
         if back.any():
-            self._removed = self._removed[~self._in(np.sort(codes[back]), self._removed)]
+            self._removed = self._removed[~in_sorted(np.sort(codes[back]), self._removed)]
         added = np.concatenate([self._added, codes[~back]])
         added.sort()
         if len(added) > _MERGE:
@@ -100,9 +93,9 @@ class _CodeSet:
     def remove(self, codes: np.ndarray) -> None:
         """Removes `codes` (unique, all in the set)."""
         codes = np.sort(codes)
-        fresh = self._in(self._added, codes)
+        fresh = in_sorted(self._added, codes)
         if fresh.any():
-            self._added = self._added[~self._in(codes[fresh], self._added)]
+            self._added = self._added[~in_sorted(codes[fresh], self._added)]
         removed = np.concatenate([self._removed, codes[~fresh]])
         removed.sort()
         if len(removed) > _MERGE:  # each a code of the bulk, once
@@ -119,19 +112,9 @@ def _grown(rows: np.ndarray, size: int) -> np.ndarray:
     return out
 
 
-def _encode(idx: np.ndarray) -> np.ndarray:
-    idx = idx.astype(np.int64) + _OFFSET
-    return (idx[:, 0] << 42) | (idx[:, 1] << 21) | idx[:, 2]
-
-
 def _tile_codes(idx: np.ndarray) -> np.ndarray:
     """Codes of the tiles holding voxels of index `idx` (n, 3)."""
-    return _encode(np.floor_divide(idx, _TILE))
-
-
-def _decode(codes: np.ndarray) -> np.ndarray:
-    return np.stack([(codes >> 42) & _MASK, (codes >> 21) & _MASK, codes & _MASK],
-                    axis=1) - _OFFSET
+    return encode(np.floor_divide(idx, _TILE))
 
 
 class OctreeMap:
@@ -242,7 +225,7 @@ class OctreeMap:
             # float64, an end on a voxel face (a flat seabed at z = -30 m) lands one voxel off.
             idx = np.floor(endpoints[hit].astype(np.float32).astype(float)
                            * (1.0 / self.resolution))
-            codes = np.unique(_encode(idx))
+            codes = np.unique(encode(idx))
             new = codes[~self._candidates.contains(codes)]
             if len(new):
                 self._candidates.add(new)
@@ -300,7 +283,7 @@ class OctreeMap:
             self._centres, self._label, self._checked, self._log_odds = (
                 _grown(a, size) for a in (self._centres, self._label, self._checked,
                                           self._log_odds))
-        idx = _decode(codes)
+        idx = decode(codes)
         self._centres[rows] = (idx + 0.5) * self.resolution
         self._label[rows] = False
         self._checked[rows] = -1
@@ -326,8 +309,8 @@ class OctreeMap:
         if np.prod((t1 - t0 + 1).astype(float)) > len(tiles):
             keys = list(tiles)
         else:
-            # _encode's fields do not overlap: a tile's code is the sum of its axes' codes.
-            x, y, z = (np.arange(a, b + 1, dtype=np.int64) + _OFFSET for a, b in zip(t0, t1))
+            # `encode`'s fields do not overlap: a tile's code is the sum of its axes' codes.
+            x, y, z = (np.arange(a, b + 1, dtype=np.int64) + OFFSET for a, b in zip(t0, t1))
             codes = (x[:, None, None] << 42) + (y[None, :, None] << 21) + z[None, None, :]
             keys = [k for k in codes.ravel().tolist() if k in tiles]
         if not keys:
@@ -383,7 +366,7 @@ class OctreeMap:
         if len(rows) == 0:
             return
         idx = np.floor(self._centres[rows] * (1.0 / self.resolution)).astype(np.int64)
-        self._candidates.remove(_encode(idx))
+        self._candidates.remove(encode(idx))
         self._checked[rows] = _LEFT
         self._vacant.append(rows)
         for key in np.unique(_tile_codes(idx)).tolist():
@@ -413,7 +396,7 @@ class OctreeMap:
         offsets = np.einsum("sk,sk->s", origins, normals)
         edge = _TILE * self.resolution
         half = 0.5 * edge * (1.0 + 1e-9)
-        middle = (_decode(keys) + 0.5) * edge  # (T, 3) tile centres
+        middle = (decode(keys) + 0.5) * edge  # (T, 3) tile centres
         gap = np.maximum(np.abs(middle[:, None, :] - origins[None]) - half, 0.0)  # (T, S, 3)
         reaches = np.einsum("tsk,tsk->ts", gap, gap) <= reach ** 2
         along = np.abs(middle @ normals.T - offsets)

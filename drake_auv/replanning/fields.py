@@ -16,6 +16,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from drake_auv.mapping.lattice import encode, in_sorted
+
 DEPTH_MARGIN = 1.0  # m, how far rollouts may stray from the section's depths (see SliceMap)
 
 
@@ -85,23 +87,6 @@ def _ball_offsets(radius: float) -> np.ndarray:
     return offsets[np.einsum("ij,ij->i", offsets, offsets) <= reach * reach]
 
 
-_OFFSET = 1 << 20  # lattice index offset: indices encode as non-negative 21-bit fields
-
-
-def _codes(idx: np.ndarray) -> np.ndarray:
-    """(n,) int64 codes of integer lattice indices (n, 3), |index| < 2^20."""
-    idx = idx.astype(np.int64) + _OFFSET
-    return (idx[:, 0] << 42) | (idx[:, 1] << 21) | idx[:, 2]
-
-
-def _member(sorted_codes: np.ndarray, codes: np.ndarray) -> np.ndarray:
-    """(n,) whether each of `codes` is in `sorted_codes` (sorted, unique)."""
-    if len(sorted_codes) == 0:
-        return np.zeros(len(codes), bool)
-    at = np.minimum(np.searchsorted(sorted_codes, codes), len(sorted_codes) - 1)
-    return sorted_codes[at] == codes
-
-
 def _voxel_codes(points: np.ndarray, resolution: float):
     """The codes (m,) of voxel centres `points` (m, 3) of `resolution` m, with the order that
     sorts them; (None, None) when the points are not distinct voxel centres (codes would
@@ -109,7 +94,7 @@ def _voxel_codes(points: np.ndarray, resolution: float):
     idx = np.floor(points / resolution)
     if not (len(points) and np.array_equal((idx + 0.5) * resolution, points)):
         return None, None
-    codes = _codes(idx)
+    codes = encode(idx)
     order = np.argsort(codes)
     if np.any(codes[order[1:]] == codes[order[:-1]]):  # two points in one voxel
         return None, None
@@ -169,14 +154,14 @@ class _TubeField3D:
         voxels = None if codes is None else codes[order]
         distance = np.empty(len(flat))
         nearest = np.empty(len(flat), dtype=np.int64)
-        node_codes = _codes(lattice)  # sorted: flat is, and the codes keep its order
+        node_codes = encode(lattice)  # sorted: flat is, and the codes keep its order
         fresh = np.ones(len(flat), bool)
         if (reuse is not None and codes is not None and reuse.cell == cell
                 and reuse.resolution == resolution and len(reuse.nodes)):
             at = np.minimum(np.searchsorted(reuse.nodes, node_codes), len(reuse.nodes) - 1)
-            kept = (reuse.nodes[at] == node_codes) & _member(voxels, reuse.nearest[at])
+            kept = (reuse.nodes[at] == node_codes) & in_sorted(voxels, reuse.nearest[at])
             distance[kept], nearest[kept] = reuse.distance[at[kept]], reuse.nearest[at[kept]]
-            added = order[~_member(reuse.voxels, voxels)]  # sorted queries: faster
+            added = order[~in_sorted(reuse.voxels, voxels)]  # sorted queries: faster
             if len(added) and kept.any():
                 d, i = cKDTree(points[added]).query(node_points[kept])
                 lower = d < distance[kept]

@@ -1,0 +1,29 @@
+"""Integer codes of 3D lattice indices (voxels, tiles, grid nodes): one int64 per index, 21
+bits an axis, so sets of them are sorted int64 arrays, looked up by binary search."""
+
+from __future__ import annotations
+
+import numpy as np
+
+OFFSET = 1 << 20  # index offset: indices in [-2^20, 2^20) encode as non-negative fields
+_MASK = (1 << 21) - 1
+
+
+def encode(idx: np.ndarray) -> np.ndarray:
+    """(n,) codes of integer lattice indices (n, 3); ordered as the indices (x, then y, z)."""
+    idx = idx.astype(np.int64) + OFFSET
+    return (idx[:, 0] << 42) | (idx[:, 1] << 21) | idx[:, 2]
+
+
+def decode(codes: np.ndarray) -> np.ndarray:
+    """(n, 3) int64 lattice indices of `codes` (n,)."""
+    return np.stack([(codes >> 42) & _MASK, (codes >> 21) & _MASK, codes & _MASK],
+                    axis=1) - OFFSET
+
+
+def in_sorted(sorted_codes: np.ndarray, codes: np.ndarray) -> np.ndarray:
+    """(n,) whether each of `codes` (n,) is in `sorted_codes` (sorted, unique)."""
+    if len(sorted_codes) == 0:
+        return np.zeros(len(codes), bool)
+    at = np.minimum(np.searchsorted(sorted_codes, codes), len(sorted_codes) - 1)
+    return sorted_codes[at] == codes
