@@ -229,6 +229,8 @@ def test_cached_labels_match_reading_every_voxel_through_moving_scans_and_cleari
             lo, hi = centre - half, centre + half
             got, want = omap.occupied_points(lo, hi), _brute_force_occupied(omap, lo, hi)
             assert sorted(map(tuple, got)) == sorted(map(tuple, want))
+            centres, log_odds = omap.occupied_points(lo, hi, log_odds=True)
+            assert np.array_equal(log_odds, [omap.tree.search(c).getLogOdds() for c in centres])
             checked += len(want)
         if k == 79:
             before = np.sum(omap.occupied_points()[:, 0] < 0.5)  # only the first block there
@@ -238,6 +240,16 @@ def test_cached_labels_match_reading_every_voxel_through_moving_scans_and_cleari
         omap, np.full(3, -np.inf), np.full(3, np.inf))))
     # Many of the first block's voxels were cleared once it moved (the rest are occluded).
     assert before > 100 and np.sum(everything[:, 0] < 0.5) < 0.75 * before
+
+
+def test_log_odds_reads_give_unknown_voxels_minus_infinity():
+    omap = OctreeMap(resolution=0.5)
+    omap.insert_scan(np.zeros(3), np.array([[1.0, 0.0, 0.0]]), np.array([3.0]), 10.0)
+    # the voxel hit, one the beam crossed, one no beam reached
+    got = omap._read_log_odds(np.array([[3.25, 0.25, 0.25], [1.25, 0.25, 0.25],
+                                        [0.25, 5.25, 0.25]]))
+    assert got[0] == omap.tree.getProbHitLog() and got[1] == omap.tree.getProbMissLog()
+    assert got[2] == -np.inf
 
 
 def test_returns_on_a_voxel_face_are_occupied_where_octomap_keys_them():

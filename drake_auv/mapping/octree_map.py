@@ -112,6 +112,14 @@ def _grown(rows: np.ndarray, size: int) -> np.ndarray:
     return out
 
 
+def _log_odds_or_unknown(node) -> float:
+    """The log-odds of an `OcTree.search` result, -inf for no node (unknown space)."""
+    try:
+        return node.getLogOdds()
+    except octomap.NullPointerException:
+        return -np.inf
+
+
 def _tile_codes(idx: np.ndarray) -> np.ndarray:
     """Codes of the tiles holding voxels of index `idx` (n, 3)."""
     return encode(np.floor_divide(idx, _TILE))
@@ -167,10 +175,11 @@ class OctreeMap:
         # box query visits only the box's tiles.
         self._count = 0
         self._vacant: list[np.ndarray] = []
+        self._placed = 0  # rows filled since the last `_compact`
         self._centres = np.zeros((0, 3))
         self._label = np.zeros(0, dtype=bool)
         self._checked = np.zeros(0, dtype=np.int64)
-        self._log_odds = np.zeros(0)  # of the occupied ones, read with their label
+        self._log_odds = np.zeros(0)  # read with the label (used for the occupied)
         self._tiles: dict[int, np.ndarray] = {}
         self._new_codes: list[np.ndarray] = []  # hit, not yet in the arrays
         # The scans as rows (revision, origin, plane normal, plane tolerance and reach, m) of
@@ -294,6 +303,25 @@ class OctreeMap:
         for key, part in zip(keys.tolist(), np.split(rows[order], first[1:])):
             old = self._tiles.get(key)
             self._tiles[key] = part if old is None else np.concatenate([old, part])
+        self._placed += len(rows)
+        if self._placed > max(_MERGE, self._count // 8):
+            self._compact()
+
+    def _compact(self) -> None:
+        """Renumbers the candidates' rows tile by tile (tiles in code order, each tile's in
+        its order), so a box query reads its tiles' rows from contiguous memory rather than
+        from rows strewn over the buffers by arrival and reuse (on a long dive a cache miss
+        a candidate); the vacant rows go. Answers keep their order: a box query lists its
+        tiles' rows in the tiles' order, which this keeps."""
+        keys = sorted(self._tiles)
+        parts = [self._tiles[k] for k in keys]
+        live = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
+        for a in (self._centres, self._label, self._checked, self._log_odds):
+            a[:len(live)] = a[live]
+        stops = np.cumsum([len(part) for part in parts])
+        self._tiles = {k: np.arange(stop - len(part), stop)
+                       for k, part, stop in zip(keys, parts, stops.tolist())}
+        self._count, self._vacant, self._placed = len(live), [], 0
 
     def _box_index(self, lo: np.ndarray, hi: np.ndarray):
         """Indices of the candidates inside the box [lo, hi] (m), found through the tiles the
@@ -350,15 +378,24 @@ class OctreeMap:
                                                tile_of[group])
         read = stale[swept]
         if len(read):
-            self._label[read] = np.asarray(self.tree.getLabels(self._centres[read])) == 1
-            occupied = read[self._label[read]]
-            search = self.tree.search
-            self._log_odds[occupied] = np.fromiter(
-                (search(p).getLogOdds() for p in self._centres[occupied]), dtype=float,
-                count=len(occupied))
+            log_odds = self._read_log_odds(self._centres[read])
+            self._log_odds[read] = log_odds
+            self._label[read] = log_odds >= self.tree.getOccupancyThresLog()
         self._checked[stale] = self.revision
         if len(read):
             self._leave(read[~self._label[read]])
+
+    def _read_log_odds(self, centres: np.ndarray) -> np.ndarray:
+        """(n,) the log-odds of the voxels at `centres` (n, 3), -inf where unknown: one
+        `search` a voxel (its label follows, as in OctoMap's `isNodeOccupied`: at or above
+        the occupancy threshold), half what `getLabels` and a second `search` for the
+        occupied ones took; rows as lists, which octomap-python indexes faster."""
+        search, points = self.tree.search, centres.tolist()
+        try:
+            return np.fromiter((search(p).getLogOdds() for p in points), dtype=float,
+                               count=len(points))
+        except octomap.NullPointerException:  # a voxel never updated (not a candidate's)
+            return np.array([_log_odds_or_unknown(search(p)) for p in points], dtype=float)
 
     def _leave(self, rows: np.ndarray) -> None:
         """Takes the candidates of `rows`, read as free, out of the index: their codes, their
