@@ -353,3 +353,42 @@ def test_code_set_matches_a_python_set_through_merges(monkeypatch):
     every = np.arange(200)
     assert set(every[codes.contains(every)].tolist()) == want and len(want) > 20
     assert len(codes._bulk) > 8  # merged, not only the small arrays
+
+
+def _wall_queries(rng_seed=8, scans=120):
+    """A noisy wall scanned along its face; the box queries' answers, in their order."""
+    rng = np.random.default_rng(rng_seed)
+    omap = OctreeMap(resolution=0.5)
+    answers = []
+    wall = trimesh.creation.box(extents=(1.0, 30.0, 12.0))
+    wall.apply_translation((10.0, 0.0, -6.0))
+    for k in range(scans):
+        origin = np.array([0.0, -10.0 + 0.15 * k, -6.0]) + rng.normal(0.0, 0.3, 3)
+        d = _fan(n=160, aperture=np.radians(100.0), tilt=rng.uniform(-0.4, 0.4))
+        r = _cast(wall, origin, d, 20.0) + rng.normal(0.0, 0.4, 160)
+        omap.insert_scan(origin, d, r, 20.0)
+        if k % 3 == 2:
+            answers.append(omap.occupied_points(origin - [1.0, 8.0, 6.0],
+                                                origin + [16.0, 8.0, 6.0], log_odds=True))
+    return omap, answers
+
+
+def test_compacting_the_rows_tile_by_tile_keeps_every_answer_and_its_order(monkeypatch):
+    _, plain = _wall_queries()
+    compacted = []
+
+    def spy(self):
+        compact(self)
+        compacted.append(self._count)
+        rows = np.concatenate([self._tiles[k] for k in sorted(self._tiles)])
+        assert np.array_equal(rows, np.arange(self._count))  # contiguous, tile by tile
+        assert self._count == len(self._candidates) and not self._vacant
+
+    compact = OctreeMap._compact
+    monkeypatch.setattr(octree_map, "_COMPACT", 300)
+    monkeypatch.setattr(OctreeMap, "_compact", spy)
+    omap, answers = _wall_queries()
+    assert len(compacted) >= 5 and len(answers) == len(plain)
+    for (centres, log_odds), (want, want_log_odds) in zip(answers, plain):
+        assert np.array_equal(centres, want) and np.array_equal(log_odds, want_log_odds)
+    assert sum(len(c) for c, _ in answers) > 2000

@@ -54,6 +54,7 @@ _TILE = 16  # voxels along a tile's edge (the candidates' spatial index)
 _LIMIT = 1e9  # m, where an unbounded box is clipped
 _LEFT = np.iinfo(np.int64).max  # the revision of a row whose candidate left the index
 _MERGE = 4096  # codes added or removed before `_CodeSet` merges them into its bulk
+_COMPACT = 4096  # rows filled (at least, and an eighth of the index) before `_compact`
 
 
 class _CodeSet:
@@ -304,7 +305,7 @@ class OctreeMap:
             old = self._tiles.get(key)
             self._tiles[key] = part if old is None else np.concatenate([old, part])
         self._placed += len(rows)
-        if self._placed > max(_MERGE, self._count // 8):
+        if self._placed > max(_COMPACT, self._count // 8):
             self._compact()
 
     def _compact(self) -> None:
@@ -312,15 +313,17 @@ class OctreeMap:
         its order), so a box query reads its tiles' rows from contiguous memory rather than
         from rows strewn over the buffers by arrival and reuse (on a long dive a cache miss
         a candidate); the vacant rows go. Answers keep their order: a box query lists its
-        tiles' rows in the tiles' order, which this keeps."""
+        tiles' rows tile by tile, each tile's in its order, which this keeps."""
         keys = sorted(self._tiles)
         parts = [self._tiles[k] for k in keys]
         live = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
         for a in (self._centres, self._label, self._checked, self._log_odds):
             a[:len(live)] = a[live]
         stops = np.cumsum([len(part) for part in parts])
-        self._tiles = {k: np.arange(stop - len(part), stop)
-                       for k, part, stop in zip(keys, parts, stops.tolist())}
+        renumbered = {k: np.arange(stop - len(part), stop)
+                      for k, part, stop in zip(keys, parts, stops.tolist())}
+        # in the dict's own order, which a box of more tiles than the map lists them in
+        self._tiles = {k: renumbered[k] for k in self._tiles}
         self._count, self._vacant, self._placed = len(live), [], 0
 
     def _box_index(self, lo: np.ndarray, hi: np.ndarray):
