@@ -47,7 +47,7 @@ import numpy as np
 import octomap
 from scipy.spatial import cKDTree
 
-from drake_auv.mapping.lattice import OFFSET, decode, encode, in_sorted
+from drake_auv.mapping.lattice import OFFSET, decode, encode, in_box, in_sorted
 
 _SCAN_WINDOW = 40  # scans remembered for the label cache; older labels are read again
 _TILE = 16  # voxels along a tile's edge (the candidates' spatial index)
@@ -349,8 +349,8 @@ class OctreeMap:
         parts = [tiles[k] for k in keys]
         index = np.concatenate(parts)
         tile_of = np.repeat(np.arange(len(parts)), [len(p) for p in parts])
-        c = self._centres[index]
-        inside = np.all((c >= lo) & (c <= hi), axis=1)
+        # `take` gathers rows 3x faster than fancy indexing (numpy 2)
+        inside = in_box(np.take(self._centres, index, axis=0), lo, hi)
         return index[inside], (np.array(keys, dtype=np.int64), tile_of[inside])
 
     def _read_labels(self, index: np.ndarray, tiles=None) -> None:
@@ -381,7 +381,7 @@ class OctreeMap:
                                                tile_of[group])
         read = stale[swept]
         if len(read):
-            log_odds = self._read_log_odds(self._centres[read])
+            log_odds = self._read_log_odds(np.take(self._centres, read, axis=0))
             self._log_odds[read] = log_odds
             self._label[read] = log_odds >= self.tree.getOccupancyThresLog()
         self._checked[stale] = self.revision
@@ -405,7 +405,8 @@ class OctreeMap:
         tiles' entries; the rows become vacant (never stale, never occupied)."""
         if len(rows) == 0:
             return
-        idx = np.floor(self._centres[rows] * (1.0 / self.resolution)).astype(np.int64)
+        idx = np.floor(np.take(self._centres, rows, axis=0) * (1.0 / self.resolution)).astype(
+            np.int64)
         self._candidates.remove(encode(idx))
         self._checked[rows] = _LEFT
         self._vacant.append(rows)
@@ -448,7 +449,7 @@ class OctreeMap:
         origin_sq = np.einsum("sk,sk->s", origins, origins)
         for chunk in range(0, len(test), 8192):  # (8192, S) blocks bound the memory
             part = slice(chunk, chunk + 8192)
-            c = self._centres[rows[test[part]]]
+            c = np.take(self._centres, rows[test[part]], axis=0)
             plane = np.abs(c @ normals.T - offsets) <= tolerance
             dist_sq = np.einsum("mk,mk->m", c, c)[:, None] - 2.0 * (c @ origins.T) + origin_sq
             out[test[part]] = (plane & (dist_sq <= reach ** 2) & pairs[part]).any(axis=1)
@@ -489,8 +490,8 @@ class OctreeMap:
         self._read_labels(inside, tiles)
         occupied = inside[self._label[inside]]
         if log_odds:
-            return self._centres[occupied], self._log_odds[occupied]
-        return self._centres[occupied]
+            return np.take(self._centres, occupied, axis=0), self._log_odds[occupied]
+        return np.take(self._centres, occupied, axis=0)
 
     def candidates(self) -> tuple[np.ndarray, np.ndarray]:
         """The voxels hit since their label was last read as free (a superset of the occupied

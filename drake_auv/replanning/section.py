@@ -34,6 +34,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from drake_auv.mapping.lattice import in_box
 from drake_auv.params import nested, param, validate
 from drake_auv.planning.polyline import Polyline, arc_length, length, project, resample
 from drake_auv.replanning.cost import ReplanningCost
@@ -280,7 +281,7 @@ def replan_section(position, waypoints, next_index: int, occupied,
         resolution = occupied.resolution
     else:
         occupied = np.asarray(occupied, dtype=float).reshape(-1, 3)
-        inside = np.all((occupied >= lo) & (occupied <= hi), axis=1)
+        inside = in_box(occupied, lo, hi)
         local = occupied[inside]
         if log_odds is not None:
             log_odds = np.asarray(log_odds, dtype=float)[inside]
