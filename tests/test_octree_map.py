@@ -6,7 +6,7 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from drake_auv.mapping import octree_map
+from drake_auv.mapping import lattice, octree_map
 from drake_auv.mapping.octree_map import OctreeMap
 
 
@@ -392,3 +392,12 @@ def test_compacting_the_rows_tile_by_tile_keeps_every_answer_and_its_order(monke
     for (centres, log_odds), (want, want_log_odds) in zip(answers, plain):
         assert np.array_equal(centres, want) and np.array_equal(log_odds, want_log_odds)
     assert sum(len(c) for c, _ in answers) > 2000
+
+
+def test_in_box_equals_testing_every_coordinate():
+    rng = np.random.default_rng(3)
+    points = np.round(rng.uniform(-3.0, 3.0, (2000, 3)), 1)  # many exactly on the faces
+    points[::97, 1] = np.nan
+    lo, hi = np.array([-1.0, -2.0, 0.5]), np.array([1.0, 0.5, 2.0])
+    want = np.all((points >= lo) & (points <= hi), axis=1)
+    assert np.array_equal(lattice.in_box(points, lo, hi), want) and 50 < want.sum() < 1900
