@@ -312,7 +312,7 @@ class OctreeMap:
         """Renumbers the candidates' rows tile by tile (tiles in code order, each tile's in
         its order), so a box query reads its tiles' rows from contiguous memory rather than
         from rows strewn over the buffers by arrival and reuse (on a long dive a cache miss
-        a candidate); the vacant rows go. Answers keep their order: a box query lists its
+        per candidate); the vacant rows go. Answers keep their order: a box query lists its
         tiles' rows tile by tile, each tile's in its order, which this keeps."""
         keys = sorted(self._tiles)
         parts = [self._tiles[k] for k in keys]
@@ -405,8 +405,8 @@ class OctreeMap:
         tiles' entries; the rows become vacant (never stale, never occupied)."""
         if len(rows) == 0:
             return
-        idx = np.floor(np.take(self._centres, rows, axis=0) * (1.0 / self.resolution)).astype(
-            np.int64)
+        centres = np.take(self._centres, rows, axis=0)
+        idx = np.floor(centres * (1.0 / self.resolution)).astype(np.int64)
         self._candidates.remove(encode(idx))
         self._checked[rows] = _LEFT
         self._vacant.append(rows)
