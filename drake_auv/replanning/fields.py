@@ -16,7 +16,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from drake_auv.mapping.lattice import encode, in_sorted
+from drake_auv.mapping.lattice import encode, in_box, in_sorted
 
 DEPTH_MARGIN = 1.0  # m, how far rollouts may stray from the section's depths (see SliceMap)
 
@@ -146,7 +146,7 @@ class _TubeField3D:
                            .astype(int) + 3)
         centres = np.rint((trajectory - self.origin) / cell).astype(int)
         nodes = (centres[:, None, :] + _ball_offsets(pad / cell)[None]).reshape(-1, 3)
-        nodes = nodes[np.all((nodes >= 0) & (nodes < self.shape), axis=1)]
+        nodes = np.compress(in_box(nodes, (0, 0, 0), np.subtract(self.shape, 1)), nodes, axis=0)
         flat = np.unique(np.ravel_multi_index(nodes.T, self.shape))
         lattice = np.column_stack(np.unravel_index(flat, self.shape)) + first.astype(np.int64)
         node_points = lattice * cell
