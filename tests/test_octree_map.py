@@ -401,3 +401,13 @@ def test_in_box_equals_testing_every_coordinate():
     lo, hi = np.array([-1.0, -2.0, 0.5]), np.array([1.0, 0.5, 2.0])
     want = np.all((points >= lo) & (points <= hi), axis=1)
     assert np.array_equal(lattice.in_box(points, lo, hi), want) and 50 < want.sum() < 1900
+
+
+def test_unique_equals_numpy_unique():
+    rng = np.random.default_rng(4)
+    codes = lattice.encode(rng.integers(-40, 40, (3000, 3)))
+    codes = np.concatenate([codes, codes[::3]])  # every third twice
+    for part in (codes, codes[:1], codes[:0], np.sort(codes)):
+        got, want = lattice.unique(part), np.unique(part)
+        assert got.dtype == want.dtype and np.array_equal(got, want)
+    assert len(lattice.unique(codes)) < len(codes)

@@ -21,6 +21,19 @@ def decode(codes: np.ndarray) -> np.ndarray:
                     axis=1) - OFFSET
 
 
+def unique(codes: np.ndarray) -> np.ndarray:
+    """The sorted distinct values of integer `codes` (n,), as `np.unique` gives them: a sort
+    and one comparison, 2-3x faster than numpy 2's hashing `np.unique` on the hundreds to
+    thousands of codes of a scan or a box."""
+    codes = np.sort(codes)
+    if len(codes) < 2:
+        return codes
+    distinct = np.empty(len(codes), bool)
+    distinct[0] = True
+    np.not_equal(codes[1:], codes[:-1], out=distinct[1:])
+    return codes[distinct]
+
+
 def in_sorted(sorted_codes: np.ndarray, codes: np.ndarray) -> np.ndarray:
     """(n,) whether each of `codes` (n,) is in `sorted_codes` (sorted, unique)."""
     if len(sorted_codes) == 0:

@@ -47,7 +47,7 @@ import numpy as np
 import octomap
 from scipy.spatial import cKDTree
 
-from drake_auv.mapping.lattice import OFFSET, decode, encode, in_box, in_sorted
+from drake_auv.mapping.lattice import OFFSET, decode, encode, in_box, in_sorted, unique
 
 _SCAN_WINDOW = 40  # scans remembered for the label cache; older labels are read again
 _TILE = 16  # voxels along a tile's edge (the candidates' spatial index)
@@ -235,7 +235,7 @@ class OctreeMap:
             # float64, an end on a voxel face (a flat seabed at z = -30 m) lands one voxel off.
             idx = np.floor(endpoints[hit].astype(np.float32).astype(float)
                            * (1.0 / self.resolution))
-            codes = np.unique(encode(idx))
+            codes = unique(encode(idx))
             new = codes[~self._candidates.contains(codes)]
             if len(new):
                 self._candidates.add(new)
@@ -410,7 +410,7 @@ class OctreeMap:
         self._candidates.remove(encode(idx))
         self._checked[rows] = _LEFT
         self._vacant.append(rows)
-        for key in np.unique(_tile_codes(idx)).tolist():
+        for key in unique(_tile_codes(idx)).tolist():
             part = self._tiles[key]
             part = part[self._checked[part] != _LEFT]
             if len(part):

@@ -94,7 +94,10 @@ class ReplanningCost:
         step = trajectories[..., 1:, :] - trajectories[..., :-1, :]
         spacing = np.empty(shape)
         spacing[..., 0] = 0.0
-        spacing[..., 1:] = (np.sqrt(np.einsum("...k,...k->...", step, step)) - p.spacing) ** 2
+        gap = np.einsum("...k,...k->...", step, step)  # in place: (sqrt(gap) - spacing)^2
+        np.sqrt(gap, out=gap)
+        gap -= p.spacing
+        np.square(gap, out=spacing[..., 1:])
         depth = None
         if self._depth_any or not weighted:
             depth = trajectories[..., 2] - self.z_ref

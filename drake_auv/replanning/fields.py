@@ -16,7 +16,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from drake_auv.mapping.lattice import encode, in_box, in_sorted
+from drake_auv.mapping.lattice import decode, encode, in_box, in_sorted
 
 DEPTH_MARGIN = 1.0  # m, how far rollouts may stray from the section's depths (see SliceMap)
 
@@ -59,8 +59,8 @@ class _DistanceField2D:
         """At most `lower_bound` of every one of `points` (n >= 1, >= 2): the least value of
         the cells nearest to their bounding box (an index is monotonic in its coordinate), so
         one slice stands for n reads when the batch is far from every column."""
-        x, y = points[:, 0], points[:, 1]  # column reductions: 2x faster than axis=0 here
-        x0, x1, y0, y1 = float(x.min()), float(x.max()), float(y.min()), float(y.max())
+        xy = np.ascontiguousarray(points[:, :2].T)  # rows reduce 1.6x faster than columns
+        (x0, y0), (x1, y1) = xy.min(axis=1).tolist(), xy.max(axis=1).tolist()
         (ox, oy), cell, (nx, ny) = self.origin.tolist(), self.cell, self._last[:, 0].tolist()
         # round() is rint's half-to-even, on the same float64 operations as `_coords`.
         i0, i1 = (min(max(round((v - ox) / cell), 0), nx) for v in (x0, x1))
@@ -88,17 +88,16 @@ def _ball_offsets(radius: float) -> np.ndarray:
 
 
 def _voxel_codes(points: np.ndarray, resolution: float):
-    """The codes (m,) of voxel centres `points` (m, 3) of `resolution` m, with the order that
-    sorts them; (None, None) when the points are not distinct voxel centres (codes would
-    not name them)."""
+    """The codes (m,) of voxel centres `points` (m, 3) of `resolution` m, and the same sorted;
+    (None, None) when the points are not distinct voxel centres (codes would not name them)."""
     idx = np.floor(points / resolution)
     if not (len(points) and np.array_equal((idx + 0.5) * resolution, points)):
         return None, None
     codes = encode(idx)
-    order = np.argsort(codes)
-    if np.any(codes[order[1:]] == codes[order[:-1]]):  # two points in one voxel
+    voxels = np.sort(codes)  # the sort alone: 0.7x an argsort here
+    if np.any(voxels[1:] == voxels[:-1]):  # two points in one voxel
         return None, None
-    return codes, order
+    return codes, voxels
 
 
 @dataclass(frozen=True)
@@ -147,11 +146,12 @@ class _TubeField3D:
         centres = np.rint((trajectory - self.origin) / cell).astype(int)
         nodes = (centres[:, None, :] + _ball_offsets(pad / cell)[None]).reshape(-1, 3)
         nodes = np.compress(in_box(nodes, (0, 0, 0), np.subtract(self.shape, 1)), nodes, axis=0)
-        flat = np.unique(np.ravel_multi_index(nodes.T, self.shape))
+        computed = np.zeros(int(np.prod(self.shape)), bool)  # a mask: 20x np.unique here
+        computed[np.ravel_multi_index(nodes.T, self.shape)] = True
+        flat = np.flatnonzero(computed)
         lattice = np.column_stack(np.unravel_index(flat, self.shape)) + first.astype(np.int64)
         node_points = lattice * cell
-        codes, order = _voxel_codes(points, resolution)
-        voxels = None if codes is None else codes[order]
+        codes, voxels = _voxel_codes(points, resolution)
         distance = np.empty(len(flat))
         nearest = np.empty(len(flat), dtype=np.int64)
         node_codes = encode(lattice)  # sorted: flat is, and the codes keep its order
@@ -161,12 +161,14 @@ class _TubeField3D:
             at = np.minimum(np.searchsorted(reuse.nodes, node_codes), len(reuse.nodes) - 1)
             kept = (reuse.nodes[at] == node_codes) & in_sorted(voxels, reuse.nearest[at])
             distance[kept], nearest[kept] = reuse.distance[at[kept]], reuse.nearest[at[kept]]
-            added = order[~in_sorted(reuse.voxels, voxels)]  # sorted queries: faster
+            # The voxels added since, from their sorted codes (sorted queries: 4x faster),
+            # at their centres: the points themselves (`_voxel_codes` checked that).
+            added = voxels[~in_sorted(reuse.voxels, voxels)]
             if len(added) and kept.any():
-                d, i = cKDTree(points[added]).query(node_points[kept])
+                d, i = cKDTree((decode(added) + 0.5) * resolution).query(node_points[kept])
                 lower = d < distance[kept]
                 rows = np.flatnonzero(kept)[lower]
-                distance[rows], nearest[rows] = d[lower], codes[added[i[lower]]]
+                distance[rows], nearest[rows] = d[lower], added[i[lower]]
             fresh = ~kept
         if fresh.any():
             distance[fresh], i = tree.query(node_points[fresh])
