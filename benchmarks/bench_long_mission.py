@@ -11,6 +11,10 @@ candidates' index (MB, candidates) and the live `ScanLog` versions at the hour's
 contact. Acceptance (docs/benchmarks.md, "Survey-scale dives"): step median <= 10 ms and p95
 <= 25 ms in every hour, the last hour's median within 1.5x of the first's, resident memory
 growing by less than 100 MB per hour after the first.
+The vehicle-only reference (`_reference.py`) is measured before and after the dive in the
+same process; the step's medians are also given in vehicle-seconds (ms times the reference's
+real-time factor, the mean of both measurements): the figure that compares across days on
+machines whose speed moves by 2x.
 `--surveys N` flies the replanned survey N times in the dive (the single one is already 3.8 h);
 `--max-time S` stops it after S simulated seconds. `--trace-python A:B` splits the growth of
 resident memory from A to B simulated seconds into the OctoMap tree's (`memoryUsage`), the
@@ -41,7 +45,7 @@ import yaml
 
 # This checkout's package first: the venv's editable install may point at another one.
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from _reference import machine  # noqa: E402
+from _reference import machine, reference_factor  # noqa: E402
 from drake_auv.mapping.mapper import OnlineMap  # noqa: E402
 from drake_auv.mapping.scan_log import ScanLog  # noqa: E402
 from drake_auv.mission.config import BUILTIN_DIR, mission_from_dict  # noqa: E402
@@ -140,8 +144,10 @@ def traced(probe: Probe, top: int = 8) -> dict:
                 rest_mb=rss1 - rss0 - (tree1 - tree0) - python - (own1 - own0), lines=lines)
 
 
-def per_hour(result, probe: Probe) -> list[dict]:
-    """One row per simulated hour (the last one partial): steps, real-time factor, memory."""
+def per_hour(result, probe: Probe, reference: float) -> list[dict]:
+    """One row per simulated hour (the last one partial): steps, real-time factor, memory;
+    the step's median also in vehicle-seconds (`reference`: the vehicle-only real-time
+    factor)."""
     steps = ReplanningStep(result.replanning)
     t_step, wall, query = steps.time, 1e3 * steps.wall_time, 1e3 * steps.query_time
     iterations = steps.iterations
@@ -161,6 +167,7 @@ def per_hour(result, probe: Probe) -> list[dict]:
         last = maps[maps[:, 0] <= t1 + 1e-9][-1] if np.any(maps[:, 0] <= t1 + 1e-9) else None
         rows.append(dict(hour=h + 1, sim_s=float(t1 - t0), steps=int(len(mine)),
                          step_median_ms=float(np.median(mine)),
+                         step_median_vehicle_s=float(np.median(mine)) / 1e3 * reference,
                          step_p95_ms=float(np.percentile(mine, 95)),
                          query_median_ms=float(np.median(query[hour])),
                          iterations_median=float(np.median(iterations[hour])),
@@ -221,12 +228,18 @@ def main() -> None:
     spec = long_mission(args.mission, args.seed, args.surveys, args.max_time)
     if trace is not None:
         tracemalloc.start()
+    before = reference_factor()
     probe = Probe(trace=trace)
     start = time.perf_counter()
     result = run_mission(spec, progress=False, probe=probe)
     wall = time.perf_counter() - start
+    after = reference_factor()
+    reference = float(np.mean([before, after]))
     summary = summarise(result)
-    rows = per_hour(result, probe)
+    rows = per_hour(result, probe, reference)
+    print(f"reference (vehicle alone, 600 s lawnmower, median of 3): {before:.0f}x real time "
+          f"before the dive, {after:.0f}x after; the dive's real-time factor is "
+          f"{result.duration_s / wall / reference:.3f} of their mean")
     print(f"\n{args.mission}: {result.duration_s:.0f} s simulated in {wall:.0f} s wall "
           f"({result.duration_s / wall:.1f}x), completed {result.completed}, multibeam "
           f"coverage {100 * summary['coverage']['multibeam']:.1f} %, true distance mean "
@@ -236,13 +249,15 @@ def main() -> None:
     print(f"map: {m['leaves']} OctoMap leaves, {m['octree_mb']:.0f} MB; {m['candidates']} "
           f"candidate voxels, index {m['index_mb']:.0f} MB; {m['batches']} batches, "
           f"{m['returns']} returns, scan file {m['scan_file_mb']:.0f} MB (on disk)")
-    print("\n| hour | steps | step median (ms) | step p95 (ms) | map query median (ms) | "
+    print("\n| hour | steps | step median (ms) | step median (vehicle-s) | step p95 (ms) | "
+          "map query median (ms) | "
           "STOMP iterations median | box voxels median | per iteration median (ms) | "
           "real-time factor | RSS at end "
           "(MB) | peak RSS (MB) | octree leaves | octree (MB) | index (MB) | candidates | "
-          "ScanLog versions |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "ScanLog versions |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['hour']} | {r['steps']} | {r['step_median_ms']:.1f} | "
+              f"{r['step_median_vehicle_s']:.2f} | "
               f"{r['step_p95_ms']:.1f} | {r['query_median_ms']:.1f} | "
               f"{r['iterations_median']:.0f} | {r['map_voxels_median']:.0f} | "
               f"{r['iteration_median_ms']:.2f} | "
@@ -273,7 +288,8 @@ def main() -> None:
               f"{time.perf_counter() - t0:.1f} s; peak RSS after it {peak_mb():.0f} MB")
     if args.json:
         Path(args.json).write_text(json.dumps(dict(
-            machine=machine(), duration_s=result.duration_s, wall_s=wall, hours=rows,
+            machine=machine(), duration_s=result.duration_s, wall_s=wall,
+            reference=dict(before=before, after=after, mean=reference), hours=rows,
             coverage=summary["coverage"], distance=summary["distance_to_target"],
             contact=summary["contact"], map=summary["map"], memory=memory), indent=1))
 
