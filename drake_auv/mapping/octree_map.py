@@ -85,7 +85,7 @@ class _CodeSet:
         if back.any():
             self._removed = self._removed[~in_sorted(np.sort(codes[back]), self._removed)]
         added = np.concatenate([self._added, codes[~back]])
-        added.sort()
+        added.sort(kind="stable")  # two sorted runs (`codes` come sorted): a linear merge
         if len(added) > _MERGE:
             self._bulk = np.insert(self._bulk, np.searchsorted(self._bulk, added), added)
             added = added[:0]
@@ -98,7 +98,7 @@ class _CodeSet:
         if fresh.any():
             self._added = self._added[~in_sorted(codes[fresh], self._added)]
         removed = np.concatenate([self._removed, codes[~fresh]])
-        removed.sort()
+        removed.sort(kind="stable")  # two sorted runs: a linear merge
         if len(removed) > _MERGE:  # each a code of the bulk, once
             self._bulk = np.delete(self._bulk, np.searchsorted(self._bulk, removed))
             removed = removed[:0]
@@ -202,17 +202,19 @@ class OctreeMap:
         origin = np.asarray(origin, dtype=float).reshape(-1)
         directions = np.asarray(directions, dtype=float)
         ranges = np.asarray(ranges, dtype=float).reshape(-1)
-        if origin.shape != (3,) or not np.all(np.isfinite(origin)):
+        if origin.shape != (3,) or not all(map(math.isfinite, origin.tolist())):
             raise ValueError(f"scan origin must be a finite 3-vector, got {origin}")
         if directions.ndim != 2 or directions.shape[1] != 3 or len(directions) != len(ranges):
             raise ValueError(f"directions must be (n, 3) matching ranges (n,), got "
                              f"{directions.shape} and {ranges.shape}")
-        if not (np.isfinite(max_range) and max_range > 0):
+        if not (math.isfinite(max_range) and max_range > 0):
             raise ValueError(f"max_range must be > 0 m, got {max_range}")
-        if np.any(ranges < 0):
+        if (ranges < 0).any():
             raise ValueError("ranges must be >= 0 m or NaN for no return")
-        valid = np.all(np.isfinite(directions), axis=1)
-        directions, ranges = directions[valid], ranges[valid]
+        finite = np.isfinite(directions)
+        if not finite.all():  # beams without a direction go (the rows test only then)
+            valid = finite.all(axis=1)
+            directions, ranges = directions[valid], ranges[valid]
         if len(ranges) == 0:
             return
         hit = np.isfinite(ranges) & (ranges <= max_range)
