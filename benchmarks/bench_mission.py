@@ -12,20 +12,139 @@ probe at the first and last simulator step, against the reference's CPU seconds)
 beside it: on a shared machine whose load changes between the mission and the reference, the
 wall-time ratio moves with the load and the CPU one much less.
 
+`--shares` adds one run that times the systems' callbacks and the native calls inside them
+(`CallTimer`: wall-clock wrappers, no profiler, so the shares are those of a normal run) and
+prints where the simulation's wall time goes, and the mission's floor: the vehicle alone over
+the same simulated time (the reference) plus the native ray casts and OctoMap insertions, the
+work this mission does at this fidelity whatever its Python costs; its ratio to the reference
+is the most this mission could reach.
+
     .venv/bin/python benchmarks/bench_mission.py [--runs 3] [--seed 0] [--set KEY=VALUE]
+        [--shares]
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import time
 
 import numpy as np
 
 from _reference import SIM_SECONDS, machine, print_reference, reference_factor
+import drake_auv.mapping.octree_map as octree_map
+import drake_auv.replanning.replanner as replanner_module
+from drake_auv.coverage.recorder import CoverageRecorder
+from drake_auv.following.controller import ProfileFollowingController
+from drake_auv.geometry.raycast import RayCaster
+from drake_auv.mapping.mapper import OctreeMapper
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.runner import run_mission
+from drake_auv.mission.supervisor import MissionSupervisor
 from drake_auv.signals import ReplanningStep
+from drake_auv.sonar.range_sonar import RangeSonar
+from drake_auv.vehicle.dynamics import Girona500Dynamics
+from drake_auv.vehicle.navigation_system import Navigation
+from drake_auv.vehicle.tracker import TrajectoryTracker
+
+# (owner, attribute, label, nested): the callbacks and calls `CallTimer` times; a nested one
+# runs inside a row above it (its time is part of that row's), the others do not overlap.
+TIMED = (
+    (octree_map.OctreeMap, "insert_scan", "octree insertion (`OctreeMap.insert_scan`)", False),
+    (octree_map.octomap.OcTree, "insertPointCloud", "of which OctoMap (C++)", True),
+    (replanner_module, "replan_section", "replanning step (`replan_section`)", False),
+    (octree_map.OctreeMap, "occupied_points", "of which the map query", True),
+    (RangeSonar, "_update_returns", "sonar updates", False),
+    (RayCaster, "cast_unit", "ray casts (Embree), sonars' and camera's", True),
+    (Girona500Dynamics, "_update_state", "vehicle dynamics", False),
+    (TrajectoryTracker, "_update_wrench", "tracker", False),
+    (Navigation, "_update_error", "navigation", False),
+    (CoverageRecorder, "_update_best", "coverage recorders", False),
+    (ProfileFollowingController, "_update_reference", "profile following", False),
+    (OctreeMapper, "_update_log", "mapper's log", False),
+    (MissionSupervisor, "_update_leg", "supervisor", False),
+)
+
+
+class _TimedTree:
+    """An `octomap.OcTree` whose `insertPointCloud` is timed (a Cython class's methods cannot
+    be replaced): everything else goes to the tree itself."""
+
+    def __init__(self, tree, insert_point_cloud):
+        self._tree, self.insertPointCloud = tree, insert_point_cloud
+
+    def __getattr__(self, name):
+        return getattr(self._tree, name)
+
+
+class CallTimer:
+    """While in use, the `TIMED` callables are wrapped to add their wall time (s) and calls
+    to `seconds` / `calls` by label."""
+
+    def __init__(self):
+        self.seconds = {label: 0.0 for _, _, label, _ in TIMED}
+        self.calls = dict.fromkeys(self.seconds, 0)
+        self._saved = []
+
+    def _wrapped(self, function, label):
+        seconds, calls, clock = self.seconds, self.calls, time.perf_counter
+
+        @functools.wraps(function)
+        def timed(*args, **kwargs):
+            start = clock()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                seconds[label] += clock() - start
+                calls[label] += 1
+        return timed
+
+    def __enter__(self):
+        for owner, name, label, _ in TIMED:
+            if owner is octree_map.octomap.OcTree:  # through `_TimedTree`, below
+                tree_label = label
+                continue
+            self._saved.append((owner, name, getattr(owner, name)))
+            setattr(owner, name, self._wrapped(getattr(owner, name), label))
+        init = octree_map.OctreeMap.__init__
+        self._saved.append((octree_map.OctreeMap, "__init__", init))
+
+        def timed_init(octree, *args, **kwargs):
+            init(octree, *args, **kwargs)
+            octree.tree = _TimedTree(octree.tree, self._wrapped(octree.tree.insertPointCloud,
+                                                                tree_label))
+        octree_map.OctreeMap.__init__ = timed_init
+        return self
+
+    def __exit__(self, *exc):
+        for owner, name, original in reversed(self._saved):
+            setattr(owner, name, original)
+        self._saved = []
+
+
+def shares(spec, vehicle_factor: float) -> None:
+    """One timed run of `spec`: where its simulation's wall time goes, and its floor."""
+    with CallTimer() as timer:
+        result = run_mission(spec, progress=False)
+    wall, sim = result.wall_s, result.duration_s
+    print(f"\nwhere the time goes (one run with `CallTimer`: {sim:.0f} s simulated in "
+          f"{wall:.1f} s wall, {sim / wall / vehicle_factor:.3f} of the reference)")
+    print("| part | wall (s) | share | calls | per call (us) |")
+    print("|---|---|---|---|---|")
+    top = 0.0
+    for _, _, label, nested in TIMED:
+        seconds, calls = timer.seconds[label], timer.calls[label]
+        top += 0.0 if nested else seconds
+        print(f"| {'  ' if nested else ''}{label} | {seconds:.2f} | {seconds / wall:.1%} | "
+              f"{calls} | {1e6 * seconds / max(calls, 1):.0f} |")
+    print(f"| the rest (Drake's stepping and event dispatch, other systems) | {wall - top:.2f} "
+          f"| {(wall - top) / wall:.1%} | | |")
+    floor = (sim / vehicle_factor + timer.seconds["of which OctoMap (C++)"]
+             + timer.seconds["ray casts (Embree), sonars' and camera's"])
+    print(f"floor: the vehicle alone for {sim:.0f} s ({sim / vehicle_factor:.1f} s at the "
+          f"reference's {vehicle_factor:.0f}x) + the native ray casts and OctoMap insertions = "
+          f"{floor:.1f} s: at most {sim / floor / vehicle_factor:.3f} of the reference; the "
+          f"rest ({wall - floor:.1f} s today) is Python and Drake's event dispatch")
 
 
 
@@ -58,6 +177,8 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--set", dest="overrides", action="append", default=[],
                         metavar="KEY=VALUE", help="override the mission file (repeatable)")
+    parser.add_argument("--shares", action="store_true",
+                        help="one more run, timed by parts, and the mission's floor")
     args = parser.parse_args(argv)
     spec = load_mission("boulder", seed=args.seed, overrides=args.overrides)
     runs = [one_run(spec) for _ in range(args.runs)]
@@ -81,6 +202,8 @@ def main(argv=None) -> int:
           f"simulation)")
     print(f"replanning step ({med['steps']:.0f} steps): median {med['step_median']:.1f} ms, "
           f"95th percentile {med['step_p95']:.1f} ms")
+    if args.shares:
+        shares(spec, vehicle)
     return 0
 
 
