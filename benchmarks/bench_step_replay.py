@@ -15,14 +15,21 @@ closed loop covers decides (docs/replanning.md). The replayed medians are also g
 vehicle-seconds (times the vehicle-only reference of `_reference.py`, measured in the same
 run), the figure to compare across machines.
 
+`--save FILE` keeps the recorded steps (a pickle, about 0.3 MB a step late in the dive);
+`--load FILE` replays a saved recording instead of flying (its steps in `--windows`), the way
+to time a change of the step's code against the same steps in minutes: the replayed
+trajectories are checked against the recorded ones, so a change that plans differently shows.
+Load only recordings you made: a pickle runs code when it is read.
+
     .venv/bin/python benchmarks/bench_step_replay.py [--until 3400]
-        [--windows 300:700,3000:3400] [--repeats 3]
+        [--windows 300:700,3000:3400] [--repeats 3] [--save FILE | --load FILE]
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import pickle
 import statistics
 import sys
 import time
@@ -160,6 +167,39 @@ def parse_windows(text: str, until: float = np.inf):
     return windows
 
 
+def open_save(path):
+    """`path` opened for `save_steps`, before any work (one line naming the problem when it
+    cannot be written)."""
+    try:
+        return open(path, "wb")
+    except OSError as error:
+        raise SystemExit(f"--save: cannot write {path}: {error.strerror}")
+
+
+def save_steps(steps: list, file) -> None:
+    """Writes recorded `steps` to `file` (`open_save`'s) and closes it."""
+    with file:
+        pickle.dump(steps, file, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def load_steps(path) -> list:
+    """The steps saved by `save_steps` at `path` (one line naming the problem when the file
+    is missing or is not such a recording)."""
+    try:
+        with open(path, "rb") as f:
+            steps = pickle.load(f)
+    except OSError as error:
+        raise SystemExit(f"--load: cannot read {path}: {error.strerror}")
+    except Exception as error:  # a truncated or foreign file: whatever unpickling raised
+        raise SystemExit(f"--load: {path} is not a recording of bench_step_replay.py --save "
+                         f"({type(error).__name__})")
+    if not (isinstance(steps, list)
+            and all(isinstance(s, dict) and {"time", "args", "box", "trajectory"} <= s.keys()
+                    for s in steps)):
+        raise SystemExit(f"--load: {path} is not a recording of bench_step_replay.py --save")
+    return steps
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--until", type=float, default=3400.0,
@@ -167,21 +207,33 @@ def main(argv=None) -> int:
     parser.add_argument("--windows", default="300:700,3000:3400",
                         help="START:END,... simulated seconds whose steps are recorded")
     parser.add_argument("--repeats", type=int, default=3, help="replays of each step (>= 1)")
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--save", metavar="FILE", help="keep the recorded steps in FILE")
+    source.add_argument("--load", metavar="FILE",
+                        help="replay the steps saved in FILE instead of flying")
     args = parser.parse_args(argv)
     if not args.until > 0 or args.repeats < 1:
         raise SystemExit(f"--until must be > 0 s and --repeats >= 1, got {args.until}, "
                          f"{args.repeats}")
-    windows = parse_windows(args.windows, args.until)
+    windows = parse_windows(args.windows, np.inf if args.load else args.until)
+    steps = load_steps(args.load) if args.load else None
+    save = open_save(args.save) if args.save else None
     print(machine())
     reference = reference_factor()
     print_reference(reference)
-    spec = long_mission("monterey_wall", 0, 1, args.until)
-    start = time.perf_counter()
-    with StepRecorder(windows) as recorder:
-        run_mission(spec, progress=True, probe=recorder.probe)
-    print(f"monterey_wall to {args.until:.0f} s: {time.perf_counter() - start:.0f} s wall, "
-          f"{len(recorder.steps)} steps recorded in {args.windows}")
-    by_window = {w: [s for s in recorder.steps if w[0] <= s["time"] < w[1]] for w in windows}
+    if steps is None:
+        spec = long_mission("monterey_wall", 0, 1, args.until)
+        start = time.perf_counter()
+        with StepRecorder(windows) as recorder:
+            run_mission(spec, progress=True, probe=recorder.probe)
+        steps = recorder.steps
+        print(f"monterey_wall to {args.until:.0f} s: {time.perf_counter() - start:.0f} s "
+              f"wall, {len(steps)} steps recorded in {args.windows}")
+        if save is not None:
+            save_steps(steps, save)
+    else:
+        print(f"{len(steps)} steps loaded from {args.load}")
+    by_window = {w: [s for s in steps if w[0] <= s["time"] < w[1]] for w in windows}
     print("| window (s) | steps | box voxels | dive: step / query (ms) | replayed without the "
           "query: median / p95 (ms) | the same in vehicle-seconds | of which STOMP / the "
           "rest (ms) | iterations | one iteration (ms) |")
@@ -208,7 +260,7 @@ def main(argv=None) -> int:
               f"{np.median(iterations):.1f} | "
               f"{1e3 * np.median(per_iteration) if len(per_iteration) else float('nan'):.3f} |")
     print(f"replayed trajectories identical to the dive's: {identical} of "
-          f"{len(recorder.steps)}")
+          f"{sum(len(v) for v in by_window.values())}")
     print("\n| STOMP budget | window (s) | replayed median / p95 (ms) | iterations | cost "
           "removed, median |")
     print("|---|---|---|---|---|")

@@ -79,3 +79,38 @@ def test_wrappers_come_off_and_budgets_apply():
 def test_bad_windows_get_one_line(text, until):
     with pytest.raises(SystemExit, match="--windows: give START:END pairs"):
         bench.parse_windows(text, until)
+
+
+def test_saved_steps_load_and_replay_to_the_same_trajectories(tmp_path):
+    steps = _record([(1.0, 3.0)])
+    path = tmp_path / "steps.pkl"
+    bench.save_steps(steps, bench.open_save(path))
+    loaded = bench.load_steps(path)
+    assert [s["time"] for s in loaded] == [s["time"] for s in steps]
+    for step in loaded:
+        assert np.array_equal(bench.replay(step)[0].trajectory, step["trajectory"])
+
+
+def test_bad_recordings_and_outputs_get_one_line(tmp_path):
+    with pytest.raises(SystemExit, match="--load: cannot read"):
+        bench.load_steps(tmp_path / "missing.pkl")
+    corrupt = tmp_path / "corrupt.pkl"
+    corrupt.write_bytes(b"not a pickle")
+    with pytest.raises(SystemExit, match="is not a recording"):
+        bench.load_steps(corrupt)
+    foreign = tmp_path / "foreign.pkl"
+    bench.save_steps([1, 2], bench.open_save(foreign))
+    with pytest.raises(SystemExit, match="is not a recording"):
+        bench.load_steps(foreign)
+    with pytest.raises(SystemExit, match="--save: cannot write"):
+        bench.open_save(tmp_path / "no" / "such" / "dir" / "steps.pkl")
+
+
+def test_main_replays_a_saved_recording_without_flying(tmp_path, capsys, monkeypatch):
+    path = tmp_path / "steps.pkl"
+    bench.save_steps(_record([(1.0, 3.0)]), bench.open_save(path))
+    monkeypatch.setattr(bench, "reference_factor", lambda: 500.0)  # the vehicle's 3 runs
+    monkeypatch.setattr(bench, "run_mission", None)  # flying would fail
+    assert bench.main(["--load", str(path), "--windows", "1:3", "--repeats", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "2 steps loaded" in out and "identical to the dive's: 2 of 2" in out
