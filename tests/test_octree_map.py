@@ -106,6 +106,25 @@ def test_bad_scan_raises():
         omap.insert_scan(np.zeros(3), np.ones((2, 3)), np.ones(3), 20.0)
     with pytest.raises(ValueError, match="max_range"):
         omap.insert_scan(np.zeros(3), np.ones((2, 3)), np.ones(2), -1.0)
+    with pytest.raises(ValueError, match="ranges must be >= 0"):
+        omap.insert_scan(np.zeros(3), np.ones((2, 3)), np.array([1.0, -1.0]), 20.0)
+
+
+def test_beams_without_a_finite_direction_are_left_out():
+    d = _fan(n=31, aperture=np.radians(60.0))
+    ranges = np.linspace(6.0, 9.0, len(d))
+    kept = np.ones(len(d), bool)
+    kept[[3, 17]] = False
+    broken = d.copy()
+    broken[3, 1], broken[17] = np.nan, np.inf
+    with_broken, without = OctreeMap(0.5), OctreeMap(0.5)
+    with_broken.insert_scan(np.zeros(3), broken, ranges, 20.0)
+    without.insert_scan(np.zeros(3), d[kept], ranges[kept], 20.0)
+    assert with_broken.tree.writeBinary() == without.tree.writeBinary()
+    assert np.array_equal(with_broken.occupied_points(), without.occupied_points())
+    nothing = OctreeMap(0.5)
+    nothing.insert_scan(np.zeros(3), np.full((2, 3), np.nan), np.ones(2), 20.0)
+    assert nothing.num_scans == 0 and nothing.tree.getNumLeafNodes() == 0
 
 
 def test_box_query_matches_the_whole_map_and_sees_clearing():
