@@ -76,6 +76,14 @@ def test_two_contexts_of_one_diagram_have_their_own_maps():
     assert len(mapper.map_output.Eval(other).map.occupied_points()) == 0
     # a survey's map clears along a beam without an echo to the sonar's range (OctoMap's way)
     assert fed.map.no_return_clear_m == np.inf
+    assert mapper.multibeam_stride == 2 and not fed.map.discretize  # the defaults
+
+
+def test_the_on_line_maps_insertion_is_set_from_the_mission():
+    spec = load_mission("boulder", overrides=["replanner.multibeam_stride=4",
+                                              "replanner.discretize=true"])
+    _, handles = build_mission_diagram(load_site(spec.site, spec.seed), spec)
+    assert handles.mapper.multibeam_stride == 4 and handles.mapper.discretize
 
 
 def test_the_multibeam_is_scored_at_every_ping():

@@ -430,3 +430,21 @@ def test_unique_equals_numpy_unique():
         got, want = lattice.unique(part), np.unique(part)
         assert got.dtype == want.dtype and np.array_equal(got, want)
     assert len(lattice.unique(codes)) < len(codes)
+
+
+def test_discretized_insertion_marks_the_same_voxels_and_clears_towards_their_centres():
+    """Two beams ending in one voxel cross different water; discretised, one ray goes to the
+    voxel's centre instead: the same voxel is occupied, less water is cleared."""
+    origin = np.array([0.0, 0.5, 0.5])
+    ends = np.array([[9.05, 3.95, 0.5], [9.95, 3.05, 0.5]])  # both in voxel (9, 3, 0)
+    directions = (ends - origin) / np.linalg.norm(ends - origin, axis=1, keepdims=True)
+    ranges = np.linalg.norm(ends - origin, axis=1)
+    every, discretized = OctreeMap(1.0), OctreeMap(1.0, discretize=True)
+    for omap in (every, discretized):
+        omap.insert_scan(origin, directions, ranges, 20.0)
+    assert discretized.discretize and not every.discretize
+    np.testing.assert_array_equal(every.occupied_points(), [[9.5, 3.5, 0.5]])
+    np.testing.assert_array_equal(discretized.occupied_points(), [[9.5, 3.5, 0.5]])
+    x, y = np.meshgrid(np.arange(10) + 0.5, np.arange(5) + 0.5)
+    grid = np.column_stack([x.ravel(), y.ravel(), np.full(x.size, 0.5)])
+    assert (every.labels(grid) == 0).sum() > (discretized.labels(grid) == 0).sum() > 0

@@ -43,6 +43,18 @@ def test_mapper_records_each_update_once_and_maps_it():
     assert mapper.scan_log_output.Eval(context).count == 2
 
 
+def test_the_mappers_insertion_options_reach_every_contexts_map():
+    mapper = OctreeMapper(resolution=0.5, discretize=True)
+    context = mapper.CreateDefaultContext()
+    mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(1)))
+    Simulator(mapper, context).AdvanceTo(0.15)
+    online = mapper.map_output.Eval(context)
+    assert online.map.discretize and len(online.map.occupied_points()) > 0
+    assert mapper.map_output.Eval(context.Clone()).map.discretize  # a copy rebuilds it so
+    plain = OctreeMapper()
+    assert not plain.map_output.Eval(plain.CreateDefaultContext()).map.discretize
+
+
 def test_each_context_has_its_own_map():
     mapper = OctreeMapper(resolution=0.5)
     first, second = mapper.CreateDefaultContext(), mapper.CreateDefaultContext()

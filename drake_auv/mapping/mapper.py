@@ -34,12 +34,14 @@ class OnlineMap:
     version, so the copy holds an equal map of its own, never a second owner of this one.
     """
 
-    def __init__(self, resolution: float, no_return_clear_m: float = np.inf):
-        self.map = OctreeMap(resolution, no_return_clear_m=no_return_clear_m)
+    def __init__(self, resolution: float, no_return_clear_m: float = np.inf,
+                 discretize: bool = False):
+        self.map = OctreeMap(resolution, no_return_clear_m=no_return_clear_m,
+                             discretize=discretize)
         self.version: ScanLog | None = None
 
     def __deepcopy__(self, memo):
-        clone = OnlineMap(self.map.resolution, self.map.no_return_clear_m)
+        clone = OnlineMap(self.map.resolution, self.map.no_return_clear_m, self.map.discretize)
         if self.version is not None:
             clone.catch_up(self.version)
         return clone
@@ -77,10 +79,11 @@ class OctreeMapper(LeafSystem):
         multibeam_stride: record every n-th multibeam beam (profiler beams are all kept).
         no_return_clear_m: how far a beam without an echo clears free water in the map, m
             (`OctreeMap`; inf: to the sonar's range).
+        discretize: OctoMap's discretised insertion, one ray per endpoint voxel (`OctreeMap`).
     """
 
     def __init__(self, resolution: float = 0.5, period: float = 0.1, multibeam_stride: int = 2,
-                 no_return_clear_m: float = np.inf):
+                 no_return_clear_m: float = np.inf, discretize: bool = False):
         super().__init__()
         if not (np.isfinite(period) and 0.01 <= period <= 10.0):
             raise ValueError(f"OctreeMapper period must be in [0.01, 10] s, got {period}")
@@ -95,6 +98,7 @@ class OctreeMapper(LeafSystem):
         self.no_return_clear_m = float(no_return_clear_m)
         self.period = float(period)
         self.multibeam_stride = int(multibeam_stride)
+        self.discretize = bool(discretize)
         model = AbstractValue.Make(SonarReturns.empty(20.0))
         self.multibeam_input = self.DeclareAbstractInputPort("multibeam_returns", model)
         self.profiler_input = self.DeclareAbstractInputPort("profiler_returns", model.Clone())
@@ -104,7 +108,8 @@ class OctreeMapper(LeafSystem):
         self._sequences = self.DeclareDiscreteState(np.array([-1.0, -1.0, -1.0]))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_log)
         self.map_output = self.DeclareAbstractOutputPort(
-            "map", lambda: AbstractValue.Make(OnlineMap(self.resolution, self.no_return_clear_m)),
+            "map", lambda: AbstractValue.Make(OnlineMap(self.resolution, self.no_return_clear_m,
+                                                        self.discretize)),
             self._calc_map,
             prerequisites_of_calc={self.abstract_state_ticket(self._log_index)})
         self.scan_log_output = self.DeclareStateOutputPort("scan_log", self._log_index)

@@ -15,9 +15,11 @@ against 0.70 M (20 MB) here, and the gap widens as beams sweep the same water ag
 about 10 % more work per multibeam ping (docs/benchmarks.md: 0.86 against 0.77 ms). Pruning changes no label or
 log-odds: `search` finds the leaf, or the pruned node it was merged into, which carries the
 same value, and a pruned node is expanded with that value when a later scan touches it.
-(Discretised insertion, one ray per endpoint voxel, is 25 % faster for a 240-beam fan but
-casts towards voxel centres, so beams without a return no longer clear exactly along the beam:
-not used.)
+Discretised insertion (`discretize`, off by default) is OctoMap's own trade: the endpoints of
+a scan are first reduced to one per voxel, and one ray is cast to each such voxel's centre
+(`computeDiscreteUpdate`). A voxel is marked occupied by the same scans, but free water is
+cleared along rays towards voxel centres, up to half a voxel diagonal off the beams; a
+240-beam fan inserts about 25 % faster.
 
 Occupied voxels are found among the candidates, whose labels are cached. A candidate is a
 voxel hit and not read as free since: a voxel becomes occupied only by a hit on it (a miss
@@ -138,17 +140,20 @@ class OctreeMap:
             a weak or grazing echo off rock, and a beam cleared to 20 m carves free water
             through the rock behind (boulder seed 2: a path into a wall facing it, the map
             free there 1,356 s in).
+        discretize: insert with OctoMap's discretised update, one ray per endpoint voxel
+            (see the module), faster for dense fans; off: every beam is cast.
     """
 
     def __init__(self, resolution: float = 0.5, prob_hit: float = 0.7, prob_miss: float = 0.4,
                  clamp_min: float = 0.12, clamp_max: float = 0.97,
-                 no_return_clear_m: float = np.inf):
+                 no_return_clear_m: float = np.inf, discretize: bool = False):
         if not (np.isfinite(resolution) and 0.01 < resolution <= 10.0):
             raise ValueError(f"resolution must be in (0.01, 10] m, got {resolution}")
         if not no_return_clear_m > 0:
             raise ValueError(f"no_return_clear_m must be > 0 m (inf: the sonar's range), got "
                              f"{no_return_clear_m}")
         self.no_return_clear_m = float(no_return_clear_m)
+        self.discretize = bool(discretize)
         if not 0.5 < prob_hit < 1.0:
             raise ValueError(f"prob_hit must be in (0.5, 1), got {prob_hit}")
         if not 0.0 < prob_miss < 0.5:
@@ -231,7 +236,8 @@ class OctreeMap:
         for beams, reach in clouds:
             cloud = endpoints[beams]
             if len(cloud):
-                self.tree.insertPointCloud(cloud, origin, maxrange=reach, lazy_eval=False)
+                self.tree.insertPointCloud(cloud, origin, maxrange=reach, lazy_eval=False,
+                                           discretize=self.discretize)
         if np.any(hit):
             # OctoMap keys single-precision points (floor(float(p) / resolution)): keyed in
             # float64, an end on a voxel face (a flat seabed at z = -30 m) lands one voxel off.

@@ -275,7 +275,8 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     multibeam, profiler, returns = add_sonars(builder, caster, vehicle, spec, plan, max_range,
                                               estimated, faults)
     mapper = builder.AddNamedSystem("octree_mapper", OctreeMapper(
-        resolution=spec.replanner.voxel_m, no_return_clear_m=min(
+        resolution=spec.replanner.voxel_m, multibeam_stride=spec.replanner.multibeam_stride,
+        discretize=spec.replanner.discretize, no_return_clear_m=min(
             (s.no_return_clear_m for s in spec.steps if s.KIND == "explore"), default=np.inf)))
     builder.Connect(returns["multibeam"], mapper.multibeam_input)
     builder.Connect(returns["profiler"], mapper.profiler_input)

@@ -150,6 +150,10 @@ class ReplannerSpec:
             `iterations` (the STOMP ones); `omega` comes from the plan step.
         period_s: replanning period, s.
         voxel_m: edge of the on-line octree map's voxels, m.
+        multibeam_stride: every n-th multibeam beam goes into the on-line map (the profiler's
+            all do); the multibeam's coverage is scored on every beam whatever this is.
+        discretize: OctoMap's discretised insertion into the on-line map, one ray per endpoint
+            voxel (`OctreeMap`): faster, free water cleared towards voxel centres.
         offset_metric: "horizontal" or "3d" distance to the map for the offset (see
             `ReplanningParameters`); "auto": "3d" after a coverage plan (offsets along the
             surface normal), "horizontal" after a contour plan.
@@ -159,6 +163,8 @@ class ReplannerSpec:
     params: ReplanningParameters = nested(ReplanningParameters)
     period_s: float = param(1.0, low=0.1, high=10.0, unit="s")
     voxel_m: float = param(0.5, low=0.1, high=2.0, unit="m")
+    multibeam_stride: int = param(2, low=1, high=16, integer=True)
+    discretize: bool = param(False, kind="bool")
     offset_metric: str = param("auto", kind="choice", choices=("auto", "horizontal", "3d"))
 
     def __post_init__(self):
