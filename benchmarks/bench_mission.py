@@ -4,9 +4,11 @@ Runs the built-in `boulder` mission (`drake_auv.mission.runner.run_mission`) hea
 Meshcat): vehicle dynamics, navigation, both sonars, the octree mapper, profile following,
 the replanner, the supervisor and the coverage recorders, in one Diagram. Reports simulated
 seconds over the simulation's wall seconds (the real-time factor), over the CPU seconds of the
-whole run (site, plan and truth computations included), the replanning step times, and the
-mission's factor over the vehicle-only one measured in the same run (`_reference.py`: the
-ratio says how much the mission's sensing and planning cost whatever the machine's speed);
+whole run (site, plan and truth computations included), the replanning step times, what the
+dive achieved (coverage, least clearance, contact: what a `--set` that makes it cheaper must
+not cost), and the mission's factor over the vehicle-only one measured in the same run
+(`_reference.py`: the ratio says how much the mission's sensing and planning cost whatever the
+machine's speed);
 medians over `--runs` runs. The same ratio in CPU time (the simulation's CPU seconds, read by a
 probe at the first and last simulator step, against the reference's CPU seconds) is printed
 beside it: on a shared machine whose load changes between the mission and the reference, the
@@ -37,9 +39,10 @@ import drake_auv.replanning.replanner as replanner_module
 from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.following.controller import ProfileFollowingController
 from drake_auv.geometry.raycast import RayCaster
+from drake_auv.geometry.visibility import coverage_share
 from drake_auv.mapping.mapper import OctreeMapper
 from drake_auv.mission.config import load_mission
-from drake_auv.mission.runner import run_mission
+from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.mission.supervisor import MissionSupervisor
 from drake_auv.signals import ReplanningStep
 from drake_auv.sonar.range_sonar import RangeSonar
@@ -168,7 +171,16 @@ def one_run(spec) -> dict:
                 steps=len(steps),  # none when a short time cap ends the dive first: NaN
                 step_median=float(np.median(steps)) if len(steps) else float("nan"),
                 step_p95=float(np.percentile(steps, 95)) if len(steps) else float("nan"),
-                completed=result.completed)
+                completed=result.completed, outcome=outcome(result))
+
+
+def outcome(result) -> str:
+    """What the dive achieved, as the report measures it: what a `--set` that makes the
+    mission cheaper must not cost."""
+    clearance = float(result.clearance.min())
+    return (f"multibeam coverage {coverage_share(result.multibeam_best, result.areas):.4f}, "
+            f"camera {coverage_share(result.camera_best, result.areas):.4f}, least clearance "
+            f"{clearance:.2f} m, contact {'yes' if clearance <= VEHICLE_RADIUS else 'no'}")
 
 
 def main(argv=None) -> int:
@@ -182,7 +194,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     spec = load_mission("boulder", seed=args.seed, overrides=args.overrides)
     runs = [one_run(spec) for _ in range(args.runs)]
-    med = {k: float(np.median([r[k] for r in runs])) for k in runs[0]}
+    med = {k: float(np.median([r[k] for r in runs])) for k in runs[0] if k != "outcome"}
     print(machine())
     cpu = time.process_time()
     vehicle = reference_factor()
@@ -202,6 +214,9 @@ def main(argv=None) -> int:
           f"simulation)")
     print(f"replanning step ({med['steps']:.0f} steps): median {med['step_median']:.1f} ms, "
           f"95th percentile {med['step_p95']:.1f} ms")
+    outcomes = sorted({r["outcome"] for r in runs})
+    print(f"the dive: {outcomes[0]}" if len(outcomes) == 1
+          else "the runs differ (not deterministic): " + "; ".join(outcomes))
     if args.shares:
         shares(spec, vehicle)
     return 0
