@@ -10,8 +10,8 @@ not cost), and the mission's factor over the vehicle-only one measured in the sa
 (`_reference.py`: the ratio says how much the mission's sensing and planning cost whatever the
 machine's speed); medians over `--runs` runs. The same ratio in CPU time (the simulation's CPU
 seconds, read by a probe at the first and last simulator step, against the reference's CPU
-seconds) is printed beside it: on a shared machine whose load changes between the mission and the reference, the
-wall-time ratio moves with the load and the CPU one much less.
+seconds) is printed beside it: on a shared machine whose load changes between the mission and
+the reference, the wall-time ratio moves with the load and the CPU one much less.
 
 `--shares` adds one run that times the systems' callbacks and the native calls inside them
 (`CallTimer`: wall-clock wrappers, no profiler, so the shares are those of a normal run) and
