@@ -122,6 +122,10 @@ def test_overrides_and_seed(tmp_path):
     ("steps.2.plan.omega=3", "steps.2.plan: step 2 is a survey step; allowed: survey"),
     ("seed.x=1", "seed.x: seed is a value, not a section"),
     ("replanner", "replanner: not a KEY=VALUE override"),
+    ("replanner.multibeam_stride=0",
+     "replanner.multibeam_stride: 0 is out of range; allowed: an integer in [1, 16]"),
+    ("replanner.discretize=maybe",
+     "replanner.discretize: 'maybe' is not a boolean; allowed: true or false"),
 ])
 def test_bad_overrides_name_the_key(tmp_path, override, message):
     assert message in _error(tmp_path, WRECK, overrides=[override])
