@@ -124,3 +124,14 @@ def test_cast_unit_takes_scalar_or_per_ray_ranges_and_marks_misses():
             assert abs(ranges[2] - 1.5) < 1e-6
     again, _ = caster.cast_unit(origin, directions, 5.0)
     assert not np.shares_memory(again, ranges)  # each query owns its arrays
+
+
+def test_cast_unit_leaves_the_callers_ranges_alone():
+    # Embree writes its hits into the query's range array: a float32 one of the caller's
+    # (a sonar's per-ray reach, read again after the cast) must not be that array.
+    caster = RayCaster(trimesh.creation.box(extents=(2, 2, 2)))
+    reach = np.array([50.0, 0.5], dtype=np.float32)
+    ranges, faces = caster.cast_unit(np.array([-10.0, 0.0, 0.0]),
+                                     np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]), reach)
+    np.testing.assert_allclose(ranges, [9.0, np.nan], atol=1e-5)
+    np.testing.assert_array_equal(reach, np.array([50.0, 0.5], dtype=np.float32))

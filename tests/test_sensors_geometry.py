@@ -319,3 +319,58 @@ def test_scan_points_derived_on_first_read_survive_copies_and_pickling():
         np.testing.assert_array_equal(other.points_nav, returns.points_nav)
     with pytest.raises(AttributeError, match="no attribute 'points'"):
         returns.points
+
+
+def test_off_axis_rays_cast_only_to_the_axis_echo_give_the_returns_of_one_query(monkeypatch):
+    # A seabed, a wall and a ball near the surface; fans and a wide pencil beam with the
+    # missions' errors (side lobes, multipath, threshold, clutter) and random poses, many near
+    # the surface: the two-query scan must equal the one-query scan bit for bit.
+    from drake_auv.mission.spec import REALISTIC_NOISE
+    from drake_auv.sonar import beams
+
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=3.0)
+    ball.apply_translation([6.0, 4.0, -6.0])
+    world = trimesh.util.concatenate([_flat_seabed(-18.0), _box((12.0, -30.0, -18.0),
+                                                                 (13.0, 30.0, -2.0)), ball])
+    caster = RayCaster(world)
+    queries = []
+    cast_unit = caster.cast_unit
+
+    def recording(origins, directions, max_range):
+        queries.append(np.broadcast_to(np.array(max_range, dtype=float), len(directions)))
+        return cast_unit(origins, directions, max_range)
+
+    monkeypatch.setattr(caster, "cast_unit", recording)
+    noise = SonarNoise(**REALISTIC_NOISE)
+    models = [(SonarModel(SonarMount.named(mount), noise=noise), fan_angles(480, np.radians(120)))
+              for mount in ("port", "down")]
+    models.append((SonarModel(SonarMount.named("horizontal"), beam_width=np.radians(6.0),
+                              noise=noise), np.radians(np.arange(-180.0, 180.0, 0.9))))
+    rng = np.random.default_rng(11)
+    nearer = beams_shortened = 0
+    for k in range(90):
+        model, angles = models[k % 3]
+        state = _state(*rng.uniform([-5, -8, -12], [10, 8, -0.5]),
+                       *rng.normal(0.0, [0.15, 0.15, 2.0]))
+        runs = []
+        for threshold in (10 ** 9, 0):
+            monkeypatch.setattr(beams, "_SHORT_QUERY_RAYS", threshold)
+            queries.clear()
+            draws = np.random.default_rng([3, k])
+            ret, hits = beams.scan_with_hits(caster, model, angles, state, state, rng=draws)
+            runs.append((ret.ranges, hits.faces, draws.random(4), list(queries)))
+        (one, faces_one, after_one, _), (two, faces_two, after_two, reaches) = runs
+        np.testing.assert_array_equal(one, two)
+        np.testing.assert_array_equal(faces_one, faces_two)
+        np.testing.assert_array_equal(after_one, after_two)  # the same draws consumed
+        off_axis = len(beams.beam_geometry(model, angles).side_rays_body)
+        side = next(r for r in reaches if len(r) == off_axis)  # (the first after the axes')
+        beams_shortened += int(np.sum(side < model.max_range))
+        axis_only = beams.scan_with_hits(
+            caster, SonarModel(model.mount, model.max_range, 0.0, model.max_incidence,
+                               SonarNoise(surface_prob=noise.surface_prob,
+                                          echo_threshold=noise.echo_threshold)),
+            angles, state, state, rng=np.random.default_rng([3, k]))[0].ranges
+        nearer += int(np.sum(np.isnan(axis_only) & np.isfinite(one)))
+    assert beams_shortened > 10_000  # the off-axis rays did stop at their axis's echo
+    assert nearer > 50  # and the test has beams that only an off-axis ray sees

@@ -125,7 +125,7 @@ class RayCaster:
             dists = np.empty(n, dtype=np.float32)
             dists.fill(max_range)
         else:
-            dists = np.asarray(max_range, dtype=np.float32)
+            dists = np.array(max_range, dtype=np.float32)  # Embree writes the hits into it
         out = self._scene.run(origins32, np.asarray(unit_directions, dtype=np.float32),
                               dists=dists, output=1)
         faces = out["primID"].astype(np.int64)
