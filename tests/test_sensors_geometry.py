@@ -346,6 +346,11 @@ def test_off_axis_rays_cast_only_to_the_axis_echo_give_the_returns_of_one_query(
               for mount in ("port", "down")]
     models.append((SonarModel(SonarMount.named("horizontal"), beam_width=np.radians(6.0),
                               noise=noise), np.radians(np.arange(-180.0, 180.0, 0.9))))
+    # The missions' fan takes the short queries at the default threshold.
+    queries.clear()
+    beams.scan_with_hits(caster, models[1][0], models[1][1], _state(z=-8.0), _state(z=-8.0),
+                         rng=np.random.default_rng(0))
+    assert any(len(q) == 960 and (q < models[1][0].max_range).mean() > 0.5 for q in queries)
     rng = np.random.default_rng(11)
     nearer = beams_shortened = 0
     for k in range(90):

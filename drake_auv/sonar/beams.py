@@ -13,7 +13,7 @@ sea surface and the seabed); each ray's echo has intensity gain * cos^2(incidenc
 along its axis, the nearest echo above the detection threshold (`SonarNoise`). With many
 off-axis rays (a multibeam's side lobes) the axes are cast first and the other rays only as
 far as their axis's echo, beyond which they cannot be the nearest: the same returns, bit for
-bit, as one query of every ray to the full range, for a third less Embree time a ping.
+bit, as one query of every ray to the full range, in less Embree time (docs/benchmarks.md).
 """
 
 from __future__ import annotations
@@ -134,8 +134,8 @@ def head_angles(ping_indices, sector: tuple[float, float], step: float) -> np.nd
 
 
 # Off-axis rays of an update (side lobes, cone edges) below which they are cast with the axes
-# in one query: fewer do not repay a second query (a pencil beam's 3 pings x 8), more do (a
-# multibeam's 480 x 2 side lobes, most cast only to their axis's echo: docs/sensors.md).
+# in one query: a pencil beam's 3 pings x 8 do not repay a second query, a multibeam's 480 x 2
+# side lobes do, most cast only to their axis's echo (measured: docs/benchmarks.md).
 _SHORT_QUERY_RAYS = 256
 EDGE_GAIN = 0.5  # two-way intensity on the edge of the -3 dB cone
 
