@@ -135,3 +135,16 @@ def test_cast_unit_leaves_the_callers_ranges_alone():
                                      np.array([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]), reach)
     np.testing.assert_allclose(ranges, [9.0, np.nan], atol=1e-5)
     np.testing.assert_array_equal(reach, np.array([50.0, 0.5], dtype=np.float32))
+
+
+
+def test_robust_scene_is_watertight_where_the_fast_traversal_leaks():
+    # Rays from the centre of a closed sphere aimed at its edges' midpoints and its vertices:
+    # every one must hit it; without the robust flag some pass between the faces.
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=2.0)
+    aims = np.vstack([sphere.vertices, sphere.vertices[sphere.edges_unique].mean(axis=1)])
+    aims /= np.linalg.norm(aims, axis=1, keepdims=True)
+    robust, fast = RayCaster(sphere), RayCaster(sphere, robust=False)
+    ranges, faces = robust.cast_unit(np.zeros(3), aims, 5.0)
+    assert np.all(faces >= 0) and np.all(np.abs(ranges - 2.0) < 0.05)
+    assert np.sum(fast.cast_unit(np.zeros(3), aims, 5.0)[1] < 0) > 10

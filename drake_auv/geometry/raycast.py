@@ -52,13 +52,17 @@ class RayCaster:
 
     Args:
         mesh: the world, a `trimesh.Trimesh` of triangles (any frame; rays use the same frame).
+        robust: Embree's robust traversal (RTC_SCENE_FLAG_ROBUST, the default): watertight, a
+            ray through an edge or vertex shared by faces hits one of them. Without it
+            traversal is faster, but such rays can pass between the faces: a sonar beam
+            through the seabed (measured: docs/benchmarks.md; kept for comparison only).
     """
 
-    def __init__(self, mesh: trimesh.Trimesh):
+    def __init__(self, mesh: trimesh.Trimesh, robust: bool = True):
         self.mesh = validate_mesh(mesh)
         vertices = np.asarray(mesh.vertices, dtype=float)
         self._offset = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
-        self._scene = rtcore_scene.EmbreeScene()
+        self._scene = rtcore_scene.EmbreeScene(robust=bool(robust))
         TriangleMesh(scene=self._scene,
                      vertices=(vertices - self._offset).astype(np.float32),
                      indices=np.asarray(mesh.faces).astype(np.int32))
