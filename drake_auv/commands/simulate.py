@@ -188,7 +188,8 @@ def add_parser(subparsers) -> None:
         description="Flies a path (CSV from `drake-auv plan` or Path.to_csv) with the simulated "
                     "GIRONA 500 and writes a Meshcat HTML recording and a tracking-error plot.")
     parser.add_argument("path_csv", help="path CSV: x,y,z,heading,sensor_x,sensor_y,sensor_z,label")
-    parser.add_argument("--out", default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
+    parser.add_argument("-o", "--out", default=DEFAULT_OUT,
+                        help=f"output folder (default {DEFAULT_OUT})")
     parser.add_argument("--speed", type=float, default=0.5, help="survey speed, m/s (default 0.5)")
     parser.add_argument("--heading-bias-deg", type=float, default=0.0,
                         help="compass bias of the dead-reckoning navigation, degrees (default 0)")
