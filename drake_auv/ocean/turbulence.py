@@ -51,12 +51,13 @@ class Turbulence:
         """A draw (2,) from the stationary distribution."""
         return self.sd() * rng.standard_normal(TURBULENCE_SIZE)
 
-    def step(self, deviation: np.ndarray, dt: float, rng: np.random.Generator) -> np.ndarray:
-        """The deviation (2,) after `dt` seconds (the exact OU transition)."""
+    def step(self, deviation, dt: float, rng: np.random.Generator) -> np.ndarray:
+        """The deviation (2,) (or (m, 2): m independent processes) after `dt` seconds, by
+        the exact OU transition."""
+        deviation = np.asarray(deviation, dtype=float)
         decay = math.exp(-dt / self.time_constant_s)
         spread = self.sd() * math.sqrt(-math.expm1(-2.0 * dt / self.time_constant_s))
-        return decay * np.asarray(deviation, dtype=float) + spread * rng.standard_normal(
-            TURBULENCE_SIZE)
+        return decay * deviation + spread * rng.standard_normal(deviation.shape)
 
 
 def perturb(velocity, rate, deviation) -> tuple[np.ndarray, np.ndarray]:
