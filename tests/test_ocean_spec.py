@@ -97,3 +97,43 @@ def test_the_turbulent_mean_speed_is_the_current_speed():
     headings = np.array([math.atan2(*model.water(0.0, [[0, 0, -5]], d)[0][0, :2])
                          for d in deviations[:500]])
     assert math.degrees(headings.std()) == pytest.approx(8.0, rel=0.1)
+
+
+def test_a_gridded_file_is_checked_when_the_mission_is_read(tmp_path):
+    from test_ocean_gridded import write_cf
+
+    good, bad = tmp_path / "good.nc", tmp_path / "bad.nc"
+    write_cf(good)
+    write_cf(bad, units="cm/s")
+    spec = ocean_from_raw({"file": "good.nc"}, tmp_path)
+    assert spec.file == good.resolve()
+    with pytest.raises(OceanSpecError, match=r"^ocean.file: bad.nc: u has units 'cm/s'; "
+                                             r"allowed: m s-1$"):
+        ocean_from_raw({"file": "bad.nc"}, tmp_path)
+
+
+def test_missions_take_an_ocean_section_and_set_its_keys():
+    from drake_auv.mission.config import (MissionFileError, load_mission, mission_from_dict,
+                                          mission_to_dict)
+
+    still = load_mission("boulder")
+    assert still.ocean is None and "ocean" not in mission_to_dict(still)
+    spec = load_mission("boulder", overrides=[
+        "ocean.current.speed_mps=0.4", "ocean.current.towards_deg=270",
+        "ocean.tides=[{name: M2, amplitude_mps: 0.2}]", "ocean.tides.0.phase_deg=45",
+        "ocean.turbulence.speed_sd_mps=0.05", "ocean.waves.hs_m=1.0"])
+    assert spec.ocean.current == spec.ocean.current.__class__(0.4, 270.0)
+    assert spec.ocean.tides[0].phase_deg == 45.0 and spec.ocean.waves.hs_m == 1.0
+    assert mission_from_dict(mission_to_dict(spec), "/", "x") == spec
+    assert load_mission("boulder", overrides=["ocean=none"]).ocean is None
+    for sets, text in [
+            (["ocean.current.speed_mps=6"], "boulder.yaml: ocean.current.speed_mps: 6.0 is out "
+                                            "of range; allowed: [0, 5] m/s"),
+            (["ocean.waves.tp_s=-2"], "boulder.yaml: ocean.waves.tp_s: -2.0 is out of range; "
+                                      "allowed: [1, 30] s"),
+            (["ocean.turbulence.sd=1"], "boulder.yaml (--set): ocean.turbulence.sd: unknown "
+                                        "key; allowed: speed_sd_mps, direction_sd_deg, "
+                                        "time_constant_s")]:
+        with pytest.raises(MissionFileError) as err:
+            load_mission("boulder", overrides=sets)
+        assert str(err.value) == text

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import re
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -88,55 +89,32 @@ class GriddedCurrent:
         """Reads `path`; `crs` the site's CRS (None: a local site, which takes a projected
         grid without grid mapping in its own coordinates), `origin` (2,) the site
         coordinates of the local frame's origin, m."""
-        import netCDF4  # a reader's dependency, loaded when a file is read
-
-        path = Path(path)
-        label = f"ocean.file: {path.name}"
-        if not path.is_file():
-            raise FileNotFoundError(f"{label}: not found ({path}); must be a CF netCDF file")
-        try:
-            dataset = netCDF4.Dataset(path)
-        except OSError as err:
-            raise ValueError(f"{label}: cannot be read as netCDF ({err.strerror or err}); "
-                             "must be a CF-conventions netCDF file") from None
-        with dataset:
-            return cls._read(dataset, label, crs, np.asarray(origin, dtype=float))
-
-    @classmethod
-    def _read(cls, ds, label, site_crs, origin):
-        found = {key: _velocity_variable(ds, key) for key in ("u", "v", "w")}
-        for key in ("u", "v"):
-            if found[key] is None:
-                raise ValueError(f"{label}: no {key} velocity; must hold a variable named "
-                                 f"{'/'.join(VARIABLE_NAMES[key])} or with standard_name "
-                                 f"{STANDARD_NAMES[key]}")
-        variables = [v for v in found.values() if v is not None]
-        for var in variables:
-            units = getattr(var, "units", None)
-            if units is None or not is_speed_unit(units):
-                raise ValueError(f"{label}: {var.name} has units {units!r}; must be m s-1")
-            if var.dimensions != variables[0].dimensions:
-                raise ValueError(f"{label}: {var.name} is over {var.dimensions}, "
-                                 f"{variables[0].name} over {variables[0].dimensions}; must "
-                                 "share their dimensions")
-        roles = _dimension_roles(ds, variables[0], label)
-        horizontal = ("lat", "lon") if "lat" in roles else ("y", "x")
-        order = [roles[r] for r in ("time", "depth", *horizontal)]
-        axes = []
-        for role, (dim, coordinate) in zip(("time", "depth", *horizontal), order):
-            axes.append(_axis(ds, role, dim, coordinate, label))
+        with _open(path) as (ds, label):
+            found, order, horizontal = _layout(ds, label)
+            axes = [_axis(ds, role, dim, coordinate, label)
+                    for role, (dim, coordinate) in zip(("time", "depth", *horizontal), order)]
+            index = [found["u"].dimensions.index(dim) for dim, _ in order]
+            components = [_as_array(found[key], index) for key in ("u", "v")]
+            components.append(np.zeros_like(components[0]) if found["w"] is None
+                              else _as_array(found["w"], index))
+            values = np.stack(components, axis=-1)
+            for k, (_, flip) in enumerate(axes):
+                if flip:
+                    values = np.flip(values, axis=k)
+            grid_crs = _grid_crs(ds, found["u"], horizontal[0] == "lat", label)
+        to_grid, rotation = _placement(crs, grid_crs, np.asarray(origin, dtype=float), label)
         clock, depth, axis_y, axis_x = (a[0] for a in axes)
-        index = [variables[0].dimensions.index(dim) for dim, _ in order]
-        components = [_as_array(found[key], index) for key in ("u", "v")]
-        components.append(np.zeros_like(components[0]) if found["w"] is None
-                          else _as_array(found["w"], index))
-        values = np.stack(components, axis=-1)
-        for k, (_, flip) in enumerate(axes):
-            if flip:
-                values = np.flip(values, axis=k)
-        grid_crs = _grid_crs(ds, variables[0], horizontal[0] == "lat", label)
-        to_grid, rotation = _placement(site_crs, grid_crs, origin, label)
         return cls(label, clock, depth, axis_y, axis_x, values, to_grid, rotation)
+
+    @staticmethod
+    def check_file(path) -> None:
+        """Refuses (one line) a file that is not a CF current this reads: its velocity
+        variables, units, dimensions and coordinates, without reading the field."""
+        with _open(path) as (ds, label):
+            found, order, horizontal = _layout(ds, label)
+            for role, (dim, coordinate) in zip(("time", "depth", *horizontal), order):
+                _axis(ds, role, dim, coordinate, label)
+            _grid_crs(ds, found["u"], horizontal[0] == "lat", label)
 
     def grid_xy(self, xy_local) -> np.ndarray:
         """Grid-CRS horizontal coordinates (n, 2) of local points (n, 2)."""
@@ -198,6 +176,47 @@ class GriddedCurrent:
         velocity[:, :2] = velocity[:, :2] @ self._rotation.T
         rate[:, :2] = rate[:, :2] @ self._rotation.T
         return velocity, rate
+
+
+@contextmanager
+def _open(path):
+    """(the open dataset, the label errors begin with)."""
+    import netCDF4  # a reader's dependency, loaded when a file is read
+
+    path = Path(path)
+    label = f"ocean.file: {path.name}"
+    if not path.is_file():
+        raise FileNotFoundError(f"{label}: not found ({path}); must be a CF netCDF file")
+    try:
+        dataset = netCDF4.Dataset(path)
+    except OSError as err:
+        raise ValueError(f"{label}: cannot be read as netCDF ({err.strerror or err}); must "
+                         "be a CF-conventions netCDF file") from None
+    with dataset:
+        yield dataset, label
+
+
+def _layout(ds, label):
+    """({"u", "v", "w": variable or None}, [(dimension, coordinate)] in the order time,
+    depth, y, x, the horizontal roles ("lat", "lon") or ("y", "x"))."""
+    found = {key: _velocity_variable(ds, key) for key in ("u", "v", "w")}
+    for key in ("u", "v"):
+        if found[key] is None:
+            raise ValueError(f"{label}: no {key} velocity; must hold a variable named "
+                             f"{'/'.join(VARIABLE_NAMES[key])} or with standard_name "
+                             f"{STANDARD_NAMES[key]}")
+    variables = [v for v in found.values() if v is not None]
+    for var in variables:
+        units = getattr(var, "units", None)
+        if units is None or not is_speed_unit(units):
+            raise ValueError(f"{label}: {var.name} has units {units!r}; must be m s-1")
+        if var.dimensions != variables[0].dimensions:
+            raise ValueError(f"{label}: {var.name} is over {var.dimensions}, "
+                             f"{variables[0].name} over {variables[0].dimensions}; must share "
+                             "their dimensions")
+    roles = _dimension_roles(ds, variables[0], label)
+    horizontal = ("lat", "lon") if "lat" in roles else ("y", "x")
+    return found, [roles[r] for r in ("time", "depth", *horizontal)], horizontal
 
 
 def _velocity_variable(ds, key):

@@ -162,6 +162,13 @@ def ocean_from_raw(raw, base_dir=".", where: str = "ocean") -> OceanSpec | None:
                              "flood_towards_deg, ...) or a CSV path")
     if raw.get("file") is not None:
         kwargs["file"] = _path(raw["file"], base_dir, f"{where}.file", "a CF netCDF file")
+        from drake_auv.ocean.gridded import GriddedCurrent  # netCDF4 only when used
+        try:
+            GriddedCurrent.check_file(kwargs["file"])
+        except ValueError as err:
+            what, _, allowed = str(err).partition("; must be ")
+            raise OceanSpecError(f"{where}.file", what.removeprefix("ocean.file: "),
+                                 allowed or "a CF netCDF current") from None
     if raw.get("start_utc") is not None:
         kwargs["start_utc"] = raw["start_utc"]
     return OceanSpec(**kwargs)
