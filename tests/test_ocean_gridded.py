@@ -230,3 +230,35 @@ def test_a_lat_lon_grid_needs_a_site_crs_and_a_file_must_be_netcdf(tmp_path):
         GriddedCurrent.from_netcdf(text)
     with pytest.raises(FileNotFoundError, match="not found"):
         GriddedCurrent.from_netcdf(tmp_path / "missing.nc")
+
+
+def test_the_shipped_monterey_current_is_its_stated_tide(tmp_path):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    import synthetic_current as synthetic
+
+    shipped = synthetic.OUT
+    fresh = tmp_path / "fresh.nc"
+    synthetic.write(fresh)
+    with netCDF4.Dataset(shipped) as a, netCDF4.Dataset(fresh) as b:
+        assert "SYNTHETIC" in a.title
+        for name in ("u", "v", "time", "depth", "lat", "lon"):
+            np.testing.assert_array_equal(a[name][:], b[name][:])
+    # the tile (lon -121.825..-121.815, lat 36.800..36.810) in its site's UTM zone
+    to_utm = Transformer.from_crs("EPSG:4326", UTM, always_xy=True)
+    corners = np.array(to_utm.transform([-121.825, -121.815], [36.800, 36.810])).T
+    origin = corners.mean(axis=0)
+    field = GriddedCurrent.from_netcdf(shipped, UTM, origin)
+    start = parse_utc(synthetic.START_UTC)
+    box = (*(corners[0] - origin), *(corners[1] - origin))
+    field.check_coverage(box, 130.0, start, start + 4 * 3600.0)
+    # at the grid's centre column, 150 m deep (factor 1), 7 h in: the stated tide, turned
+    # from true to UTM grid north by the meridian convergence
+    x, y = to_utm.transform(synthetic.LON[4], synthetic.LAT[4])
+    velocity, _ = field.water(start + 7 * 3600.0, [[x - origin[0], y - origin[1], -150.0]])
+    expected, _ = synthetic.tide().velocity(start + 7 * 3600.0)
+    gamma = math.radians((synthetic.LON[4] + 123.0) * math.sin(math.radians(36.805)))
+    turn = np.array([[math.cos(gamma), -math.sin(gamma)], [math.sin(gamma), math.cos(gamma)]])
+    np.testing.assert_allclose(velocity[0, :2], turn @ expected, atol=2e-4)
