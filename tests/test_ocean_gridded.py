@@ -262,3 +262,26 @@ def test_the_shipped_monterey_current_is_its_stated_tide(tmp_path):
     gamma = math.radians((synthetic.LON[4] + 123.0) * math.sin(math.radians(36.805)))
     turn = np.array([[math.cos(gamma), -math.sin(gamma)], [math.sin(gamma), math.cos(gamma)]])
     np.testing.assert_allclose(velocity[0, :2], turn @ expected, atol=2e-4)
+
+
+def test_the_model_refuses_a_dive_its_file_does_not_cover(tmp_path):
+    from drake_auv.ocean.spec import ocean_from_raw
+
+    path = tmp_path / "land.nc"
+    write_cf(path, nan_at=(slice(None), slice(None), 0, 0))
+    to_utm = Transformer.from_crs("EPSG:4326", UTM, always_xy=True)
+    origin = np.array(to_utm.transform(-121.82, 36.805))
+    model = ocean_from_raw({"file": "land.nc", "current": {"speed_mps": 0.1}},
+                           tmp_path).model(np.random.default_rng(0), UTM, origin)
+    assert model.start_s == T0  # the file's first time
+    route = np.array([[0.0, 0.0, -5.0], [100.0, 50.0, -20.0]])
+    model.check((-500, -500, 500, 500), 50.0, 2 * 3600.0, route)
+    with pytest.raises(ValueError, match="dive's time span"):
+        model.check((-500, -500, 500, 500), 50.0, 4 * 3600.0, route)
+    x, y = to_utm.transform(LON[0] + 0.001, LAT[0] - 0.001)
+    with pytest.raises(ValueError, match="no water velocity"):
+        model.check((-500, -500, 500, 500), 50.0, 3600.0,
+                    np.vstack([route, [[x - origin[0], y - origin[1], -5.0]]]))
+    velocity, _ = model.water(1800.0, route)
+    direct, _ = model.gridded.water(T0 + 1800.0, route)
+    np.testing.assert_allclose(velocity - direct, [[0.0, 0.1, 0.0]] * 2, atol=1e-15)

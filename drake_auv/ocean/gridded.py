@@ -148,6 +148,15 @@ class GriddedCurrent:
                 f"x [{grid[:, 0].min():.6g}, {grid[:, 0].max():.6g}], y "
                 f"[{grid[:, 1].min():.6g}, {grid[:, 1].max():.6g}]; must cover the site")
 
+    def check_route(self, positions, start_s: float, end_s: float) -> None:
+        """Refuses (one line) a route whose local `positions` (n, 3) read a masked or
+        outside cell at any of the file's times within [start_s, end_s] (s since 1970 UTC)
+        or at those two instants."""
+        positions = np.atleast_2d(np.asarray(positions, dtype=float))
+        inside = self.clock_s[(self.clock_s > start_s) & (self.clock_s < end_s)]
+        for clock in (start_s, *inside, end_s):
+            self.water(float(clock), positions)
+
     def water(self, clock_s: float, positions) -> tuple[np.ndarray, np.ndarray]:
         """Velocity (n, 3) m/s in the site's local axes (x east, y north, z up) and its time
         derivative (n, 3) m/s^2 at `clock_s` (s since 1970 UTC), local `positions` (n, 3).

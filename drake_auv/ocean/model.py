@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from drake_auv.ocean.current import MeanCurrent, VerticalProfile
+from drake_auv.ocean.tides import TidalSeries
 from drake_auv.ocean.turbulence import Turbulence, perturb
 
 
@@ -34,6 +35,18 @@ class OceanModel:
         self.turbulence = turbulence if turbulence is not None else Turbulence()
         self.start_s = float(start_s)
         self._mean_velocity = self.mean.velocity()
+
+    def check(self, box, deepest_m: float, duration_s: float, route=None) -> None:
+        """Refuses (one line) a dive the sea's files do not cover: the site's local box
+        (xmin, ymin, xmax, ymax, m), its deepest point (m), the dive's `duration_s` from
+        t = 0 and, for a gridded file, the `route`'s local points (n, 3) in water cells."""
+        end_s = self.start_s + duration_s
+        if isinstance(self.tides, TidalSeries):
+            self.tides.check_span(self.start_s, end_s)
+        if self.gridded is not None:
+            self.gridded.check_coverage(box, deepest_m, self.start_s, end_s)
+            if route is not None:
+                self.gridded.check_route(route, self.start_s, end_s)
 
     def horizontal(self, t: float, deviation) -> tuple[np.ndarray, np.ndarray]:
         """The depth-uniform current U_turb (2,) m/s and its rate (2,) m/s^2 at time t."""
