@@ -93,5 +93,6 @@ class VerticalProfile:
         if self.seabed_depth_m is not None:
             layer = (self.seabed_depth_m if self.boundary_layer_m is None
                      else self.boundary_layer_m)
-            return np.clip((z + self.seabed_depth_m) / layer, 0.0, 1.0) ** self.exponent
+            return np.minimum(np.maximum((z + self.seabed_depth_m) / layer, 0.0), 1.0) \
+                ** self.exponent
         return np.ones_like(z)

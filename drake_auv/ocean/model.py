@@ -62,12 +62,11 @@ class OceanModel:
               ) -> tuple[np.ndarray, np.ndarray]:
         """World-frame water velocity (n, 3) m/s and acceleration (n, 3) m/s^2 at time `t`
         (s) and `positions` (n, 3), m; `deviation` the turbulence state (2,)."""
-        positions = np.atleast_2d(np.asarray(positions, dtype=float))
-        current, rate = self.horizontal(t, np.asarray(deviation, dtype=float))
-        factor = self.profile.factor_at(positions[:, 2])[:, None]
-        velocity = np.zeros_like(positions)
-        acceleration = np.zeros_like(positions)
-        velocity[:, :2], acceleration[:, :2] = factor * current, factor * rate
+        positions = np.asarray(positions, dtype=float).reshape(-1, 3)
+        current, rate = self.horizontal(t, deviation)
+        factor = self.profile.factor_at(positions[:, 2:3])
+        velocity = np.concatenate([factor * current, np.zeros_like(factor)], axis=1)
+        acceleration = np.concatenate([factor * rate, np.zeros_like(factor)], axis=1)
         for part in (self.gridded, self.waves):
             if part is not None:
                 clock = self.start_s + t if part is self.gridded else t

@@ -25,7 +25,9 @@ OCEAN_PERIOD_S = 0.1  # the turbulence's update period, s
 class Ocean(LeafSystem):
     """Input `state` (12); output `water` (6)."""
 
-    def __init__(self, model: OceanModel, seed: int = 0, period: float = OCEAN_PERIOD_S):
+    def __init__(self, model: OceanModel, seed=0, period: float = OCEAN_PERIOD_S):
+        """`seed`: an int or a `numpy.random.SeedSequence` (the turbulence's stream);
+        `period`: s between turbulence updates."""
         super().__init__()
         self.model, self.period = model, float(period)
         self.state_input = self.DeclareVectorInputPort("state", VehicleState.size())

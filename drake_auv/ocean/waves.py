@@ -3,13 +3,15 @@
 The sea surface is a sum of N components i of amplitude a_i, angular frequency w_i,
 wavenumber k_i, direction theta_i (towards, clockwise from north) and random phase phi_i:
 
-    eta(t, x, y) = sum_i a_i cos(psi_i),  psi_i = k_i (x sin theta_i + y cos theta_i) - w_i t + phi_i
+    eta(t, x, y) = sum_i a_i cos(psi_i)
+    psi_i = k_i (x sin theta_i + y cos theta_i) - w_i t + phi_i
 
 with the finite-depth dispersion relation w^2 = g k tanh(k h) solved per component (Newton,
 from Guo's explicit approximation). Below the surface (-h <= z <= 0) the orbital velocity and
 its local time derivative are, along the component's direction and up,
 
-    u_h = a w C cos psi,   w_z = a w S sin psi,   du_h/dt = a w^2 C sin psi,   dw_z/dt = -a w^2 S cos psi
+    u_h = a w C cos psi,        w_z = a w S sin psi
+    du_h/dt = a w^2 C sin psi,  dw_z/dt = -a w^2 S cos psi
     C = cosh(k (z + h)) / sinh(k h),   S = sinh(k (z + h)) / sinh(k h)
 
 (deep water, h -> inf: C = S = exp(k z)); z is clamped to [-h, 0] (no stretching above the
@@ -111,14 +113,15 @@ class WaveField:
         # q = 1 / (1 - exp(-2kh)) (deep water: C = S = exp(kz)); q is folded into the gains
         q = 1.0 if h is None else 1.0 / -np.expm1(-2.0 * self.k * h)
         aw, aw2 = self.amplitude * self.omega * q, self.amplitude * self.omega ** 2 * q
-        zero = np.zeros_like(aw)
-        # (components, 3) gains: horizontal along each direction, and vertical
-        self._horizontal_v = np.stack([aw * np.sin(self.direction),
-                                       aw * np.cos(self.direction), zero], axis=1)
-        self._horizontal_a = np.stack([aw2 * np.sin(self.direction),
-                                       aw2 * np.cos(self.direction), zero], axis=1)
-        self._vertical_v = np.stack([zero, zero, aw], axis=1)
-        self._vertical_a = np.stack([zero, zero, -aw2], axis=1)
+        east, north = np.sin(self.direction), np.cos(self.direction)
+        # one (4 components, 6) gain matrix: the rows multiply [C cos, S sin, C sin, S cos]
+        # of each component, the columns give [velocity xyz, acceleration xyz]
+        n = spectrum.components
+        self._gains = np.zeros((4 * n, 6))
+        self._gains[:n, 0], self._gains[:n, 1] = aw * east, aw * north
+        self._gains[n:2 * n, 2] = aw
+        self._gains[2 * n:3 * n, 3], self._gains[2 * n:3 * n, 4] = aw2 * east, aw2 * north
+        self._gains[3 * n:, 5] = -aw2
 
     def _phase(self, t: float, positions: np.ndarray) -> np.ndarray:
         return (positions[:, :1] * self._kx + positions[:, 1:2] * self._ky
@@ -133,8 +136,9 @@ class WaveField:
         and world positions (n, 3) (x east, y north, z up)."""
         positions = np.atleast_2d(np.asarray(positions, dtype=float))
         h = self.spectrum.depth_m
-        z = np.minimum(positions[:, 2:3], 0.0) if h is None else np.clip(
-            positions[:, 2:3], -h, 0.0)
+        z = np.minimum(positions[:, 2:3], 0.0)
+        if h is not None:
+            z = np.maximum(z, -h)
         grow = np.exp(z * self.k)  # (n, components)
         if h is None:
             c = s = grow
@@ -143,9 +147,8 @@ class WaveField:
             c, s = grow + mirror, grow - mirror  # C and S without q
         psi = self._phase(t, positions)
         cos, sin = np.cos(psi), np.sin(psi)
-        velocity = (c * cos) @ self._horizontal_v + (s * sin) @ self._vertical_v
-        acceleration = (c * sin) @ self._horizontal_a + (s * cos) @ self._vertical_a
-        return velocity, acceleration
+        both = np.concatenate([c * cos, s * sin, c * sin, s * cos], axis=1) @ self._gains
+        return both[:, :3], both[:, 3:]
 
 
 def _spreading_draw(s: float, rng: np.random.Generator, n: int) -> np.ndarray:
