@@ -137,3 +137,14 @@ def test_missions_take_an_ocean_section_and_set_its_keys():
         with pytest.raises(MissionFileError) as err:
             load_mission("boulder", overrides=sets)
         assert str(err.value) == text
+
+
+def test_a_campaign_varies_the_sea():
+    from drake_auv.campaign.grid import expand_runs, parse_vary
+
+    runs = expand_runs("boulder", [0, 1], parse_vary(["ocean.current.speed_mps=0,0.2,0.4"]),
+                       overrides=["ocean.current.towards_deg=90"])
+    assert len(runs) == 6
+    speeds = sorted({run.mission["ocean"]["current"]["speed_mps"] for run in runs})
+    assert speeds == [0.0, 0.2, 0.4]
+    assert all(run.mission["ocean"]["current"]["towards_deg"] == 90.0 for run in runs)
