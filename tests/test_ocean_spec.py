@@ -148,3 +148,20 @@ def test_a_campaign_varies_the_sea():
     speeds = sorted({run.mission["ocean"]["current"]["speed_mps"] for run in runs})
     assert speeds == [0.0, 0.2, 0.4]
     assert all(run.mission["ocean"]["current"]["towards_deg"] == 90.0 for run in runs)
+
+
+def test_a_tidal_csv_drives_the_tide_and_its_span_is_checked(tmp_path):
+    (tmp_path / "tide.csv").write_text(
+        "time_utc,east_mps,north_mps\n2024-03-01T00:00:00Z,0.0,0.2\n"
+        "2024-03-01T02:00:00Z,0.2,-0.2\n")
+    spec = ocean_from_raw({"tides": "tide.csv", "start_utc": "2024-03-01T00:30:00Z"},
+                          tmp_path)
+    assert spec.tides_file == (tmp_path / "tide.csv").resolve()
+    assert ocean_from_raw(ocean_to_raw(spec), tmp_path) == spec
+    model = spec.model(np.random.default_rng(0))
+    velocity, acceleration = model.water(1800.0, [[0.0, 0.0, -5.0]])  # one hour in
+    np.testing.assert_allclose(velocity[0], [0.1, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(acceleration[0], [0.1 / 3600, -0.2 / 3600, 0.0], atol=1e-15)
+    model.check((0, 0, 1, 1), 10.0, 3600.0)
+    with pytest.raises(ValueError, match="not the dive's"):
+        model.check((0, 0, 1, 1), 10.0, 2 * 3600.0)

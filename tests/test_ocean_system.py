@@ -47,6 +47,11 @@ def test_waves_give_the_model_s_velocity_and_acceleration_at_the_vehicle():
     np.testing.assert_array_equal(water.velocity, velocity[0])
     np.testing.assert_array_equal(water.acceleration, acceleration[0])
     assert np.any(water.acceleration != 0.0)
+    context.SetTime(13.0)  # the output follows time (its cache depends on it)
+    later = ocean.GetOutputPort("water").Eval(context)
+    np.testing.assert_array_equal(later, np.concatenate(model.water(13.0, [[3.0, -4.0, -2.0]]),
+                                                        axis=1)[0])
+    assert ocean.HasDirectFeedthrough(0, 0)  # state -> water
 
 
 def test_turbulence_lives_in_the_context_and_is_seeded():

@@ -39,8 +39,10 @@ class Ocean(LeafSystem):
         if model.turbulence.enabled:
             self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0,
                                                         self._update_turbulence)
-        self.water_output = self.DeclareVectorOutputPort("water", Water.size(),
-                                                         self._calc_water)
+        self.water_output = self.DeclareVectorOutputPort(
+            "water", Water.size(), self._calc_water, prerequisites_of_calc={
+                self.time_ticket(), self.input_port_ticket(self.state_input.get_index()),
+                self.discrete_state_ticket(self._turbulence)})
 
     def turbulence(self, context) -> np.ndarray:
         """The turbulence deviation (2,): speed (m/s), direction (rad)."""
