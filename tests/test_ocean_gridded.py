@@ -25,8 +25,9 @@ def _values(shape, seed):
 
 
 def write_cf(path, *, geographic=True, names=("u", "v"), units="m s-1", standard=True,
-             w=False, nan_at=None, grid_mapping=None, xy=None, dims_order=None):
+             w=False, nan_at=None, grid_mapping=None, xy=None, dims_order=None, lon=LON):
     """A CF current over (time, depth, lat, lon) or (time, depth, y, x); returns u, v."""
+    longitudes = lon
     with netCDF4.Dataset(path, "w") as ds:
         ny, nx = (LAT.size, LON.size) if geographic else (len(xy[1]), len(xy[0]))
         hname, xname = ("lat", "lon") if geographic else ("y", "x")
@@ -46,7 +47,7 @@ def write_cf(path, *, geographic=True, names=("u", "v"), units="m s-1", standard
             lat[:] = LAT
             lon = ds.createVariable("lon", "f8", ("lon",))
             lon.units, lon.standard_name = "degrees_east", "longitude"
-            lon[:] = LON
+            lon[:] = longitudes
         else:
             for name, values, standard_name in (("y", xy[1], "projection_y_coordinate"),
                                                 ("x", xy[0], "projection_x_coordinate")):
@@ -141,6 +142,18 @@ def test_a_lat_lon_grid_is_placed_in_a_utm_site_and_its_vectors_turned(tmp_path)
     assert np.hypot(*velocity[0, :2]) == pytest.approx(np.hypot(u[i, j, k, m], v[i, j, k, m]),
                                                        rel=1e-6)
     assert velocity[0, 2] != 0.0  # w read
+
+
+def test_longitudes_from_0_to_360_are_read(tmp_path):
+    east, west = tmp_path / "east.nc", tmp_path / "west.nc"
+    u, v = write_cf(east, lon=LON + 360.0)  # HYCOM's convention: 238.16 for -121.84
+    write_cf(west)
+    to_utm = Transformer.from_crs("EPSG:4326", UTM, always_xy=True)
+    origin = np.array(to_utm.transform(-121.82, 36.805))
+    point = [[120.0, -80.0, -12.0]]
+    a, _ = GriddedCurrent.from_netcdf(east, UTM, origin).water(T0 + 600.0, point)
+    b, _ = GriddedCurrent.from_netcdf(west, UTM, origin).water(T0 + 600.0, point)
+    np.testing.assert_allclose(a, b, rtol=1e-9)
 
 
 def test_a_grid_mapping_places_a_projected_grid(tmp_path):

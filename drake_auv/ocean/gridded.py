@@ -102,8 +102,9 @@ class GriddedCurrent:
                 if flip:
                     values = np.flip(values, axis=k)
             grid_crs = _grid_crs(ds, found["u"], horizontal[0] == "lat", label)
-        to_grid, rotation = _placement(crs, grid_crs, np.asarray(origin, dtype=float), label)
         clock, depth, axis_y, axis_x = (a[0] for a in axes)
+        to_grid, rotation = _placement(crs, grid_crs, np.asarray(origin, dtype=float), label,
+                                       east_of_180=axis_x[-1] > 180.0)
         return cls(label, clock, depth, axis_y, axis_x, values, to_grid, rotation)
 
     @staticmethod
@@ -324,9 +325,9 @@ def _grid_crs(ds, var, geographic: bool, label):
     return CRS.from_epsg(4326) if geographic else None
 
 
-def _placement(site_crs, grid_crs, origin, label):
+def _placement(site_crs, grid_crs, origin, label, east_of_180=False):
     """(local xy -> grid xy function or None, 2x2 rotation from the grid's velocity axes to
-    the site's)."""
+    the site's); `east_of_180`: a geographic grid's longitudes run in [0, 360) (HYCOM's)."""
     if grid_crs is None or (site_crs is not None and CRS.from_user_input(site_crs) == grid_crs):
         if grid_crs is not None and grid_crs.is_geographic:
             raise ValueError(f"{label}: the site's CRS {site_crs} is geographic; must be "
@@ -341,7 +342,10 @@ def _placement(site_crs, grid_crs, origin, label):
 
     def to_grid(xy):
         gx, gy = transformer.transform(xy[:, 0] + origin[0], xy[:, 1] + origin[1])
-        return np.stack([np.asarray(gx, dtype=float), np.asarray(gy, dtype=float)], axis=1)
+        gx = np.asarray(gx, dtype=float)
+        if east_of_180 and grid_crs.is_geographic:
+            gx = np.mod(gx, 360.0)
+        return np.stack([gx, np.asarray(gy, dtype=float)], axis=1)
 
     centre = to_grid(np.zeros((1, 2)))[0]
     step = 1e-5 if grid_crs.is_geographic else 1.0
