@@ -175,6 +175,11 @@ Wrench = _signal(
 Thrust = _signal(
     "Thrust", THRUSTER_NAMES,
     "The five thrusts (N), in the order of `vehicle.model.THRUSTER_NAMES`.")
+Water = _signal(
+    "Water", ("vx", "vy", "vz", "ax", "ay", "az"),
+    "`Ocean.water` (6): the water's velocity (m/s) and acceleration (m/s^2) at the vehicle, "
+    "world frame (x east, y north, z up).",
+    velocity=("vx", "vz"), acceleration=("ax", "az"))
 
 _STATE_PORTS = ("state", "estimated_state", "true_state", "estimated_in")
 # (system class, port name) or port name -> view; the class entry wins. Not named: arrays of
@@ -183,7 +188,7 @@ PORT_SIGNALS = {
     **{name: VehicleState for name in _STATE_PORTS},
     "reference": Reference, "response_reference": Reference, "leg": LegSignal,
     "response": Response, "profile": Profile, "step": ReplanningStep, "wrench": Wrench,
-    "thrust": Thrust, "thrust_command": Thrust,
+    "thrust": Thrust, "thrust_command": Thrust, "water": Water,
     "path_status": PathStatus, "replanner_status": ReplannerStatus,
     "autopilot_status": PilotStatus, "explorer_status": ExplorerStatus,
     ("PathReference", "status"): PathStatus, ("Replanner", "status"): ReplannerStatus,

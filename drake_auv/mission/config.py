@@ -22,6 +22,7 @@ from pathlib import Path
 import yaml
 
 from drake_auv.mission.overrides import apply_overrides, one_line
+from drake_auv.ocean.spec import OceanSpecError, ocean_from_raw, ocean_to_raw
 from drake_auv.mission.spec import (FAULT_CLASSES, FLY_FORMATS, REALISTIC_NOISE, SECTIONS,
                                     STEP_KINDS, TOP_KEYS, ExploreStep, FaultsSpec, FlyStep, FollowStep,
                                     LimitsSpec, MissionFileError, MissionSpec,
@@ -131,6 +132,13 @@ class _Reader:
         return FaultsSpec(**{name: self.section(cls, raw.get(name), f"faults.{name}")
                              for name, cls in FAULT_CLASSES.items()})
 
+    def ocean(self, raw):
+        """The `ocean:` section (`drake_auv.ocean.spec`): None for still water."""
+        try:
+            return ocean_from_raw(raw, self.base_dir)
+        except OceanSpecError as err:
+            self.fail(err.where, err.what, err.allowed)
+
     def steps(self, raw) -> tuple:
         if not isinstance(raw, list) or not raw:
             self.fail("steps", f"{raw!r} is not a non-empty list", _STEP_ALLOWED)
@@ -186,7 +194,8 @@ class _Reader:
         self.prior_needed(sections["site"], steps)
         return MissionSpec(**top, **sections,
                            sonar_noise=self.sonar_noise(raw.get("sonar_noise")),
-                           faults=self.faults(raw.get("faults")), steps=steps, source=source)
+                           faults=self.faults(raw.get("faults")),
+                           ocean=self.ocean(raw.get("ocean")), steps=steps, source=source)
 
 
 def _has_default(cls, path) -> bool:
@@ -304,13 +313,14 @@ def _plain(obj) -> dict:
 
 def mission_to_dict(spec: MissionSpec) -> dict:
     """The validated mission as a plain YAML-able mapping, defaults filled in, paths absolute
-    (`mission_from_dict` reads it back to an equal spec)."""
+    (`mission_from_dict` reads it back to an equal spec); still water leaves `ocean` out."""
     noise = spec.sonar_noise
+    sea = {} if spec.ocean is None else dict(ocean=ocean_to_raw(spec.ocean))
     return dict(name=spec.name, description=spec.description, seed=spec.seed,
                 **{key: _plain(getattr(spec, key)) for key in SECTIONS},
                 sonar_noise=dict(noise.params) if noise.preset == "custom" else noise.preset,
                 faults={name: _plain(getattr(spec.faults, name)) for name in FAULT_CLASSES},
-                steps=[{s.KIND: _plain(s)} for s in spec.steps])
+                **sea, steps=[{s.KIND: _plain(s)} for s in spec.steps])
 
 
 def _resolve(source) -> Path:

@@ -14,6 +14,9 @@ import yaml
 
 from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, STEP_KINDS,
                                     TOP_KEYS, MissionFileError, mission_keys)
+from drake_auv.ocean.spec import OCEAN_KEYS, PARTS
+from drake_auv.ocean.tides import TidalConstituent
+from drake_auv.params import checks
 from drake_auv.sonar.noise import SonarNoise
 
 
@@ -89,6 +92,34 @@ def _set(raw: dict, parts: list[str], value, label: str):
         if not isinstance(raw[head].get(rest[0]), dict):
             raw[head][rest[0]] = {}
         node, keys, offset = raw[head][rest[0]], tuple(mission_keys(FAULT_CLASSES[rest[0]])), 2
+    elif head == "ocean":  # ocean.<part>.<key>, ocean.tides.<i>.<key>, ocean.<value>
+        if not isinstance(raw.get(head), dict):  # still water ("none") becomes a sea
+            raw[head] = {}
+        sea, part = raw[head], rest[0]
+        if part not in OCEAN_KEYS:
+            fail(1, "unknown key", OCEAN_KEYS)
+        if len(rest) == 1:
+            sea[part] = value
+            return
+        if part == "tides":
+            tides = sea.get("tides")
+            count = len(tides) if isinstance(tides, list) else 0
+            if not (rest[1].isdigit() and int(rest[1]) < count):
+                fail(2, "no such constituent",
+                     [str(i) for i in range(count)] or ["(the file has none)"])
+            index = int(rest[1])
+            if len(rest) == 2:
+                tides[index] = value
+                return
+            if not isinstance(tides[index], dict):
+                tides[index] = {}
+            node, keys, offset = tides[index], tuple(checks(TidalConstituent)), 3
+        elif part in PARTS:
+            if not isinstance(sea.get(part), dict):
+                sea[part] = {}
+            node, keys, offset = sea[part], tuple(checks(PARTS[part])), 2
+        else:
+            fail(1, f"{part} is a value, not a section", [f"ocean.{part}"])
     elif head in SECTIONS:
         if not isinstance(raw.get(head), dict):
             raw[head] = {}

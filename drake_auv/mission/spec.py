@@ -25,6 +25,7 @@ from typing import ClassVar
 
 from drake_auv.exploration.planner import ExploreParameters
 from drake_auv.following.behaviours import FollowingParams
+from drake_auv.ocean.spec import OceanSpec
 from drake_auv.params import CHECK, NESTED, like, nested, param, validate
 from drake_auv.replanning.section import OPTIMIZERS, ReplanningParameters
 from drake_auv.scenarios import list_scenarios
@@ -449,6 +450,7 @@ class MissionSpec:
     payload: PayloadSpec = PayloadSpec()
     limits: LimitsSpec = LimitsSpec()
     faults: FaultsSpec = FaultsSpec()
+    ocean: OceanSpec | None = None  # None: still water (`ocean: none`)
     source: Path | None = field(default=None, compare=False)
 
     def __post_init__(self):
@@ -460,4 +462,4 @@ class MissionSpec:
 SECTIONS = dict(site=SiteSpec, navigation=NavigationParams, replanner=ReplannerSpec,
                 payload=PayloadSpec, limits=LimitsSpec)
 TOP_KEYS = ("name", "description", "seed", "site", "navigation", "sonar_noise", "replanner",
-            "payload", "limits", "faults", "steps")
+            "payload", "limits", "faults", "ocean", "steps")
