@@ -169,6 +169,10 @@ NavigationError = _signal(
     "white noise (m, rad), the true position at the last update (m), the update index, "
     "whether an update has happened (0/1).",
     drift=("drift_x", "drift_y"), noise=("noise_x", "noise_yaw"), last=("last_x", "last_y"))
+Water = _signal(
+    "Water", ("vx", "vy", "vz", "ax", "ay", "az"),
+    "The water at the vehicle (6), world frame (x east, y north, z up): velocity (m/s), then "
+    "acceleration (m/s^2).", velocity=("vx", "vz"), acceleration=("ax", "az"))
 Wrench = _signal(
     "Wrench", ("X", "Y", "Z", "N"),
     "The tracker's body-frame wrench (4): forces along x, y, z (N) and the moment about z (N m).")
@@ -183,7 +187,7 @@ PORT_SIGNALS = {
     **{name: VehicleState for name in _STATE_PORTS},
     "reference": Reference, "response_reference": Reference, "leg": LegSignal,
     "response": Response, "profile": Profile, "step": ReplanningStep, "wrench": Wrench,
-    "thrust": Thrust, "thrust_command": Thrust,
+    "thrust": Thrust, "thrust_command": Thrust, "thrust_saturation": Thrust, "water": Water,
     "path_status": PathStatus, "replanner_status": ReplannerStatus,
     "autopilot_status": PilotStatus, "explorer_status": ExplorerStatus,
     ("PathReference", "status"): PathStatus, ("Replanner", "status"): ReplannerStatus,
