@@ -164,11 +164,15 @@ LegProgress = _signal(
     "(rad), where the leg began (m).", start=("start_x", "start_y"))
 NavigationError = _signal(
     "NavigationError", ("drift_x", "drift_y", "noise_x", "noise_y", "noise_z", "noise_yaw",
-                        "last_x", "last_y", "index", "started"),
-    "The `Navigation` system's error state (10): the dead-reckoning drift (m), this update's "
+                        "last_x", "last_y", "index", "started", "current_drift_x",
+                        "current_drift_y", "water_tracking"),
+    "The `Navigation` system's error state (13): the dead-reckoning drift (m), this update's "
     "white noise (m, rad), the true position at the last update (m), the update index, "
-    "whether an update has happened (0/1).",
-    drift=("drift_x", "drift_y"), noise=("noise_x", "noise_yaw"), last=("last_x", "last_y"))
+    "whether an update has happened (0/1), the part of the drift the current caused while the "
+    "DVL tracked the water (m), whether the last update tracked the water (1) or the bottom "
+    "(0).",
+    drift=("drift_x", "drift_y"), noise=("noise_x", "noise_yaw"), last=("last_x", "last_y"),
+    current_drift=("current_drift_x", "current_drift_y"))
 Water = _signal(
     "Water", ("vx", "vy", "vz", "ax", "ay", "az"),
     "The water at the vehicle (6), world frame (x east, y north, z up): velocity (m/s), then "
