@@ -7,7 +7,7 @@ from pydrake.systems.analysis import Simulator
 from drake_auv.planning import Path
 from drake_auv.vehicle.control import TrackingController, TrackingGains, axis_force_limits
 from drake_auv.vehicle.diagram import build_tracking_diagram
-from drake_auv.vehicle.model import Girona500Params
+from drake_auv.vehicle.model import Girona500Model, Girona500Params, allocate_thrust
 
 LANE = Path(np.array([(0.0, 0.0, -10.0), (30.0, 0.0, -10.0)]), 0.0, (0.0, 0.0, -1.0))
 
@@ -66,6 +66,10 @@ def test_anti_windup_clamps_and_freezes_the_integral():
     reference[1] = 0.5  # 0.5 m off: the PD is far from saturating, the integral grows
     _, integral = controller.wrench(reference, state, np.zeros(3), 0.05)
     np.testing.assert_allclose(integral, [0.0, 0.025, 0.0])
+    reference[4] = 0.1  # and a velocity error, weighted by kd / kp = 2 s
+    _, integral = controller.wrench(reference, state, np.zeros(3), 0.05)
+    np.testing.assert_allclose(integral, [0.01, 0.025, 0.0])
+    reference[4] = 0.0
     _, integral = controller.wrench(reference, state, np.full(3, 1e3), 0.05)
     np.testing.assert_allclose(integral, controller.integral_limit)  # clamped
     reference[1] = 5.0  # 5 m off: saturated, the integral does not wind up ...
@@ -75,3 +79,28 @@ def test_anti_windup_clamps_and_freezes_the_integral():
     # ... but unwinds what it holds against the error
     _, integral = controller.wrench(reference, state, np.array([0.0, -2.0, 0.0]), 0.05)
     np.testing.assert_allclose(integral, [0.0, -2.0 + 0.25, 0.0])
+
+
+def _carrot(gains, current, seconds=60.0, dt=0.05):
+    """The model under the controller with a reference re-anchored on the vehicle every
+    period (what profile following does): hold the position, move at 0.3 m/s along x, in a
+    head current along -x. Returns the final ground speed, m/s."""
+    params = Girona500Params()
+    model, controller = Girona500Model(params), TrackingController(params, gains)
+    x, integral = np.zeros(17), np.zeros(3)
+    water = np.array([-current, 0.0, 0.0, 0.0, 0.0, 0.0])
+    for _ in range(int(seconds / dt)):
+        reference = np.zeros(8)
+        reference[:3], reference[4] = x[:3], 0.3
+        wrench, integral = controller.wrench(reference, x[:12], integral, dt)
+        thrust = allocate_thrust(controller.allocation, wrench, params.max_thrust)
+        x = model.step(x, thrust, dt, water)
+    return x[6]
+
+
+def test_integral_restores_the_speed_of_a_re_anchored_reference():
+    """Re-anchored, the position error stays 0: an integral of the position alone would not
+    see the 0.3 m/s head current that slows the vehicle; the PD's own command does."""
+    assert _carrot(TrackingGains(), 0.3) == pytest.approx(0.3, abs=0.003)
+    assert _carrot(TrackingGains(ki=0.0), 0.3) < 0.2
+    assert _carrot(TrackingGains(), 0.0) == pytest.approx(0.3, abs=1e-3)

@@ -3,7 +3,7 @@
 Position and heading are controlled independently: a hovering vehicle can look one way and move
 another. The law is a computed-force PID in the world frame:
 
-    a = kp e_p + kd (v_ref - v) + ki int(e_p)          (world, m/s^2)
+    a = kp e_p + kd e_v + ki int(e_p + (kd / kp) e_v)  (world, m/s^2; e_v = v_ref - v)
     F_body = M_t R_WB^T a + D(v_body) v_body           (surge, sway, heave)
     N = I_z (kp_yaw e_yaw + kd_yaw (r_ref - r)) + D(r_ref) r_ref
 
@@ -12,11 +12,14 @@ translation the damping at the vehicle's velocity is cancelled, so in still wate
 dynamics are the chosen third-order ones and the reference velocity is tracked without lag. In
 a current the damping acts on the velocity through the water, which the controller does not
 know: the integral supplies the difference (D(v_c) v_c to hold station), so a steady current
-leaves no steady error. Anti-windup: the integral's contribution ki int(e_p) is clamped per
-world axis to the acceleration the thrusters can give along the weakest body axis that serves
-it (horizontal: sway, one thruster; vertical: heave, two), and while the thrusters saturate the
-integral does not grow (conditional integration: a component only integrates an error that
-shrinks it).
+leaves no steady error. It integrates the PD's own command over kp (the series PID form), not
+the position error alone: a behaviour that re-anchors its reference on the vehicle at every
+update (profile following) keeps the position error near zero, and there only the velocity
+error shows what the current takes away (and undoes what a transient wound up). Anti-windup:
+the integral's contribution is clamped per world axis to the acceleration the thrusters can
+give along the weakest body axis that serves it (horizontal: sway, one thruster; vertical:
+heave, two), and while the thrusters saturate the integral does not grow (conditional
+integration: a component only integrates what shrinks it).
 
 In yaw the linear damping (130 N m s) is large against I_z (8 kg m^2): cancelling it on the
 measured rate through thrusters that lag 0.2 s acts like a negative inertia (about 130 x 0.2 =
@@ -47,23 +50,35 @@ class TrackingGains:
 
     Attributes:
         kp: position stiffness, 1/s^2.  kd: velocity gain, 1/s.
-        ki: integral gain, 1/s^3 (0: no integral action); with kp = 1 and kd = 2 the default
-            0.1 puts the poles of s^3 + kd s^2 + kp s + ki at -1.28, -0.59 and -0.13 1/s, all
-            real: a steady current's error decays with a 7.5 s time constant, no overshoot.
+        ki: integral gain, 1/s^3 (0: no integral action). The integral is of the PD's own
+            command over kp, e_p + (kd / kp) e_v (the series PID form): it sees a steady
+            position error, and also the velocity a behaviour asks for but does not get when
+            it re-anchors its reference on the vehicle every update. The default 0.2 puts the
+            poles of s^3 + kd s^2 + (kp + ki kd / kp) s + ki at -0.91 +- 0.49j and -0.19 1/s:
+            a steady current's error decays with a 5.3 s time constant.
         kp_yaw: 1/s^2.  kd_yaw: 1/s, added to the vehicle's own yaw damping (see above).
     """
 
     kp: float = param(1.0, low=0.0, high=1e3, unit="1/s^2")
     kd: float = param(2.0, low=0.0, high=1e3, unit="1/s")
-    ki: float = param(0.1, low=0.0, high=1e3, unit="1/s^3")
+    ki: float = param(0.2, low=0.0, high=1e3, unit="1/s^3")
     kp_yaw: float = param(16.0, low=0.0, high=1e3, unit="1/s^2")
     kd_yaw: float = param(0.0, low=0.0, high=1e3, unit="1/s")
 
     def __post_init__(self):
         validate(self)
-        if self.ki > 0 and not self.ki < self.kp * self.kd:
-            raise ValueError(f"TrackingGains.ki must be < kp * kd = {self.kp * self.kd:g} for a "
-                             f"stable loop, got {self.ki}")
+        if self.ki > 0 and not self.ki < self.ki_bound:
+            raise ValueError(f"TrackingGains.ki must be < {self.ki_bound:g} for a stable loop with "
+                             f"kp = {self.kp:g} and kd = {self.kd:g}, got {self.ki}")
+
+    @property
+    def ki_bound(self) -> float:
+        """The largest stable ki, 1/s^3: Routh on s^3 + kd s^2 + (kp + ki kd / kp) s + ki
+        asks kd kp^2 > ki (kp - kd^2) (any ki when kd^2 >= kp), with kp, kd > 0."""
+        if self.kp <= 0 or self.kd <= 0:
+            return 0.0
+        margin = self.kp - self.kd ** 2
+        return math.inf if margin <= 0 else self.kd * self.kp ** 2 / margin
 
 
 def wrap_angle(a):
@@ -108,6 +123,7 @@ class TrackingController:
         accel = axis_force_limits(params) / self.mass_t
         accel = np.array([accel[:2].min(), accel[:2].min(), accel[2]])
         self.integral_limit = accel / self.gains.ki if self.gains.ki > 0 else np.zeros(3)
+        self.lead = self.gains.kd / self.gains.kp if self.gains.kp > 0 else 0.0  # s
 
     def wrench(self, reference: np.ndarray, state: np.ndarray, integral: np.ndarray,
                dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -117,7 +133,8 @@ class TrackingController:
         rot = rotation_world_body(state.roll, state.pitch, state.yaw)
         v_body = state.linear_velocity
         e_p = reference.position - state.position
-        accel = g.kp * e_p + g.kd * (reference.velocity - rot @ v_body)
+        e_v = reference.velocity - rot @ v_body
+        accel = g.kp * e_p + g.kd * e_v
         damping = self.d_lin[:3] * v_body
         quadratic = self.d_quad[:3] * np.abs(v_body) * v_body
         up = self.net_up * rot[2]
@@ -129,12 +146,12 @@ class TrackingController:
         wrench = np.empty(4)
         wrench[3] = yaw_moment
         integral = np.asarray(integral, dtype=float)
-        grow = e_p * dt
+        grow = (e_p + self.lead * e_v) * dt  # the PD's own command over kp, integrated
         if g.ki > 0:
             wrench[:3] = self.mass_t * (rot.T @ (accel + g.ki * integral))
             wrench[:3] += damping + quadratic - up
             if np.abs(self.allocation @ wrench).max() > self.max_thrust:
-                grow = np.where(e_p * integral >= 0.0, 0.0, grow)  # only unwind while saturated
+                grow = np.where(grow * integral >= 0.0, 0.0, grow)  # only unwind while saturated
         integral = np.clip(integral + grow, -self.integral_limit, self.integral_limit)
         wrench[:3] = self.mass_t * (rot.T @ (accel + g.ki * integral)) + damping + quadratic - up
         return wrench, integral
