@@ -21,7 +21,7 @@ WATER = np.array([0.3, -0.2, 0.0, 0.0, 0.0, 0.0])
 def _walk(params, water, lock, seconds=100.0, velocity=(0.5, 0.0)):
     """Updates along a straight line at `velocity` (m/s) for `seconds`."""
     error, state = np.zeros(ERROR_SIZE), np.zeros(12)
-    for k in range(int(round(seconds / params.period)) + 1):
+    for k in range(round(seconds / params.period) + 1):
         state[:2] = np.multiply(velocity, k * params.period)
         error = update_error(params, error, state, water, lock)
     return NavigationError(error), state

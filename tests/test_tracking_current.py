@@ -50,7 +50,7 @@ def test_integral_action_rejects_a_steady_cross_current():
 def test_a_current_beyond_the_thrusters_saturates_them():
     """1.5 m/s across needs d U^2 = 333 N of sway, twice what its one thruster gives: the sway
     thruster is at its limit nearly all the time and the vehicle is swept off."""
-    t, x, _, saturation = _fly_across(1.5)
+    _, x, _, saturation = _fly_across(1.5)
     assert saturation[4] > 0.9 and np.all(saturation[:4] < 0.05)
     assert x[1, -1] > 20.0
 

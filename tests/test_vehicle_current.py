@@ -15,7 +15,7 @@ def _drift(model, water_of, seconds, x0=None):
     and the 17-states at each step's end."""
     x = np.zeros(17) if x0 is None else x0.copy()
     times, states, previous = [], [], None
-    for k in range(int(round(seconds / DT))):
+    for k in range(round(seconds / DT)):
         water = water_of(k * DT)
         x = model.step(x, np.zeros(5), DT, water, previous)
         previous = water[3:]
