@@ -17,10 +17,15 @@ estimated state, as the multibeam's are): the octree mapper inserts them, so the
 structure's flat top under the vehicle is mapped where neither the side-looking multibeam nor
 the horizontal profiler sees it (a beam grazing a flat top returns nothing to them).
 
+Bottom lock is also what the navigation needs: with it the DVL measures the velocity over
+ground; without it (the seabed beyond `max_range`, or too few beams) it tracks the water and
+dead reckoning drifts with the current (`drake_auv.vehicle.navigation`).
+
 Ports: inputs `true_state` (12), `estimated_state` (12); outputs `altitude` (1, m, NaN
-without bottom lock), `seabed_elevation` (1: the measured seabed under the vehicle,
-`z_est - altitude`: the elevation in the navigation frame, NaN without lock) and `returns`
-(`SonarReturns` of the four beams, navigation frame).
+without bottom lock), `bottom_lock` (1: 1 with bottom lock at the last measurement, else 0:
+the `Navigation`'s input of the same name), `seabed_elevation` (1: the measured seabed under
+the vehicle, `z_est - altitude`: the elevation in the navigation frame, NaN without lock) and
+`returns` (`SonarReturns` of the four beams, navigation frame).
 """
 
 from __future__ import annotations
@@ -46,7 +51,8 @@ class DvlParams:
 
     Attributes:
         beam_deg: angle of each beam from the body's -z axis, deg, in [0, 60].
-        max_range: bottom-track range, m, > 0.
+        max_range: bottom-track range, m, > 0 (the Explorer's 600 kHz: about 80 m; beyond
+            it the DVL tracks the water).
         rate: measurements per second, in (0, 50].
         range_sigma_fraction, range_sigma_m: range noise, a fraction of the range and m, >= 0.
         dropout_prob: probability that a beam is lost, in [0, 1].
@@ -137,6 +143,9 @@ class DvlAltimeter(LeafSystem):
         self.altitude_output = self.DeclareVectorOutputPort(
             "altitude", 1, self._calc_altitude,
             prerequisites_of_calc={self.discrete_state_ticket(self._measurement)})
+        self.bottom_lock_output = self.DeclareVectorOutputPort(
+            "bottom_lock", 1, self._calc_bottom_lock,
+            prerequisites_of_calc={self.discrete_state_ticket(self._measurement)})
         self.seabed_output = self.DeclareVectorOutputPort(
             "seabed_elevation", 1, self._calc_seabed_elevation,
             prerequisites_of_calc={self.discrete_state_ticket(self._measurement),
@@ -161,6 +170,9 @@ class DvlAltimeter(LeafSystem):
 
     def _calc_altitude(self, context, output: BasicVector):
         output.SetAtIndex(0, context.get_discrete_state(self._measurement)[0])
+
+    def _calc_bottom_lock(self, context, output: BasicVector):
+        output.SetAtIndex(0, float(np.isfinite(context.get_discrete_state(self._measurement)[0])))
 
     def _calc_seabed_elevation(self, context, output: BasicVector):
         altitude = context.get_discrete_state(self._measurement)[0]

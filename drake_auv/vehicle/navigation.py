@@ -3,13 +3,19 @@
 The estimated state is the true state plus an error: a position drift that grows with the
 distance travelled, as in DVL dead reckoning, and white measurement noise.
 
-Per navigation update, with dp the true horizontal displacement since the last update:
-    drift += ((1 + scale_error) Rz(heading_bias) - I) dp + random_walk sqrt(|dp|) n,  n ~ N(0, I2)
-The first term is the systematic drift of a compass bias and a DVL scale-factor error (linear in
-distance), the second a random walk in distance (growing as sqrt(distance)). The estimated yaw
-carries the compass bias. White noise (position, depth, heading) is redrawn every update.
-Draws come from `np.random.default_rng([seed, update_index])`, so a run is reproducible and its
-error state fits in a plain vector. All parameters zero (the default): estimate == truth.
+Per navigation update, with dp the true horizontal displacement since the last update and dm
+the displacement the DVL measures:
+    drift += (1 + scale_error) Rz(heading_bias) dm - dp + random_walk sqrt(|dm|) n,  n ~ N(0, I2)
+While the seabed is within the DVL's range it tracks the bottom, dm = dp, and the drift is
+((1 + scale_error) Rz(heading_bias) - I) dp: the systematic drift of a compass bias and a DVL
+scale-factor error (linear in distance) and a random walk in distance (growing as
+sqrt(distance)). Above its range it tracks the water: dm = dp - v_c dt, the displacement
+through the water (v_c the water's horizontal velocity, dt the update period), so dead
+reckoning misses what the unknown current carried the vehicle and the drift gains -v_c dt;
+that part is also accumulated on its own (`current_drift`). The estimated yaw carries the
+compass bias. White noise (position, depth, heading) is redrawn every update. Draws come from
+`np.random.default_rng([seed, update_index])`, so a run is reproducible and its error state
+fits in a plain vector. All parameters zero (the default): estimate == truth.
 """
 
 from __future__ import annotations
@@ -20,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_auv.params import param, validate
-from drake_auv.signals import NavigationError, VehicleState
+from drake_auv.signals import NavigationError, VehicleState, Water
 
 ERROR_SIZE = NavigationError.size()  # the error vector kept by the Navigation system
 
@@ -58,9 +64,11 @@ class NavigationParams:
                         self.position_noise, self.depth_noise, self.heading_noise))
 
 
-def update_error(params: NavigationParams, error: np.ndarray, true_state: np.ndarray) -> np.ndarray:
+def update_error(params: NavigationParams, error: np.ndarray, true_state: np.ndarray,
+                 water: np.ndarray | None = None, bottom_lock: bool = True) -> np.ndarray:
     """The error vector (`signals.NavigationError`) after one navigation update at
-    `true_state` (`VehicleState`)."""
+    `true_state` (`VehicleState`). `water` (`signals.Water`, world frame; None: still water)
+    is the water at the vehicle; `bottom_lock` False: the DVL tracks the water."""
     error = NavigationError(np.array(error, dtype=float))
     state = VehicleState(true_state)
     x, y = state.x, state.y
@@ -69,14 +77,22 @@ def update_error(params: NavigationParams, error: np.ndarray, true_state: np.nda
     n = rng.standard_normal(6)
     if error.started:
         dx, dy = x - error.last_x, y - error.last_y
+        mx, my = dx, dy  # what the DVL measures
+        if not bottom_lock and water is not None:
+            water = Water(water)
+            carried_x, carried_y = water.vx * params.period, water.vy * params.period
+            mx, my = dx - carried_x, dy - carried_y
+            error.current_drift_x -= carried_x
+            error.current_drift_y -= carried_y
         c, s = math.cos(params.heading_bias), math.sin(params.heading_bias)
         k = 1.0 + params.scale_error
-        walk = params.random_walk * math.sqrt(math.hypot(dx, dy))
-        error.drift_x += k * (c * dx - s * dy) - dx + walk * n[0]
-        error.drift_y += k * (s * dx + c * dy) - dy + walk * n[1]
+        walk = params.random_walk * math.sqrt(math.hypot(mx, my))
+        error.drift_x += k * (c * mx - s * my) - dx + walk * n[0]
+        error.drift_y += k * (s * mx + c * my) - dy + walk * n[1]
     error.noise = n[2:6] * (params.position_noise, params.position_noise, params.depth_noise,
                             params.heading_noise)
     error.last_x, error.last_y, error.index, error.started = x, y, index + 1, 1.0
+    error.water_tracking = 0.0 if bottom_lock else 1.0
     return error[:]
 
 
