@@ -10,11 +10,11 @@ import trimesh
 
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.random_streams import MAX_SEED, STREAMS, child, generator, stream
+from drake_auv.signals import NavigationError, VehicleState
 from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.sonar.profiler import PencilBeamProfiler
 from drake_auv.vehicle.navigation import NavigationParams, update_error
-from drake_auv.signals import NavigationError, VehicleState
 
 PACKAGE = Path(__file__).resolve().parents[1] / "drake_auv"
 

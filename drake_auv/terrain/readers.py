@@ -18,6 +18,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.output_files import replacing
 from drake_auv.terrain.bathymetry import Bathymetry
 
 _EARTH_RADIUS = 6378137.0  # WGS 84 semi-major axis, m (the sphere of Pseudo-Mercator)
@@ -164,8 +165,9 @@ def write_geotiff(bathy: Bathymetry, path) -> None:
     x0, y0 = bathy.origin
     ny, nx = bathy.shape
     transform = Affine(dx, 0.0, x0 - dx / 2, 0.0, -dy, y0 + (ny - 0.5) * dy)
-    with rasterio.open(path, "w", driver="GTiff", width=nx, height=ny, count=1,
-                       dtype="float32", nodata=np.float32(-9999.0), transform=transform,
-                       crs=bathy.crs if bathy.crs and bathy.crs.startswith("EPSG") else None) as ds:
+    crs = bathy.crs if bathy.crs and bathy.crs.startswith("EPSG") else None
+    with replacing(path) as temporary, rasterio.open(
+            temporary, "w", driver="GTiff", width=nx, height=ny, count=1, dtype="float32",
+            nodata=np.float32(-9999.0), transform=transform, crs=crs) as ds:
         data = np.where(np.isfinite(bathy.z), bathy.z, -9999.0)[::-1].astype(np.float32)
         ds.write(data, 1)
