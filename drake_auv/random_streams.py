@@ -38,9 +38,9 @@ STREAMS = {
     "replanner": 6,         # STOMP's rollouts, child (k, i): leg k, replanning step i
     "exploration": 7,       # the view planner, child (k, i): leg k, step i (its children:
                             # 0 the random strategy, 1 the view paths' STOMP)
-    "faults": 8,            # random fault times and magnitudes
-    "ocean.turbulence": 9,  # the ocean's turbulent velocity
-    "ocean.waves": 10,      # the wave components' phases
+    "faults": 8,            # reserved: random fault times and magnitudes
+    "ocean.turbulence": 9,  # reserved: the ocean's turbulent velocity
+    "ocean.waves": 10,      # reserved: the wave components' phases
 }
 
 

@@ -7,14 +7,13 @@ and the real-time factors. Failed runs count in `runs` and `failed` only.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from drake_auv.output_files import replacing, write_text
+from drake_auv.output_files import replacing, write_json, write_text
 
 QUANTILES = (0.0, 0.05, 0.5, 0.95, 1.0)
 Z95 = 1.959964  # standard normal quantile of 0.975
@@ -192,7 +191,7 @@ def write_summary(rows: list[dict], vary_keys, out, meta: dict, dpi: int = 110) 
     """Writes summary.json, summary.md and the plots into `out`; returns the summary."""
     out = Path(out)
     summary = summarise_campaign(rows, vary_keys, meta)
-    write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+    write_json(out / "summary.json", summary)
     write_text(out / "summary.md", summary_markdown(summary))
     for name, fig in figures(rows, vary_keys).items():
         with replacing(out / name) as temporary:

@@ -28,6 +28,7 @@ from drake_auv.mission.spec import (FAULT_CLASSES, FLY_FORMATS, REALISTIC_NOISE,
                                     NavigationJumpFault, PayloadSpec, PlanStep, ReplannerSpec,
                                     SiteSpec, SonarNoiseSpec, SonarSilentFault, Step, SurveyStep,
                                     ThrusterFailureFault, mission_keys)
+from drake_auv.mission.yaml_text import load_yaml
 from drake_auv.params import NESTED, ParameterError, is_number, checks
 from drake_auv.sonar.noise import SonarNoise
 
@@ -330,7 +331,7 @@ def load_mission(source, seed: int | None = None, overrides=()) -> MissionSpec:
     path = _resolve(source)
     label = path.name
     try:
-        raw = yaml.safe_load(path.read_text())
+        raw = load_yaml(path.read_text())
     except (OSError, UnicodeDecodeError) as err:
         raise MissionFileError(label, "", f"cannot be read ({one_line(err)})",
                                "a readable YAML text file") from None

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 import resource
 import time
 from pathlib import Path as FilePath
@@ -37,7 +36,7 @@ from drake_auv.exploration.view_planner import exploration_summary
 from drake_auv.mapping.mapper import map_memory
 from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
-from drake_auv.output_files import open_replacing, replacing, write_text
+from drake_auv.output_files import open_replacing, replacing, write_json, write_text
 from drake_auv.reconstruction.products import products_markdown, write_products
 from drake_auv.signals import ReplanningStep, VehicleState
 
@@ -467,7 +466,7 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
     summary["timing"].update(_rounded(dict(
         setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
         total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
-    write_text(out / "report.json", json.dumps(summary, indent=2) + "\n")
+    write_json(out / "report.json", summary)
     write_text(out / "report.md",
                report_markdown(summary) + products_markdown(summary["reconstruction"]))
     return summary

@@ -8,12 +8,11 @@ CRS (no `crs` member: RFC 7946 is WGS 84), depths and altitudes as properties
 
 from __future__ import annotations
 
-import json
 from pathlib import Path as FilePath
 
 import numpy as np
 
-from drake_auv.output_files import open_replacing, write_text
+from drake_auv.output_files import write_json, write_text
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.missions import ALTITUDE_LABELS
 from drake_auv.planning.path import Path
@@ -71,8 +70,8 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", surface=None)
 
 
 def write_geojson(path: Path, geo: GeoFrame, filename, name: str = "path", surface=None) -> None:
-    with open_replacing(filename) as f:
-        json.dump(path_to_geojson(path, geo, name, surface), f, separators=(",", ":"))
+    write_json(filename, path_to_geojson(path, geo, name, surface), indent=None,
+               separators=(",", ":"))
 
 
 def _ratio(a: float, b: float) -> float | None:
@@ -311,8 +310,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     rep = report_dict(plan, m3d)
     if extras:
         rep["exports"] = extras
-    with open_replacing(outdir / "report.json") as f:
-        json.dump(rep, f, indent=2)
+    write_json(outdir / "report.json", rep)
     written += [outdir / "report.md", outdir / "report.json"]
     if figures:
         from drake_auv.planning.figures import write_figures

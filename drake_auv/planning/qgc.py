@@ -304,7 +304,8 @@ def write_qgc(plan, geo: GeoFrame, outdir, max_items: int = DEFAULT_MAX_ITEMS,
     for k, name in enumerate(files):
         part = mission.part(k)
         with open_replacing(name) as f:
-            json.dump(qgc_plan(part, geo, speed, acceptance_radius, zones), f, indent=1)
+            json.dump(qgc_plan(part, geo, speed, acceptance_radius, zones), f, indent=1,
+                      allow_nan=False)  # a NaN in an autopilot's file is a bug: refused
         counts.append(_items(len(part)))
     p = plan.parameters
     flown = _flown_path(plan.path, mission.waypoints, plan.surface, p["sample_spacing"])

@@ -119,7 +119,11 @@ def _read_raster(path: FilePath) -> Bathymetry:
     except RasterioIOError as err:
         raise ValueError(f"{path}: not a raster GDAL can read ({err})") from None
     z = np.ma.filled(band, np.nan)
-    z[~np.isfinite(z)] = np.nan
+    if np.isinf(z).any():  # refused as `Bathymetry` refuses it, not read as no-data
+        i, j = np.argwhere(np.isinf(z))[0]
+        raise ValueError(f"{path}: {int(np.isinf(z).sum())} infinite cell(s) (first {z[i, j]} "
+                         f"at row {i}, column {j} of the file); elevations must be finite "
+                         "metres, no-data cells the file's nodata value or NaN")
     ny, nx = z.shape
     a, b, c, d, e, f = transform.a, transform.b, transform.c, transform.d, transform.e, transform.f
     jac = np.array([[a, b], [d, e]])  # map units per (column, row) step
