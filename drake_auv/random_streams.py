@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 MAX_SEED = 2 ** 63 - 1  # a run's seed: an integer in [0, MAX_SEED]
+SEED_RANGE = "an integer in [0, 2^63 - 1]"
 
 # name -> spawn key. Add a source with a new key; never renumber or reuse one.
 STREAMS = {
@@ -58,7 +59,7 @@ def stream(seed: int, name: str, *keys: int) -> np.random.SeedSequence:
         raise ValueError(f"random stream {name!r} is not in the table; allowed: "
                          f"{', '.join(STREAMS)}")
     if isinstance(seed, bool) or int(seed) != seed or not 0 <= int(seed) <= MAX_SEED:
-        raise ValueError(f"seed must be an integer in [0, {MAX_SEED}], got {seed!r}")
+        raise ValueError(f"seed must be {SEED_RANGE}, got {seed!r}")
     return np.random.SeedSequence(int(seed), spawn_key=(STREAMS[name], *_check_keys(keys)))
 
 

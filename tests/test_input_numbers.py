@@ -85,3 +85,23 @@ def test_plans_report_json_is_strict(tmp_path, monkeypatch):
                  "-o", str(tmp_path / "o")]) == 0
     report = _strict((tmp_path / "o" / "report.json").read_text())
     assert report["undefined"] is None and report["undefined_null_reason"] == "NaN"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("a: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
+        f"{b}: &{b} [{', '.join([f'*{a}'] * 10)}]\n" for a, b in zip("abcdefgh", "bcdefghi")),
+     "expands to more than 100000 values"),
+    ("a: &a [1, *a]\n", "expands to more than 100000 values"),
+    ("k: '" + "x" * (1 << 20) + "'\n", "more than 1048576")])
+def test_yaml_bombs_are_refused_at_once_in_one_line(tmp_path, text, message):
+    import time
+
+    from drake_auv.mission.config import MissionFileError
+
+    path = tmp_path / "bomb.yaml"
+    path.write_text(text)
+    start = time.perf_counter()
+    with pytest.raises(MissionFileError, match=message) as info:
+        load_mission(path)
+    assert time.perf_counter() - start < 1.0 and len(str(info.value)) < 300
+    assert "\n" not in str(info.value)

@@ -140,7 +140,8 @@ class ViewPlanner(LeafSystem):
         rays = scan_rays(batches, params.cell_m) if batches is not None else None
         returns = multibeam_returns(batches) if batches is not None else None
         step = plan_view(online.map, x.position, params, view.target,
-                         seed=stream(self.seed, "exploration", int(leg), int(progress.steps)), previous=view.grid, rays=rays,
+                         seed=stream(self.seed, "exploration", int(leg), int(progress.steps)),
+                         previous=view.grid, rays=rays,
                          visited=view.visited, yaw=float(x.yaw),
                          current_path=self._remaining(view.trajectory, t), returns=returns)
         trajectory = view.trajectory

@@ -138,8 +138,8 @@ class Site:
 
 def shift_prior(bathy: Bathymetry, error_m: float, seed: int) -> Bathymetry:
     """`bathy` moved horizontally by `error_m` (m, in [0, 5]) in a direction drawn from
-    the run's `seed`: the prior-map error. The grid, CRS and world-to-CRS map are kept (the cells now
-    claim wrong positions)."""
+    the run's `seed`: the prior-map error. The grid, CRS and world-to-CRS map are kept (the
+    cells now claim wrong positions)."""
     if not (np.isfinite(error_m) and 0.0 <= error_m <= MAX_PRIOR_ERROR):
         raise ValueError(f"prior map: error_m must be in [0, {MAX_PRIOR_ERROR}] m, "
                          f"got {error_m}")

@@ -157,7 +157,9 @@ class Replanner(LeafSystem):
         start = time.perf_counter()
         plan = replan_section(position, nominal.points, int(next_index),
                               online.map if online is not None else np.zeros((0, 3)),
-                              self.params, seed=stream(self.seed, "replanner", int(leg), int(steps)), keep_offset=keep_offset,
+                              self.params,
+                              seed=stream(self.seed, "replanner", int(leg), int(steps)),
+                              keep_offset=keep_offset,
                               optimizer=self.optimizer,
                               previous=None if current.plan is None else current.plan.trajectory,
                               tube=None if current.plan is None else current.plan.tube)

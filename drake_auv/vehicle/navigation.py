@@ -9,7 +9,8 @@ The first term is the systematic drift of a compass bias and a DVL scale-factor 
 distance), the second a random walk in distance (growing as sqrt(distance)). The estimated yaw
 carries the compass bias. White noise (position, depth, heading) is redrawn every update.
 Update n draws from the run's `navigation` stream, child n (`drake_auv.random_streams`), so a
-run is reproducible and its error state fits in a plain vector. All parameters zero (the default): estimate == truth.
+run is reproducible and its error state fits in a plain vector. All parameters zero (the
+default): estimate == truth.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_auv.params import param, validate
-from drake_auv.random_streams import MAX_SEED, generator
+from drake_auv.random_streams import MAX_SEED, SEED_RANGE, generator
 from drake_auv.signals import NavigationError, VehicleState
 
 ERROR_SIZE = NavigationError.size()  # the error vector kept by the Navigation system
@@ -47,7 +48,7 @@ class NavigationParams:
     depth_noise: float = param(0.0, low=0.0, high=10.0, unit="m")
     heading_noise: float = param(0.0, low=0.0, high=1.0, unit="rad")
     period: float = param(0.1, low=0.01, high=10.0, unit="s")
-    seed: int = param(0, low=0, high=MAX_SEED, integer=True)
+    seed: int = param(0, low=0, high=MAX_SEED, integer=True, note=SEED_RANGE)
 
     def __post_init__(self):
         validate(self)
