@@ -27,6 +27,7 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_auv.leg_signal import LEG_SIZE, read_leg
 from drake_auv.following.behaviours import FollowConfig, FollowerState
+from drake_auv.random_streams import stream
 from drake_auv.signals import Consumed, Profile, Reference, VehicleState
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.path_reference import trajectory_reference
@@ -49,7 +50,8 @@ class ProfileFollowingController(LeafSystem):
             for leg 0 (the controller alone, its `leg` input unconnected).
         period: update period, s; use the profiler's (its returns hold the pings since its
             last update).
-        seed: seed of the estimator's RANSAC (leg k uses seed + k).
+        seed: the run's seed; leg k's RANSAC draws from its `following` stream, child k
+            (`drake_auv.random_streams`).
     """
 
     def __init__(self, legs: FollowConfig | dict[int, FollowConfig] = FollowConfig(),
@@ -67,7 +69,7 @@ class ProfileFollowingController(LeafSystem):
             "returns", AbstractValue.Make(SonarReturns.empty(20.0)))
         self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
-        self._followers = {leg: config.follower(self.seed + leg)
+        self._followers = {leg: config.follower(stream(self.seed, "following", leg))
                            for leg, config in self.legs.items()}  # immutable
         self._follower_index = self.DeclareAbstractState(
             AbstractValue.Make(self._followers[min(self.legs)].initial_state()))

@@ -29,6 +29,7 @@ from drake_auv.mission.spec import (FAULT_CLASSES, FLY_FORMATS, REALISTIC_NOISE,
                                     NavigationJumpFault, PayloadSpec, PlanStep, ReplannerSpec,
                                     SiteSpec, SonarNoiseSpec, SonarSilentFault, Step, SurveyStep,
                                     ThrusterFailureFault, mission_keys)
+from drake_auv.mission.yaml_text import MAX_BYTES, MAX_VALUES, YamlLimitError, load_yaml_file
 from drake_auv.params import NESTED, ParameterError, is_number, checks
 from drake_auv.sonar.noise import SonarNoise
 
@@ -340,10 +341,14 @@ def load_mission(source, seed: int | None = None, overrides=()) -> MissionSpec:
     path = _resolve(source)
     label = path.name
     try:
-        raw = yaml.safe_load(path.read_text())
+        raw = load_yaml_file(path)
     except (OSError, UnicodeDecodeError) as err:
         raise MissionFileError(label, "", f"cannot be read ({one_line(err)})",
                                "a readable YAML text file") from None
+    except YamlLimitError as err:
+        raise MissionFileError(label, "", one_line(err),
+                               f"at most {MAX_BYTES} bytes and {MAX_VALUES} values with its "
+                               "aliases expanded") from None
     except yaml.YAMLError as err:
         raise MissionFileError(label, "", f"is not valid YAML ({one_line(err)})",
                                "a YAML mapping of " + ", ".join(TOP_KEYS)) from None

@@ -119,7 +119,7 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
         seed=spec.seed, axis_hits_output=True))
     options = {**FOLLOWING_SETUP, "max_range": max_range}
     profiler = builder.AddNamedSystem("profiler", PencilBeamProfiler(
-        caster, scan_plane="horizontal", noise=noise, seed=spec.seed + 1,
+        caster, scan_plane="horizontal", noise=noise, seed=spec.seed,
         planes=plan.profiler_planes or None, **options))
     silent = spec.faults.sonar_silent
     returns = {}
@@ -144,7 +144,7 @@ def add_autopilot(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSy
     if not (plan.autopilot_legs or plan.explore_legs):
         return None, None
     dvl = builder.AddNamedSystem("dvl", DvlAltimeter(
-        caster, noise=spec.sonar_noise.to_noise() is not None, seed=spec.seed + 2))
+        caster, noise=spec.sonar_noise.to_noise() is not None, seed=spec.seed))
     builder.Connect(vehicle.dynamics.state_output, dvl.true_state_input)
     builder.Connect(estimated, dvl.estimated_state_input)
     if not plan.autopilot_legs:

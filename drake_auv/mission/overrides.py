@@ -14,6 +14,7 @@ import yaml
 
 from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, STEP_KINDS,
                                     TOP_KEYS, MissionFileError, mission_keys)
+from drake_auv.mission.yaml_text import load_yaml
 from drake_auv.ocean.spec import OCEAN_KEYS, PARTS
 from drake_auv.ocean.tides import TidalConstituent
 from drake_auv.params import checks
@@ -32,7 +33,7 @@ def apply_overrides(raw: dict, overrides, label: str = "--set") -> dict:
         key, text = item.split("=", 1)
         key = re.sub(r"\[(\d+)\]", r".\1", key.strip())
         try:
-            value = yaml.safe_load(text)
+            value = load_yaml(text)
         except yaml.YAMLError as err:
             raise MissionFileError(label, key, f"value {text!r} is not YAML ({one_line(err)})",
                                    "a YAML value: number, string, true/false, null, [..], {..}")

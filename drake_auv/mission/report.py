@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 import resource
 import time
 from pathlib import Path as FilePath
@@ -37,6 +36,7 @@ from drake_auv.exploration.view_planner import exploration_summary
 from drake_auv.mapping.mapper import map_memory
 from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
+from drake_auv.output_files import open_replacing, replacing, write_json, write_text
 from drake_auv.reconstruction.products import products_markdown, write_products
 from drake_auv.signals import ReplanningStep, VehicleState
 
@@ -419,7 +419,7 @@ def write_trajectory(result: MissionResult, filename) -> None:
     true_xyz = result.site.to_site(state.position)
     est_xyz = result.site.to_site(estimated.position)
     pose = VehicleState.get_fields()[:6]  # position and attitude
-    with open(filename, "w", newline="") as f:
+    with open_replacing(filename, "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["t", *pose, *(f"est_{name}" for name in pose[:3])])
         for t, p, a, e in zip(result.times, true_xyz, state.attitude, est_xyz):
@@ -456,16 +456,17 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
 
         figures["plan.png"] = fig_path3d(result.plan.coverage)
     for name, fig in figures.items():
-        fig.savefig(out / name, dpi=dpi, bbox_inches="tight")
+        with replacing(out / name) as temporary:
+            fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
     write_trajectory(result, out / "trajectory.csv")
-    (out / "diagram.dot").write_text(result.diagram_dot)
+    write_text(out / "diagram.dot", result.diagram_dot)
     if finish is not None:
         finish(out)
     outputs_s = time.perf_counter() - start
     summary["timing"].update(_rounded(dict(
         setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
         total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
-    (out / "report.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (out / "report.md").write_text(report_markdown(summary)
-                                   + products_markdown(summary["reconstruction"]))
+    write_json(out / "report.json", summary)
+    write_text(out / "report.md",
+               report_markdown(summary) + products_markdown(summary["reconstruction"]))
     return summary

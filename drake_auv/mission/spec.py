@@ -27,6 +27,7 @@ from drake_auv.exploration.planner import ExploreParameters
 from drake_auv.following.behaviours import FollowingParams
 from drake_auv.ocean.spec import OceanSpec
 from drake_auv.params import CHECK, NESTED, like, nested, param, validate
+from drake_auv.random_streams import MAX_SEED, SEED_RANGE
 from drake_auv.replanning.section import OPTIMIZERS, ReplanningParameters
 from drake_auv.scenarios import list_scenarios
 from drake_auv.sonar.noise import SonarNoise
@@ -442,7 +443,7 @@ class MissionSpec:
     name: str = param(kind="text")
     site: SiteSpec
     steps: tuple
-    seed: int = param(0, low=0, integer=True)
+    seed: int = param(0, low=0, high=MAX_SEED, integer=True, note=SEED_RANGE)
     description: str | None = param(None, kind="text", nullable=True)
     navigation: NavigationParams = NavigationParams()
     sonar_noise: SonarNoiseSpec = SonarNoiseSpec()

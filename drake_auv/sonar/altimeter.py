@@ -7,7 +7,8 @@ the mean of the beams' vertical ranges (slant range times the cosine of the beam
 world vertical, so roll and pitch are accounted for) and has bottom lock with at least
 `min_beams` valid beams. Noise: each beam's range gets a Gaussian error of
 `range_sigma_fraction` of the range plus `range_sigma_m`, and is lost with `dropout_prob`.
-Without bottom lock the altitude is NaN. Update n draws from `default_rng([seed, n])`.
+Without bottom lock the altitude is NaN. Measurement n draws from the run's `dvl` stream,
+child n (`drake_auv.random_streams`).
 
 This is what an autopilot holding altitude reads (COLA2 altitude mode, ArduSub's frame 10 via
 its downward rangefinder); the true world reaches the mission only through this ray casting.
@@ -39,6 +40,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.params import param, validate
+from drake_auv.random_streams import generator, stream as random_stream
 from drake_auv.signals import VehicleState
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.control import rotation_world_body
@@ -125,14 +127,16 @@ class DvlAltimeter(LeafSystem):
     Args:
         world: the true world's `RayCaster`.
         params: the DVL (default `DvlParams()`); noise: False for a perfect DVL.
-        seed: of the noise draws.
+        seed: the run's seed, drawn through `stream` (`drake_auv.random_streams`).
+        stream: the noise's random stream.
     """
 
     def __init__(self, world: RayCaster, params: DvlParams | None = None, noise: bool = True,
-                 seed: int = 0):
+                 seed: int = 0, stream: str = "dvl"):
         super().__init__()
         self.caster, self.params = world, params if params is not None else DvlParams()
-        self.noise, self.seed = bool(noise), int(seed)
+        self.noise, self.seed, self.stream = bool(noise), int(seed), str(stream)
+        random_stream(self.seed, self.stream)  # checks the seed and the stream's name
         self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
         self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
         self._measurement = self.DeclareDiscreteState(np.array([np.nan, 0.0]))  # altitude, n
@@ -161,7 +165,7 @@ class DvlAltimeter(LeafSystem):
 
     def _update_measurement(self, context, discrete_state):
         n = int(context.get_discrete_state(self._measurement)[1])
-        rng = np.random.default_rng([self.seed, n]) if self.noise else None
+        rng = generator(self.seed, self.stream, n) if self.noise else None
         true = self.true_state_input.Eval(context)
         ranges = measure_ranges(self.caster, self.params, true, rng)
         discrete_state.set_value(self._measurement, [altitude_of(self.params, true, ranges),

@@ -13,9 +13,10 @@ sqrt(distance)). Above its range it tracks the water: dm = dp - v_c dt, the disp
 through the water (v_c the water's horizontal velocity, dt the update period), so dead
 reckoning misses what the unknown current carried the vehicle and the drift gains -v_c dt;
 that part is also accumulated on its own (`current_drift`). The estimated yaw carries the
-compass bias. White noise (position, depth, heading) is redrawn every update. Draws come from
-`np.random.default_rng([seed, update_index])`, so a run is reproducible and its error state
-fits in a plain vector. All parameters zero (the default): estimate == truth.
+compass bias. White noise (position, depth, heading) is redrawn every update. Update n draws
+from the run's `navigation` stream, child n (`drake_auv.random_streams`), so a run is
+reproducible and its error state fits in a plain vector. All parameters zero (the default):
+estimate == truth.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from drake_auv.params import param, validate
+from drake_auv.random_streams import MAX_SEED, SEED_RANGE, generator
 from drake_auv.signals import NavigationError, VehicleState, Water
 
 ERROR_SIZE = NavigationError.size()  # the error vector kept by the Navigation system
@@ -41,7 +43,7 @@ class NavigationParams:
         depth_noise: depth-sensor white noise, m, in [0, 10].
         heading_noise: compass white noise, rad, in [0, 1].
         period: navigation update period, s, in [0.01, 10].
-        seed: seed of the random draws (int >= 0).
+        seed: the run's seed (its `navigation` stream, `drake_auv.random_streams`).
     """
 
     heading_bias: float = param(0.0, low=-math.pi / 4, high=math.pi / 4, unit="rad",
@@ -52,7 +54,7 @@ class NavigationParams:
     depth_noise: float = param(0.0, low=0.0, high=10.0, unit="m")
     heading_noise: float = param(0.0, low=0.0, high=1.0, unit="rad")
     period: float = param(0.1, low=0.01, high=10.0, unit="s")
-    seed: int = param(0, low=0, integer=True)
+    seed: int = param(0, low=0, high=MAX_SEED, integer=True, note=SEED_RANGE)
 
     def __post_init__(self):
         validate(self)
@@ -73,7 +75,7 @@ def update_error(params: NavigationParams, error: np.ndarray, true_state: np.nda
     state = VehicleState(true_state)
     x, y = state.x, state.y
     index = int(error.index)
-    rng = np.random.default_rng([params.seed, index])
+    rng = generator(params.seed, "navigation", index)
     n = rng.standard_normal(6)
     if error.started:
         dx, dy = x - error.last_x, y - error.last_y

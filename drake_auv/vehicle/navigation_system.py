@@ -1,9 +1,9 @@
 """`Navigation`: true state -> estimated state with a dead-reckoning error model.
 
 A thin adapter over `drake_auv.vehicle.navigation`: the error vector is discrete state updated
-every `params.period` seconds (its random draws are keyed by seed and update index, so the
-same seed gives the same run); the output is the current true state plus that error. With all
-error sources zero (the default) no update is declared and the output equals the input
+every `params.period` seconds (update n draws from the run's `navigation` stream, child n, so
+the same seed gives the same run); the output is the current true state plus that error. With
+all error sources zero (the default) no update is declared and the output equals the input
 exactly, current or not (an ideal navigation).
 """
 

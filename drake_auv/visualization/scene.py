@@ -18,6 +18,7 @@ from pydrake.geometry import Box, Capsule, Meshcat, MeshcatParams, Rgba
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import LeafSystem
 
+from drake_auv.output_files import write_text
 from drake_auv.planning.path import Path
 from drake_auv.signals import VehicleState
 
@@ -171,7 +172,7 @@ class Scene:
             self.recording = False
         filename = FilePath(filename)
         filename.parent.mkdir(parents=True, exist_ok=True)
-        filename.write_text(self.meshcat.StaticHtml())
+        write_text(filename, self.meshcat.StaticHtml())
         return filename
 
 
