@@ -40,8 +40,8 @@ STREAMS = {
     "exploration": 7,       # the view planner, child (k, i): leg k, step i (its children:
                             # 0 the random strategy, 1 the view paths' STOMP)
     "faults": 8,            # reserved: random fault times and magnitudes
-    "ocean.turbulence": 9,  # reserved: the ocean's turbulent velocity
-    "ocean.waves": 10,      # reserved: the wave components' phases
+    "ocean.turbulence": 9,  # the current's Ornstein-Uhlenbeck turbulence (the Ocean system)
+    "ocean.waves": 10,      # the wave components' frequencies, directions and phases
 }
 
 

@@ -44,6 +44,8 @@ from drake_auv.mission.plan import SENSOR_AZIMUTH, MissionPlan, plan_mission, te
 from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
 from drake_auv.following.controller import ProfileFollowingController
+from drake_auv.ocean.system import Ocean
+from drake_auv.random_streams import generator
 from drake_auv.replanning.replanner import Replanner
 from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar
@@ -82,6 +84,7 @@ class MissionHandles:
     autopilot: AutopilotPilot | None = None  # with a fly step: the pilot
     dvl: DvlAltimeter | None = None  # with a fly or an explore step
     explorer: ViewPlanner | None = None  # with an explore step: the view planner
+    ocean: Ocean | None = None  # with a sea (`ocean:` not none): the water at the vehicle
 
 
 def add_faults(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec):
@@ -133,6 +136,30 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
             builder.Connect(sonar.returns_output, gate.returns_input)
             returns[name] = gate.returns_output
     return multibeam, profiler, returns
+
+
+def add_ocean(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec,
+              site: Site, plan: MissionPlan, dvl: DvlAltimeter | None):
+    """The sea of `spec.ocean` (None: still water, nothing added): the `Ocean` system at the
+    vehicle's true position, feeding the dynamics' relative-velocity hydrodynamics and the
+    navigation (which dead-reckons through the water when `dvl` loses the bottom). The sea's
+    files are checked against the site, the dive's span and the nominal route first (one
+    line). Returns the Ocean or None."""
+    if spec.ocean is None:
+        return None
+    model = spec.ocean.model(generator(spec.seed, "ocean.waves"), site.crs, site.origin)
+    bounds = site.world.bounds
+    cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
+    model.check((bounds[0, 0], bounds[0, 1], bounds[1, 0], bounds[1, 1]), -bounds[0, 2],
+                cap if np.isfinite(cap) else 0.0,
+                plan.nominal.points if plan.nominal is not None else None)
+    ocean = builder.AddNamedSystem("ocean", Ocean(model, seed=spec.seed))
+    builder.Connect(vehicle.dynamics.state_output, ocean.state_input)
+    builder.Connect(ocean.water_output, vehicle.dynamics.water_input)
+    builder.Connect(ocean.water_output, vehicle.navigation.water_input)
+    if dvl is not None:
+        builder.Connect(dvl.bottom_lock_output, vehicle.navigation.bottom_lock_input)
+    return ocean
 
 
 def add_autopilot(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
@@ -283,6 +310,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     pilot, dvl = add_autopilot(builder, caster, vehicle, spec, plan, estimated)
     if dvl is not None:
         builder.Connect(dvl.returns_output, mapper.dvl_input)
+    ocean = add_ocean(builder, vehicle, spec, site, plan, dvl)
     path_reference, controller, replanner, supervisor, switch = add_behaviours(
         builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns, pilot,
         dvl=dvl)
@@ -297,6 +325,8 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
         "leg": LogVectorOutput(supervisor.leg_output, builder, SUPERVISOR_PERIOD),
         "response": LogVectorOutput(supervisor.response_output, builder, SUPERVISOR_PERIOD),
     }
+    if ocean is not None:
+        logs["water"] = LogVectorOutput(ocean.water_output, builder, LOG_PERIOD)
     if controller is not None:
         logs["profile"] = LogVectorOutput(controller.profile_output, builder, LOG_PERIOD)
     if replanner is not None:
@@ -327,5 +357,5 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,
                              controller, replanner, supervisor, camera, multibeam_coverage, logs,
-                             faults, pilot, dvl, explorer)
+                             faults, pilot, dvl, explorer, ocean)
     return diagram, handles

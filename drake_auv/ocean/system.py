@@ -6,7 +6,7 @@ dynamics' relative-velocity hydrodynamics. The turbulence deviation (2: speed m/
 rad) is the discrete-state group `turbulence`, advanced every `period` seconds by the exact
 Ornstein-Uhlenbeck transition (its statistics do not depend on `period`) and drawn at the
 start from its stationary law; the generator it draws from is abstract state (each Context
-holds its own copy), seeded by `seed`.
+holds its own copy), the run's `ocean.turbulence` stream.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.ocean.model import OceanModel
 from drake_auv.ocean.turbulence import TURBULENCE_SIZE
+from drake_auv.random_streams import generator
 from drake_auv.signals import VehicleState, Water
 
 OCEAN_PERIOD_S = 0.1  # the turbulence's update period, s
@@ -26,12 +27,12 @@ class Ocean(LeafSystem):
     """Input `state` (12); output `water` (6)."""
 
     def __init__(self, model: OceanModel, seed=0, period: float = OCEAN_PERIOD_S):
-        """`seed`: an int or a `numpy.random.SeedSequence` (the turbulence's stream);
-        `period`: s between turbulence updates."""
+        """`seed`: the run's seed (the turbulence draws from its `ocean.turbulence` stream,
+        `drake_auv.random_streams`); `period`: s between turbulence updates."""
         super().__init__()
         self.model, self.period = model, float(period)
         self.state_input = self.DeclareVectorInputPort("state", VehicleState.size())
-        rng = np.random.default_rng(seed)
+        rng = generator(seed, "ocean.turbulence")
         initial = (model.turbulence.initial(rng) if model.turbulence.enabled
                    else np.zeros(TURBULENCE_SIZE))
         self._turbulence = self.DeclareDiscreteState(BasicVector(initial))
