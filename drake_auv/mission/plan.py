@@ -24,7 +24,7 @@ from drake_auv.autopilot.items import FlownMission, localise
 from drake_auv.autopilot.semantics import mission_duration
 from drake_auv.following.behaviours import EstimatorParams, FollowConfig, FollowingParams
 from drake_auv.mission.legs import Leg
-from drake_auv.mission.site import Site
+from drake_auv.mission.site import Site, check_in_water
 from drake_auv.mission.spec import (ExploreStep, FlyStep, FollowStep, MissionFileError,
                                     MissionSpec, PlanStep, SurveyStep)
 from drake_auv.planning.path import Path
@@ -127,8 +127,47 @@ def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMis
             raise MissionFileError(label, f"{where}.file", f"{step.file.name}: item {k + 1} "
                                    f"commands depth {min(depths):g} m, above the sea surface",
                                    "depths >= 0 m (positive down)")
+    check_in_water(site, *_item_points(mission, legs, site, step.file.name), label,
+                   f"{where}.file")
     return FlownMission(mission.autopilot, legs, mission.heave_in_3d, step.speed,
                         step.file.name)
+
+
+def _item_points(mission, legs, site: Site, file: str) -> tuple[np.ndarray, list[str]]:
+    """(n, 3) where the file's items put the vehicle (each end, and a section's start), an
+    altitude over the world's top there, and their names for messages."""
+    from drake_auv.autopilot.semantics import leg_target_z
+
+    points, names = [], []
+    ends = np.array([leg.end for leg in legs], float)
+    tops = site.clearance.top(ends)
+    tops = np.where(np.isfinite(tops), tops, site.prior.elevation_at(ends[:, 0], ends[:, 1]))
+    for k, (item, leg, top) in enumerate(zip(mission.items, legs, tops)):
+        name = f"{file}: item {k + 1} at lon {item.lon:.6f}, lat {item.lat:.6f}"
+        if np.isfinite(leg_target_z(leg, top)):  # an altitude over no seabed is not judged
+            points.append([*leg.end, leg_target_z(leg, top)])
+            names.append(name)
+        if leg.start is not None and leg.start_z is not None:
+            points.append([*leg.start, leg.start_z])
+            names.append(f"{name} (its start at lon {item.start_lon:.6f}, lat "
+                         f"{item.start_lat:.6f})")
+    return np.array(points, float).reshape(-1, 3), names
+
+
+def check_path_in_water(path: Path, site: Site, label: str, where: str) -> None:
+    """Raises MissionFileError (one line naming `where` and the sample) for the first sample of
+    a planned `path` above the sea surface or below the prior map it was planned on."""
+    z = path.points[:, 2]
+    seabed = site.prior.elevation_at(path.points[:, 0], path.points[:, 1])
+    bad = np.flatnonzero((z > 0.0) | (z < np.nan_to_num(seabed, nan=-np.inf) - 1e-6))
+    if len(bad):
+        k = int(bad[0])
+        what = (f"{z[k]:.2f} m above the sea surface" if z[k] > 0.0 else
+                f"{seabed[k] - z[k]:.2f} m below the prior map's seabed there "
+                f"({-seabed[k]:.1f} m deep)")
+        raise MissionFileError(label, where, f"sample {k} of the planned path: depth "
+                               f"{-z[k]:.2f} m is {what}", "a path in the water the planner "
+                               "planned on the prior map")
 
 
 def _first_position(mission: FlownMission, site: Site) -> np.ndarray:
@@ -167,13 +206,14 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
     method, survey_speed = "coverage", 0.5
     margin = spec.limits.time_margin
     azimuth = SENSOR_AZIMUTH.get(spec.payload.multibeam_mount)
-    for step in spec.steps:
+    label = spec.source.name if spec.source is not None else spec.name
+    for k, step in enumerate(spec.steps):
         if isinstance(step, PlanStep):
             nominal, coverage = _plan_step(step, site)
+            check_path_in_water(nominal, site, label, f"steps[{k}].plan")
             method = step.method
             omega = step.omega
             survey_speed = step.speed
-    label = spec.source.name if spec.source is not None else spec.name
     flown = {k: flown_mission(step, site, label, f"steps[{k}].fly")
              for k, step in enumerate(spec.steps) if isinstance(step, FlyStep)}
     start = site.start_state
@@ -190,6 +230,11 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             xy = (site.to_local(np.asarray(first.start[:2], dtype=float))
                   if first.start is not None else charted_centre(site) + [-30.0, 0.0])
             start[:3] = (xy[0], xy[1], -(first.depth or 5.0))
+        first_index = spec.steps.index(first)
+        check_in_water(site, start[:3], label, f"steps[{first_index}].{first.KIND}",
+                       f"where the dive starts, at ({start[0]:.1f}, {start[1]:.1f}) local")
+    else:
+        check_in_water(site, start[:3], label, "site.start", "")
     legs, path_legs, follow_legs, replan_legs, planes, autopilot_legs = [], {}, {}, [], {}, {}
     explore_legs = {}
     position, yaw = np.asarray(start[:3], float), float(start[5])
@@ -227,6 +272,8 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             if step.mode == "horizontal" and azimuth is not None:
                 # fly along the wall with the payload facing it: the wall on the payload's side
                 side, yaw_offset = (-1 if azimuth > 0 else 1), -azimuth
+            check_in_water(site, (*xy, z), label, f"steps[{k}].follow",
+                           f"where following begins, at ({xy[0]:.1f}, {xy[1]:.1f}) local")
             add_transit(k, (*xy, z), facing + yaw_offset, TRANSIT_SPEED)
             params = FollowingParams(offset=step.offset, speed=step.speed, side=side,
                                      yaw_offset=yaw_offset, corner_weight=step.corner_weight,
@@ -307,10 +354,9 @@ def explore_parameters(step: ExploreStep, site: Site, spec: MissionSpec, label: 
                        where: str):
     """The step's `ExploreParameters` (local frame). Raises MissionFileError (one line
     naming `where`) for a region that holds no part of the world, or whose water the
-    vehicle cannot reach (every point of it below the seabed or inside the structure: a
-    vertical ray up from it meets the world)."""
+    vehicle cannot reach (every point of it below the seabed or inside the structure:
+    `Site.clearance`)."""
     from drake_auv.exploration.planner import ExploreParameters
-    from drake_auv.geometry.raycast import RayCaster
 
     region = explore_region(step, site)
     axes = [np.linspace(region[k] + 0.25, region[k + 3] - 0.25,
@@ -318,9 +364,7 @@ def explore_parameters(step: ExploreStep, site: Site, spec: MissionSpec, label: 
             for k in range(3)]
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     points = points[points[:, 2] < -1.0]
-    up = np.tile([0.0, 0.0, 1.0], (len(points), 1))
-    blocked = (RayCaster(site.world).cast(points, up, 1e4).faces >= 0) if len(points) else []
-    if np.all(blocked):
+    if np.all(site.clearance.inside(points)):
         raise MissionFileError(label, f"{where}.region", f"{list(step.region)} holds no water "
                                "the vehicle can reach (all of it below the seabed or inside "
                                "the structure)", "a box that holds open water below z = -1 m")
