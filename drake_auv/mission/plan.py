@@ -127,8 +127,8 @@ def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMis
             raise MissionFileError(label, f"{where}.file", f"{step.file.name}: item {k + 1} "
                                    f"commands depth {min(depths):g} m, above the sea surface",
                                    "depths >= 0 m (positive down)")
-    check_in_water(site, *_item_points(mission, legs, site, step.file.name), label,
-                   f"{where}.file")
+    points, names = _item_points(mission, legs, site, step.file.name)
+    check_in_water(site, points, label, f"{where}.file", names)
     return FlownMission(mission.autopilot, legs, mission.heave_in_3d, step.speed,
                         step.file.name)
 
