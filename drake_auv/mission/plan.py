@@ -111,7 +111,8 @@ def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMis
                                f"a valid {step.file.suffix} {step.autopilot} mission") from None
     geo = GeoFrame(site.prior)
     legs = localise(mission, geo.from_lonlat, geo.grid_north_azimuth)
-    (x0, y0), (x1, y1) = site.world.bounds[:, :2]
+    tolerance = position_tolerance(mission)
+    (x0, y0), (x1, y1) = site.world.bounds[:, :2] + [[-tolerance], [tolerance]]
     for k, (item, leg) in enumerate(zip(mission.items, legs)):
         points = [leg.end] + ([leg.start] if leg.start is not None else [])
         if not all(x0 <= x <= x1 and y0 <= y <= y1 for x, y in points):
@@ -120,7 +121,8 @@ def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMis
                                    f"at lon {item.lon:.6f}, lat {item.lat:.6f} lies outside "
                                    "the world (a file for another site?)",
                                    f"positions in x [{sx0:.1f}, {sx1:.1f}], y [{sy0:.1f}, "
-                                   f"{sy1:.1f}] m of the site's CRS {site.prior.crs}")
+                                   f"{sy1:.1f}] m of the site's CRS {site.prior.crs}, or within "
+                                   f"{tolerance:.2g} m of them (the file's precision)")
         depths = [item.z] if item.z_mode == "depth" else []
         depths += [item.start_depth] if item.start_depth is not None else []
         if any(d < 0 for d in depths):
@@ -131,6 +133,26 @@ def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMis
     check_in_water(site, points, label, f"{where}.file", names)
     return FlownMission(mission.autopilot, legs, mission.heave_in_3d, step.speed,
                         step.file.name)
+
+
+METRES_PER_DEGREE = 111_320.0  # of latitude, on the WGS 84 ellipsoid (within 0.6 %)
+
+
+def _decimals(value: float) -> int:
+    """Decimals of `value` as written (its shortest round-trip form)."""
+    text = np.format_float_positional(float(value), trim="-")
+    return len(text.split(".")[1]) if "." in text else 0
+
+
+def position_tolerance(mission) -> float:
+    """How far past the world's edge (m) a file's item may lie and still fly: two units of the
+    last decimal its latitudes and longitudes are written with, on the ground (each rounded by
+    up to half a unit; twice that covers both and the re-projection), 0.22 m for 6 decimals,
+    0.22 mm for the 9 the exports write; a file with fewer than 5 is judged as one with 5
+    (2.2 m: coarser positions are no file for this site)."""
+    values = [v for item in mission.items
+              for v in (item.lat, item.lon, item.start_lat, item.start_lon) if v is not None]
+    return 2.0 * 10.0 ** -max(5, *(_decimals(v) for v in values)) * METRES_PER_DEGREE
 
 
 def _item_points(mission, legs, site: Site, file: str) -> tuple[np.ndarray, list[str]]:
