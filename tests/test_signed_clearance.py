@@ -208,3 +208,34 @@ def test_simulate_refuses_a_path_above_the_surface(tmp_path, capsys):
     assert code == 2 and len(err.splitlines()) == 1
     assert f"{csv}:4: depth -50 m is 50.00 m above the sea surface" in err
     assert not (tmp_path / "out" / "state.csv").exists()
+
+
+def test_a_file_item_within_its_precision_of_the_edge_flies(tmp_path):
+    """A 6-decimal file's items may lie 0.22 m past the world's edge (two units of its last
+    decimal): the project's own plan covers its region to the border. 1 m past: refused."""
+    from drake_auv.autopilot.items import MissionItem, VehicleMission
+    from drake_auv.mission.plan import flown_mission, position_tolerance
+
+    def mission(decimals):
+        return VehicleMission("ardusub", (MissionItem("waypoint", round(41.5, decimals) + 10.0
+                                                      ** -decimals, 3.0, "depth", 5.0),))
+
+    assert position_tolerance(mission(6)) == pytest.approx(0.2226, abs=1e-4)
+    assert position_tolerance(mission(9)) == pytest.approx(2.226e-4, rel=1e-3)
+    assert position_tolerance(mission(2)) == pytest.approx(2.226, abs=1e-3)  # judged at 5
+    path, spec, site = _site(tmp_path)
+    geo = GeoFrame(site.prior)
+    east = site.world.bounds[1, 0]
+    for past, accepted in ((0.1, True), (1.0, False)):
+        plan = _qgc(geo, [(east - 10.0, 0.0, -5.0), (east + past, 0.0, -5.0)])
+        for item in plan["mission"]["items"]:
+            item["params"][4:6] = [round(v, 6) for v in item["params"][4:6]]
+        (tmp_path / "mission.plan").write_text(json.dumps(plan))
+        step = load_mission(path, overrides=["steps=[{fly: {file: mission.plan}}]"]).steps[0]
+        if accepted:
+            flown = flown_mission(step, site, "m", "steps[0].fly")
+            assert flown.legs[-1].end[0] > east
+        else:
+            with pytest.raises(MissionFileError, match="lies outside the world .* or within "
+                                                       "0.22 m of them"):
+                flown_mission(step, site, "m", "steps[0].fly")
