@@ -239,3 +239,51 @@ def test_a_file_item_within_its_precision_of_the_edge_flies(tmp_path):
             with pytest.raises(MissionFileError, match="lies outside the world .* or within "
                                                        "0.22 m of them"):
                 flown_mission(step, site, "m", "steps[0].fly")
+
+
+def _cola2(geo: GeoFrame, points, speed: float = 0.5) -> str:
+    """A COLA2 mission: a goto to the first local point (x, y, depth), sections to the others
+    (each holds its final depth from its start: heave_in_3D off), a 5 s park at the last."""
+    lonlat = geo.to_lonlat(np.asarray(points, float)[:, :2])
+
+    def final(k):
+        return (f"<final_latitude>{lonlat[k, 1]:.9f}</final_latitude><final_longitude>"
+                f"{lonlat[k, 0]:.9f}</final_longitude><final_depth>{points[k][2]}</final_depth>"
+                f"<final_altitude>5</final_altitude><heave_mode>0</heave_mode>"
+                f"<surge_velocity>{speed}</surge_velocity>")
+
+    steps = [f'<maneuver type="goto">{final(0)}<tolerance_xy>1</tolerance_xy>'
+             "<no_altitude_goes_up>true</no_altitude_goes_up></maneuver>"]
+    for k in range(1, len(points)):
+        steps.append(f'<maneuver type="section"><initial_latitude>{lonlat[k - 1, 1]:.9f}'
+                     f"</initial_latitude><initial_longitude>{lonlat[k - 1, 0]:.9f}"
+                     f"</initial_longitude><initial_depth>{points[k - 1][2]}</initial_depth>"
+                     f"{final(k)}<tolerance_xy>1</tolerance_xy><no_altitude_goes_up>true"
+                     "</no_altitude_goes_up></maneuver>")
+    steps.append(f'<maneuver type="park">{final(len(points) - 1)}<final_yaw>0</final_yaw>'
+                 "<use_yaw>false</use_yaw><time>5</time><no_altitude_goes_up>true"
+                 "</no_altitude_goes_up></maneuver>")
+    return ("<mission><version>2.0</version>"
+            + "".join(f"<mission_step>{s}</mission_step>" for s in steps) + "</mission>")
+
+
+def test_a_cola2_depth_step_is_flown_without_a_safety_response(tmp_path):
+    """A section that steps 9 m down (COLA2 holds its final depth from its first instant):
+    the healthy vehicle is more than 2 m from its reference for over 5 s, which the tracking
+    rule once took for a failed thruster; it closes the error, so no response, and the file
+    flies to its end."""
+    path, spec, site = _site(tmp_path)
+    geo = GeoFrame(site.prior)
+    (tmp_path / "mission.xml").write_text(_cola2(geo, [(-20.0, -20.0, 5.0), (-20.0, -16.0, 5.0),
+                                                       (-20.0, 4.0, 14.0)]))
+    spec = load_mission(path, overrides=["limits.max_time_s=120", "sonar_noise=clean",
+                                         "steps=[{fly: {file: mission.xml, speed: 0.8}}]"])
+    result = run_mission(spec, progress=False)
+    summary = summarise(result)
+    assert result.outcomes == ["goal"] and summary["responses"] == []
+    assert summary["contact"] is False
+    # what the rule without the closing test would have answered: > 2 m for 5 s on end
+    far = np.linalg.norm(result.estimated[:, :3] - result.reference[:, :3], axis=1) > 2.0
+    edges = np.flatnonzero(np.diff(np.r_[0, far.astype(int), 0]))
+    longest = max(result.times[b - 1] - result.times[a] for a, b in zip(edges[::2], edges[1::2]))
+    assert longest >= 5.0, longest
