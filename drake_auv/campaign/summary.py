@@ -95,8 +95,9 @@ def summary_markdown(summary: dict) -> str:
     lines = [f"# Campaign: {summary['mission']}", "",
              f"Seeds {summary['seeds']}; {summary['overall']['runs']} runs "
              f"({summary['overall']['failed']} failed). Contact: true signed clearance <= "
-             f"{VEHICLE_RADIUS_M:g} m (negative inside the world or out of the water). Rates with 95 % Wilson intervals; coverage and clearance "
-             "as median [5th-95th percentile] (min); real-time factor: median.", "",
+             f"{VEHICLE_RADIUS_M:g} m (negative inside the world or out of the water). Rates "
+             "with 95 % Wilson intervals; coverage and clearance as median [5th-95th "
+             "percentile] (min); real-time factor: median.", "",
              "| " + " | ".join(head + ["runs", "failed", "contacts", "contact rate (95 %)",
                                        "multibeam coverage %", "camera coverage %",
                                        "min clearance m", "responses", "real-time factor"])

@@ -107,8 +107,8 @@ class WorldClearance:
                                         np.inf))
 
     def top(self, xy) -> np.ndarray:
-        """(n,) elevation of the world's highest face above each (x, y) (n, 2), m; NaN where
-        no face lies above or below it."""
+        """(n,) elevation of the world's highest face at each (x, y) (n, 2), m; NaN where no
+        face lies at it."""
         xy = np.atleast_2d(np.asarray(xy, dtype=float))[:, :2]
         if not len(xy):
             return np.zeros(0)

@@ -3,9 +3,9 @@ Diagram, written by `write_outputs`.
 
 `report.json` keys (a contract; more may be added): `coverage.multibeam`, `coverage.camera`
 (fractions of the target's area, union over the dive), `min_clearance_m` (the true signed
-clearance to anything, `geometry.clearance`: negative inside the world or above the sea surface),
-`contact` (that clearance at or below the vehicle's radius), `distance_to_target` (`mean_m`, `sd_m`, `min_m` over the survey samples within
-2 Omega of the target, and `map_mean_m`, the same against the on-line map's voxels on the
+clearance to anything, `geometry.clearance`: negative inside the world or above the sea
+surface), `contact` (that clearance at or below the vehicle's radius), `distance_to_target`
+(`mean_m`, `sd_m`, `min_m` over the survey samples within 2 Omega of the target, and `map_mean_m`, the same against the on-line map's voxels on the
 target, as the reference reports it), `phases` (`name`, `start_s`, `end_s`, one time axis),
 `faults` (the injected ones, as in the mission file), `responses` (the supervisor's answers:
 `response`, `cause`, `start_s`, `end_s`), `mission.aborted` and `coverage_vs_time` (`t_s`,
