@@ -4,6 +4,7 @@ before the dive, in one line."""
 
 import dataclasses
 import json
+import re
 import time
 
 import numpy as np
@@ -287,3 +288,19 @@ def test_a_cola2_depth_step_is_flown_without_a_safety_response(tmp_path):
     edges = np.flatnonzero(np.diff(np.r_[0, far.astype(int), 0]))
     longest = max(result.times[b - 1] - result.times[a] for a, b in zip(edges[::2], edges[1::2]))
     assert longest >= 5.0, longest
+
+
+def test_a_planned_path_below_the_prior_or_above_the_surface_is_refused(tmp_path):
+    from drake_auv.mission.plan import check_path_in_water
+    from drake_auv.planning.path import Path
+
+    _, _, site = _site(tmp_path)
+    for z, message in ((-25.0, "sample 1 of the planned path: depth 25.00 m is 5.00 m below "
+                               "the prior map's seabed there (20.0 m deep)"),
+                       (3.0, "sample 1 of the planned path: depth -3.00 m is 3.00 m above the "
+                             "sea surface")):
+        path = Path(np.array([[-20.0, -20.0, -5.0], [-20.0, -10.0, z]]), 0.0, [0, 0, -1.0])
+        with pytest.raises(MissionFileError, match=re.escape("steps[0].plan: " + message)):
+            check_path_in_water(path, site, "m", "steps[0].plan")
+    check_path_in_water(Path(np.array([[-20.0, -20.0, -5.0], [200.0, 0.0, -30.0]]), 0.0,
+                             [0, 0, -1.0]), site, "m", "steps[0].plan")  # off the map: unjudged

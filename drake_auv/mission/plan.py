@@ -178,9 +178,12 @@ def _item_points(mission, legs, site: Site, file: str) -> tuple[np.ndarray, list
 
 def check_path_in_water(path: Path, site: Site, label: str, where: str) -> None:
     """Raises MissionFileError (one line naming `where` and the sample) for the first sample of
-    a planned `path` above the sea surface or below the prior map it was planned on."""
-    z = path.points[:, 2]
-    seabed = site.prior.elevation_at(path.points[:, 0], path.points[:, 1])
+    a planned `path` above the sea surface or below the prior map it was planned on (on the
+    map's extent)."""
+    x, y, z = path.points.T
+    xmin, xmax, ymin, ymax = site.prior.extent
+    seabed = np.where((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax),
+                      site.prior.elevation_at(x, y), np.nan)
     bad = np.flatnonzero((z > 0.0) | (z < np.nan_to_num(seabed, nan=-np.inf) - 1e-6))
     if len(bad):
         k = int(bad[0])
