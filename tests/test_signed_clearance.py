@@ -214,8 +214,8 @@ def test_simulate_refuses_a_path_above_the_surface(tmp_path, capsys):
 def test_a_file_item_within_its_precision_of_the_edge_flies(tmp_path):
     """A 6-decimal file's items may lie 0.22 m past the world's edge (two units of its last
     decimal): the project's own plan covers its region to the border. 1 m past: refused."""
-    from drake_auv.autopilot.items import MissionItem, VehicleMission
-    from drake_auv.mission.plan import flown_mission, position_tolerance
+    from drake_auv.autopilot.items import MissionItem, VehicleMission, position_tolerance
+    from drake_auv.mission.plan import flown_mission
 
     def mission(decimals):
         return VehicleMission("ardusub", (MissionItem("waypoint", round(41.5, decimals) + 10.0
@@ -291,7 +291,7 @@ def test_a_cola2_depth_step_is_flown_without_a_safety_response(tmp_path):
 
 
 def test_a_planned_path_below_the_prior_or_above_the_surface_is_refused(tmp_path):
-    from drake_auv.mission.plan import check_path_in_water
+    from drake_auv.mission.site import check_path_in_water
     from drake_auv.planning.path import Path
 
     _, _, site = _site(tmp_path)

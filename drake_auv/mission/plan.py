@@ -20,11 +20,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from drake_auv.autopilot.items import FlownMission, localise
+from drake_auv.autopilot.items import (FlownMission, item_positions, localise,
+                                       position_tolerance)
 from drake_auv.autopilot.semantics import mission_duration
 from drake_auv.following.behaviours import EstimatorParams, FollowConfig, FollowingParams
 from drake_auv.mission.legs import Leg
-from drake_auv.mission.site import Site, check_in_water
+from drake_auv.mission.site import Site, check_in_water, check_path_in_water
 from drake_auv.mission.spec import (ExploreStep, FlyStep, FollowStep, MissionFileError,
                                     MissionSpec, PlanStep, SurveyStep)
 from drake_auv.planning.path import Path
@@ -129,70 +130,13 @@ def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMis
             raise MissionFileError(label, f"{where}.file", f"{step.file.name}: item {k + 1} "
                                    f"commands depth {min(depths):g} m, above the sea surface",
                                    "depths >= 0 m (positive down)")
-    points, names = _item_points(mission, legs, site, step.file.name)
+    ends = np.array([leg.end for leg in legs], float)
+    tops = site.clearance.top(ends)  # where an altitude item holds its altitude over
+    tops = np.where(np.isfinite(tops), tops, site.prior.elevation_at(ends[:, 0], ends[:, 1]))
+    points, names = item_positions(mission, legs, tops, step.file.name)
     check_in_water(site, points, label, f"{where}.file", names)
     return FlownMission(mission.autopilot, legs, mission.heave_in_3d, step.speed,
                         step.file.name)
-
-
-METRES_PER_DEGREE = 111_320.0  # of latitude, on the WGS 84 ellipsoid (within 0.6 %)
-
-
-def _decimals(value: float) -> int:
-    """Decimals of `value` as written (its shortest round-trip form)."""
-    text = np.format_float_positional(float(value), trim="-")
-    return len(text.split(".")[1]) if "." in text else 0
-
-
-def position_tolerance(mission) -> float:
-    """How far past the world's edge (m) a file's item may lie and still fly: two units of the
-    last decimal its latitudes and longitudes are written with, on the ground (each rounded by
-    up to half a unit; twice that covers both and the re-projection), 0.22 m for 6 decimals,
-    0.22 mm for the 9 the exports write; a file with fewer than 5 is judged as one with 5
-    (2.2 m: coarser positions are no file for this site)."""
-    values = [v for item in mission.items
-              for v in (item.lat, item.lon, item.start_lat, item.start_lon) if v is not None]
-    return 2.0 * 10.0 ** -max(5, *(_decimals(v) for v in values)) * METRES_PER_DEGREE
-
-
-def _item_points(mission, legs, site: Site, file: str) -> tuple[np.ndarray, list[str]]:
-    """(n, 3) where the file's items put the vehicle (each end, and a section's start), an
-    altitude over the world's top there, and their names for messages."""
-    from drake_auv.autopilot.semantics import leg_target_z
-
-    points, names = [], []
-    ends = np.array([leg.end for leg in legs], float)
-    tops = site.clearance.top(ends)
-    tops = np.where(np.isfinite(tops), tops, site.prior.elevation_at(ends[:, 0], ends[:, 1]))
-    for k, (item, leg, top) in enumerate(zip(mission.items, legs, tops)):
-        name = f"{file}: item {k + 1} at lon {item.lon:.6f}, lat {item.lat:.6f}"
-        if np.isfinite(leg_target_z(leg, top)):  # an altitude over no seabed is not judged
-            points.append([*leg.end, leg_target_z(leg, top)])
-            names.append(name)
-        if leg.start is not None and leg.start_z is not None:
-            points.append([*leg.start, leg.start_z])
-            names.append(f"{name} (its start at lon {item.start_lon:.6f}, lat "
-                         f"{item.start_lat:.6f})")
-    return np.array(points, float).reshape(-1, 3), names
-
-
-def check_path_in_water(path: Path, site: Site, label: str, where: str) -> None:
-    """Raises MissionFileError (one line naming `where` and the sample) for the first sample of
-    a planned `path` above the sea surface or below the prior map it was planned on (on the
-    map's extent)."""
-    x, y, z = path.points.T
-    xmin, xmax, ymin, ymax = site.prior.extent
-    seabed = np.where((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax),
-                      site.prior.elevation_at(x, y), np.nan)
-    bad = np.flatnonzero((z > 0.0) | (z < np.nan_to_num(seabed, nan=-np.inf) - 1e-6))
-    if len(bad):
-        k = int(bad[0])
-        what = (f"{z[k]:.2f} m above the sea surface" if z[k] > 0.0 else
-                f"{seabed[k] - z[k]:.2f} m below the prior map's seabed there "
-                f"({-seabed[k]:.1f} m deep)")
-        raise MissionFileError(label, where, f"sample {k} of the planned path: depth "
-                               f"{-z[k]:.2f} m is {what}", "a path in the water the planner "
-                               "planned on the prior map")
 
 
 def _first_position(mission: FlownMission, site: Site) -> np.ndarray:

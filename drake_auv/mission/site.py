@@ -337,6 +337,25 @@ def check_in_water(site: Site, points, label: str, where: str, names) -> None:
                                    allowed)
 
 
+def check_path_in_water(path, site: Site, label: str, where: str) -> None:
+    """Raises MissionFileError (one line naming `where` and the sample) for the first sample of
+    a planned `path` (a `planning.path.Path`, local frame) above the sea surface or below the
+    prior map it was planned on (on the map's extent)."""
+    x, y, z = path.points.T
+    xmin, xmax, ymin, ymax = site.prior.extent
+    seabed = np.where((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax),
+                      site.prior.elevation_at(x, y), np.nan)
+    bad = np.flatnonzero((z > 0.0) | (z < np.nan_to_num(seabed, nan=-np.inf) - 1e-6))
+    if len(bad):
+        k = int(bad[0])
+        what = (f"{z[k]:.2f} m above the sea surface" if z[k] > 0.0 else
+                f"{seabed[k] - z[k]:.2f} m below the prior map's seabed there "
+                f"({-seabed[k]:.1f} m deep)")
+        raise MissionFileError(label, where, f"sample {k} of the planned path: depth "
+                               f"{-z[k]:.2f} m is {what}", "a path in the water the planner "
+                               "planned on the prior map")
+
+
 def check_against_site(spec: MissionSpec, site: Site) -> None:
     """Checks the mission values only the site can judge, against the prior map (what the
     operator knows) and the world's bounds: starts inside the world's bounds and in the water
