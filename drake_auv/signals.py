@@ -154,9 +154,11 @@ Response = _signal(
     "start time (s), start pose (m, rad) and target (m).",
     start=("x0", "z0"), target=("x1", "z1"))
 Watch = _signal(
-    "Watch", ("multibeam_hit_s", "profiler_hit_s", "tracking_since_s", "x", "y", "z"),
-    "The supervisor's `watch` group (6): last return time of each sonar (s), tracking error "
-    "above threshold since (s, -1: not), previous estimated position (m).",
+    "Watch", ("multibeam_hit_s", "profiler_hit_s", "tracking_since_s", "tracking_error0_m",
+              "x", "y", "z"),
+    "The supervisor's `watch` group (7): last return time of each sonar (s), tracking error "
+    "above threshold since (s, -1: not) and what it was then (m), previous estimated position "
+    "(m).",
     position=("x", "z"))
 LegProgress = _signal(
     "LegProgress", ("bearing", "turned", "start_x", "start_y"),

@@ -140,7 +140,8 @@ def test_replay_flies_goto_sections_and_park():
 
 
 class _FlatSurface:
-    """A horizontal seabed at `z0` with `TerrainSurface`'s distance query."""
+    """A horizontal seabed at `z0` with `TerrainSurface`'s distance queries (signed: below it
+    negative)."""
 
     def __init__(self, z0):
         self.z0 = z0
@@ -148,6 +149,9 @@ class _FlatSurface:
     def distance(self, points, upper_bound=np.inf):
         d = np.asarray(points, float)[:, 2] - self.z0
         return np.where(d <= upper_bound, d, np.inf), None
+
+    def signed_distance(self, points, upper_bound=np.inf):
+        return self.distance(points, upper_bound)[0]
 
 
 def replay_file(f, plan, geo, start, heave_in_3d=False):

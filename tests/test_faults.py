@@ -163,6 +163,30 @@ def test_supervisor_backs_off_from_the_map_when_tracking_fails():
     assert record[7] > 4.0 and abs(record[8]) < 0.5  # away (+x) from the voxel at x = -3
 
 
+@pytest.mark.parametrize("speed, response", [(0.3, "none"), (0.05, "back_off")])
+def test_a_step_the_vehicle_closes_is_not_a_fault(speed, response):
+    """The reference steps 9 m down at t = 0 (a COLA2 section's depth, held from its start):
+    closed at 0.3 m/s the error stays above 2 m for 20 s without a response; closed at
+    0.05 m/s (a failed heave thruster) it is a tracking error after 5 s."""
+    sup, simulator, context, x = _supervisor()
+    online = OnlineMap(0.5)  # one return 3 m west of the vehicle: room to back off
+    online.catch_up(ScanLog().append(ScanBatch.make(0.0, "multibeam", (0.0, 0.0, -5.0),
+                                                    [[-1.0, 0.0, 0.0]], [3.0], 20.0)))
+    sup.map_input.FixValue(context, online)
+    sup.reference_input.FixValue(context, np.r_[0.0, 0.0, -14.0, 0.0, np.zeros(4)])
+    for k, t in enumerate(np.arange(0.5, 20.01, 0.5)):
+        x[2] = -5.0 - speed * t
+        sup.state_input.FixValue(context, x)
+        sup.returns_inputs["multibeam"].FixValue(context, _returns(t, True, 2 + k))
+        simulator.AdvanceTo(t + 0.1)
+        if _mode(sup, context)[0] != "none":
+            break
+    assert _mode(sup, context)[0] == response
+    assert np.linalg.norm(x[:3] - (0.0, 0.0, -14.0)) > 2.0
+    if response != "none":
+        assert 5.0 <= t <= 5.6
+
+
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no survey samples: null statistics
 def test_a_navigation_jump_in_a_dive_ends_it_with_an_abort():
     from drake_auv.mission.report import summarise

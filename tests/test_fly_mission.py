@@ -57,6 +57,7 @@ def test_the_exported_file_flies_like_the_plan(flown, autopilot):
     internal, fly = summaries["internal"], summaries[autopilot]
     assert results[autopilot].outcomes == ["goal"] and results[autopilot].completed
     assert not fly["contact"] and fly["min_clearance_m"] > 5.0  # Omega 10 m
+    assert fly["responses"] == []  # the autopilot's own steps are no fault
     # ArduSub holds the plan's yaw (the slices face the wall) as the internal path does;
     # COLA2's sections can only head along their track, which turns the down-looking fan
     # across the contours and sees more of this wall: never less than the plan's

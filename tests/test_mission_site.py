@@ -175,8 +175,13 @@ def test_mission_values_only_the_site_can_judge(tmp_path):
                "steps.1={follow: {mode: horizontal, depth: 15, offset: 3, start: [600000, "
                "4600000]}}")
     assert "steps[0].plan.omega: 25 m leaves no water" in error("steps.0.plan.omega=25")
-    assert "site.start: z = -25 m is not in the water; allowed: z in (-20.0, 0) m there" in error(
-        "site.start=[499990, 4600000, -25, 0]")
+    assert ("site.start: depth 25 m is 5.00 m inside the world (its top surface there: 20.0 m "
+            "deep); allowed: a point in the water: depth in [0, 20.0) m there, outside the "
+            "structures") in error("site.start=[499990, 4600000, -25, 0]")
+    assert "site.start: depth 16 m is 1.50 m inside the world (its top surface there: 14.5 m " \
+        "deep)" in error("site.start=[500004, 4600000, -16, 0]")  # inside the cube
+    assert "site.start: depth -2 m is 2.00 m above the sea surface" in error(
+        "site.start=[499990, 4600000, 2, 0]")
     assert "steps[0].plan.depth: 22 m cuts no structure" in error(
         "steps.0.plan={method: contour, omega: 3, depth: 22}")
     load_mission(path, overrides=[follow.replace("25", "16")])  # above the seabed: fine

@@ -171,3 +171,45 @@ class FlownMission:
 
     def speed(self, leg: LocalLeg) -> float:
         return leg.speed if leg.speed is not None else self.default_speed
+
+
+METRES_PER_DEGREE = 111_320.0  # of latitude, on the WGS 84 ellipsoid (within 0.6 %)
+
+
+def _decimals(value: float) -> int:
+    """Decimals of `value` as written (its shortest round-trip form)."""
+    text = np.format_float_positional(float(value), trim="-")
+    return len(text.split(".")[1]) if "." in text else 0
+
+
+def position_tolerance(mission: VehicleMission) -> float:
+    """How far past a site's edge (m) the file's items may lie and still be the site's: two
+    units of the last decimal its latitudes and longitudes are written with, on the ground
+    (each rounded by up to half a unit; twice that covers both and the re-projection), 0.22 m
+    for 6 decimals, 0.22 mm for the 9 the exports write; a file with fewer than 5 is judged as
+    one with 5 (2.2 m: coarser positions are no file for one site)."""
+    values = [v for item in mission.items
+              for v in (item.lat, item.lon, item.start_lat, item.start_lon) if v is not None]
+    return 2.0 * 10.0 ** -max(5, *(_decimals(v) for v in values)) * METRES_PER_DEGREE
+
+
+def item_positions(mission: VehicleMission, legs: tuple[LocalLeg, ...], seabed_z,
+                   source: str) -> tuple[np.ndarray, list[str]]:
+    """(n, 3) where the items put the vehicle, local frame: each item's end (an altitude over
+    `seabed_z`, (len(legs),) m, the seabed's elevation under each end; NaN: not judged) and a
+    COLA2 section's start; and a name for each, for messages ("<source>: item k at lon .., lat
+    ..")."""
+    from drake_auv.autopilot.semantics import leg_target_z
+
+    points, names = [], []
+    for k, (item, leg, seabed) in enumerate(zip(mission.items, legs, seabed_z)):
+        name = f"{source}: item {k + 1} at lon {item.lon:.6f}, lat {item.lat:.6f}"
+        z = leg_target_z(leg, float(seabed))
+        if np.isfinite(z):
+            points.append([*leg.end, z])
+            names.append(name)
+        if leg.start is not None and leg.start_z is not None:
+            points.append([*leg.start, leg.start_z])
+            names.append(f"{name} (its start at lon {item.start_lon:.6f}, lat "
+                         f"{item.start_lat:.6f})")
+    return np.array(points, float).reshape(-1, 3), names

@@ -20,15 +20,16 @@ def clearance_report(positions: np.ndarray, surface, omega: float, min_depth: fl
         omega: the plan's offset, m; a sample closer than 0.5 omega is a violation.
         min_depth: the minimum operating depth, m; a sample shallower is a violation.
     Returns:
-        min_clearance_m and min_clearance_over_omega (3D distance to the surface; None when
-        every sample is farther than `checked_to_m` = 2 omega), shallowest_depth_m, samples,
+        min_clearance_m and min_clearance_over_omega (3D distance to the surface, signed:
+        negative below it or above the sea surface; None when every sample is farther than
+        `checked_to_m` = 2 omega), shallowest_depth_m, samples,
         closer_than_half_omega, shallower_than_min_depth, and closer_than_reachable: samples
         closer than the least of 0.5 omega and what the minimum depth leaves (the distance
         from the point at that depth above them).
     """
     p = np.asarray(positions, float)
     bound = 2.0 * omega
-    d, _ = surface.distance(p, upper_bound=bound)
+    d = surface.signed_distance(p, upper_bound=bound)
     tol = 1e-6
     close = np.flatnonzero(d < 0.5 * omega - tol)
     ceiling = np.column_stack([p[close, :2], np.full(len(close), -float(min_depth))])

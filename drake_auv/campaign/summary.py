@@ -95,9 +95,10 @@ def summary_markdown(summary: dict) -> str:
     head = ["variant" if not keys else " | ".join(f"`{k}`" for k in keys)]
     lines = [f"# Campaign: {summary['mission']}", "",
              f"Seeds {summary['seeds']}; {summary['overall']['runs']} runs "
-             f"({summary['overall']['failed']} failed). Contact: true clearance <= "
-             f"{VEHICLE_RADIUS_M:g} m. Rates with 95 % Wilson intervals; coverage and clearance "
-             "as median [5th-95th percentile] (min); real-time factor: median.", "",
+             f"({summary['overall']['failed']} failed). Contact: true signed clearance <= "
+             f"{VEHICLE_RADIUS_M:g} m (negative inside the world or out of the water). Rates "
+             "with 95 % Wilson intervals; coverage and clearance as median [5th-95th "
+             "percentile] (min); real-time factor: median.", "",
              "| " + " | ".join(head + ["runs", "failed", "contacts", "contact rate (95 %)",
                                        "multibeam coverage %", "camera coverage %",
                                        "min clearance m", "responses", "real-time factor"])
@@ -155,7 +156,8 @@ def figures(rows: list[dict], vary_keys) -> dict[str, Figure]:
     values = _floats([r for g in groups.values() for r in g], "min_clearance_m")
     ax.hist(values, bins=30, color="tab:blue")
     ax.axvline(VEHICLE_RADIUS_M, color="tab:red", label="contact (vehicle radius)")
-    ax.set(xlabel="minimum true clearance of a dive (m)", ylabel="runs",
+    ax.set(xlabel="minimum true signed clearance of a dive (m; < 0: inside the world or out "
+                  "of the water)", ylabel="runs",
            title=f"Minimum clearance, {len(values)} runs")
     ax.legend()
     comparison = Figure(figsize=(11, 4.5))

@@ -71,6 +71,7 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
                          f"1.4 m/s), got {speed}")
     if len(path) < 2:
         raise ValueError("the path needs at least 2 samples to fly")
+    check_below_surface(path)
     if not (np.isfinite(realtime_rate) and realtime_rate >= 0):
         raise ValueError(f"realtime_rate must be >= 0 (0 = as fast as possible), got {realtime_rate}")
     out_dir = FilePath(out_dir)
@@ -107,6 +108,19 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
         np.savetxt(temporary, np.column_stack([times, state.T]), delimiter=",", fmt="%.5f",
                    header=",".join(("t", *VehicleState.get_fields())), comments="")
     return result
+
+
+def check_below_surface(path, source: str = "path", first_row: int | None = None) -> None:
+    """Raises ValueError (one line) for the first sample of `path` above the sea surface (z > 0:
+    out of the water), named `<source> sample <k>`, or `<source>:<row>` when the samples are
+    a file's rows from `first_row` on."""
+    above = np.flatnonzero(path.points[:, 2] > 0.0)
+    if len(above):
+        k = int(above[0])
+        where = f"{source} sample {k}" if first_row is None else f"{source}:{first_row + k}"
+        raise ValueError(f"{where}: depth {-path.points[k, 2]:g} m is {path.points[k, 2]:.2f} m "
+                         "above the sea surface (out of the water); allowed: z <= 0 m (z up, "
+                         "sea surface z = 0)")
 
 
 SETTLED = (0.02, 0.01, 0.01)  # m from the path's end, m/s, rad of heading: the flight is over
@@ -176,6 +190,7 @@ def run(args) -> int:
     from drake_auv.visualization import Scene
 
     path = Path.from_csv(args.path_csv)
+    check_below_surface(path, args.path_csv, first_row=2)  # row 1: the header
     navigation = NavigationParams(heading_bias=np.radians(args.heading_bias_deg),
                                   random_walk=args.random_walk, seed=args.seed)
     scene = None if args.no_html else Scene()

@@ -20,11 +20,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from drake_auv.autopilot.items import FlownMission, localise
+from drake_auv.autopilot.items import (FlownMission, item_positions, localise,
+                                       position_tolerance)
 from drake_auv.autopilot.semantics import mission_duration
 from drake_auv.following.behaviours import EstimatorParams, FollowConfig, FollowingParams
 from drake_auv.mission.legs import Leg
-from drake_auv.mission.site import Site
+from drake_auv.mission.site import Site, check_in_water, check_path_in_water
 from drake_auv.mission.spec import (ExploreStep, FlyStep, FollowStep, MissionFileError,
                                     MissionSpec, PlanStep, SurveyStep)
 from drake_auv.planning.path import Path
@@ -111,7 +112,8 @@ def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMis
                                f"a valid {step.file.suffix} {step.autopilot} mission") from None
     geo = GeoFrame(site.prior)
     legs = localise(mission, geo.from_lonlat, geo.grid_north_azimuth)
-    (x0, y0), (x1, y1) = site.world.bounds[:, :2]
+    tolerance = position_tolerance(mission)
+    (x0, y0), (x1, y1) = site.world.bounds[:, :2] + [[-tolerance], [tolerance]]
     for k, (item, leg) in enumerate(zip(mission.items, legs)):
         points = [leg.end] + ([leg.start] if leg.start is not None else [])
         if not all(x0 <= x <= x1 and y0 <= y <= y1 for x, y in points):
@@ -120,13 +122,19 @@ def flown_mission(step: FlyStep, site: Site, label: str, where: str) -> FlownMis
                                    f"at lon {item.lon:.6f}, lat {item.lat:.6f} lies outside "
                                    "the world (a file for another site?)",
                                    f"positions in x [{sx0:.1f}, {sx1:.1f}], y [{sy0:.1f}, "
-                                   f"{sy1:.1f}] m of the site's CRS {site.prior.crs}")
+                                   f"{sy1:.1f}] m of the site's CRS {site.prior.crs}, or within "
+                                   f"{tolerance:.2g} m of them (the file's precision)")
         depths = [item.z] if item.z_mode == "depth" else []
         depths += [item.start_depth] if item.start_depth is not None else []
         if any(d < 0 for d in depths):
             raise MissionFileError(label, f"{where}.file", f"{step.file.name}: item {k + 1} "
                                    f"commands depth {min(depths):g} m, above the sea surface",
                                    "depths >= 0 m (positive down)")
+    ends = np.array([leg.end for leg in legs], float)
+    tops = site.clearance.top(ends)  # where an altitude item holds its altitude over
+    tops = np.where(np.isfinite(tops), tops, site.prior.elevation_at(ends[:, 0], ends[:, 1]))
+    points, names = item_positions(mission, legs, tops, step.file.name)
+    check_in_water(site, points, label, f"{where}.file", names)
     return FlownMission(mission.autopilot, legs, mission.heave_in_3d, step.speed,
                         step.file.name)
 
@@ -167,13 +175,14 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
     method, survey_speed = "coverage", 0.5
     margin = spec.limits.time_margin
     azimuth = SENSOR_AZIMUTH.get(spec.payload.multibeam_mount)
-    for step in spec.steps:
+    label = spec.source.name if spec.source is not None else spec.name
+    for k, step in enumerate(spec.steps):
         if isinstance(step, PlanStep):
             nominal, coverage = _plan_step(step, site)
+            check_path_in_water(nominal, site, label, f"steps[{k}].plan")
             method = step.method
             omega = step.omega
             survey_speed = step.speed
-    label = spec.source.name if spec.source is not None else spec.name
     flown = {k: flown_mission(step, site, label, f"steps[{k}].fly")
              for k, step in enumerate(spec.steps) if isinstance(step, FlyStep)}
     start = site.start_state
@@ -190,6 +199,11 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             xy = (site.to_local(np.asarray(first.start[:2], dtype=float))
                   if first.start is not None else charted_centre(site) + [-30.0, 0.0])
             start[:3] = (xy[0], xy[1], -(first.depth or 5.0))
+        first_index = spec.steps.index(first)
+        check_in_water(site, start[:3], label, f"steps[{first_index}].{first.KIND}",
+                       f"where the dive starts, at ({start[0]:.1f}, {start[1]:.1f}) local")
+    else:
+        check_in_water(site, start[:3], label, "site.start", "")
     legs, path_legs, follow_legs, replan_legs, planes, autopilot_legs = [], {}, {}, [], {}, {}
     explore_legs = {}
     position, yaw = np.asarray(start[:3], float), float(start[5])
@@ -227,6 +241,8 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             if step.mode == "horizontal" and azimuth is not None:
                 # fly along the wall with the payload facing it: the wall on the payload's side
                 side, yaw_offset = (-1 if azimuth > 0 else 1), -azimuth
+            check_in_water(site, (*xy, z), label, f"steps[{k}].follow",
+                           f"where following begins, at ({xy[0]:.1f}, {xy[1]:.1f}) local")
             add_transit(k, (*xy, z), facing + yaw_offset, TRANSIT_SPEED)
             params = FollowingParams(offset=step.offset, speed=step.speed, side=side,
                                      yaw_offset=yaw_offset, corner_weight=step.corner_weight,
@@ -307,10 +323,9 @@ def explore_parameters(step: ExploreStep, site: Site, spec: MissionSpec, label: 
                        where: str):
     """The step's `ExploreParameters` (local frame). Raises MissionFileError (one line
     naming `where`) for a region that holds no part of the world, or whose water the
-    vehicle cannot reach (every point of it below the seabed or inside the structure: a
-    vertical ray up from it meets the world)."""
+    vehicle cannot reach (every point of it below the seabed or inside the structure:
+    `Site.clearance`)."""
     from drake_auv.exploration.planner import ExploreParameters
-    from drake_auv.geometry.raycast import RayCaster
 
     region = explore_region(step, site)
     axes = [np.linspace(region[k] + 0.25, region[k + 3] - 0.25,
@@ -318,9 +333,7 @@ def explore_parameters(step: ExploreStep, site: Site, spec: MissionSpec, label: 
             for k in range(3)]
     points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     points = points[points[:, 2] < -1.0]
-    up = np.tile([0.0, 0.0, 1.0], (len(points), 1))
-    blocked = (RayCaster(site.world).cast(points, up, 1e4).faces >= 0) if len(points) else []
-    if np.all(blocked):
+    if np.all(site.clearance.inside(points)):
         raise MissionFileError(label, f"{where}.region", f"{list(step.region)} holds no water "
                                "the vehicle can reach (all of it below the seabed or inside "
                                "the structure)", "a box that holds open water below z = -1 m")

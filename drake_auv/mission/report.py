@@ -2,9 +2,10 @@
 Diagram, written by `write_outputs`.
 
 `report.json` keys (a contract; more may be added): `coverage.multibeam`, `coverage.camera`
-(fractions of the target's area, union over the dive), `min_clearance_m` (true, to anything),
-`contact`, `distance_to_target` (`mean_m`, `sd_m`, `min_m` over the survey samples within
-2 Omega of the target, and `map_mean_m`, the same against the on-line map's voxels on the
+(fractions of the target's area, union over the dive), `min_clearance_m` (the true signed
+clearance to anything, `geometry.clearance`: negative inside the world or above the sea
+surface), `contact` (that clearance at or below the vehicle's radius), `distance_to_target`
+(`mean_m`, `sd_m`, `min_m` over the survey samples within 2 Omega of the target, and `map_mean_m`, the same against the on-line map's voxels on the
 target, as the reference reports it), `phases` (`name`, `start_s`, `end_s`, one time axis),
 `faults` (the injected ones, as in the mission file), `responses` (the supervisor's answers:
 `response`, `cause`, `start_s`, `end_s`), `mission.aborted` and `coverage_vs_time` (`t_s`,
@@ -301,7 +302,8 @@ def report_markdown(summary: dict) -> str:
               f" minimum over the dive {d['min_m']:.2f} m. Against the on-line map: mean "
               f"{_fmt(d['map_mean_m'], '.2f')} m, sd {_fmt(d['map_sd_m'], '.2f')} m.",
               coverage_time_line(summary["coverage_vs_time"]),
-              f"- Minimum clearance to anything: {summary['min_clearance_m']:.2f} m: "
+              f"- Minimum signed clearance to anything (negative: inside the world or out "
+              f"of the water): {summary['min_clearance_m']:.2f} m: "
               + ("**contact**." if summary["contact"] else "no contact.")
               + f" Largest navigation error: {summary['navigation_error_max_m']:.2f} m.",
               *ocean_markdown(summary.get("ocean")),

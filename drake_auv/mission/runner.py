@@ -5,7 +5,8 @@ done) or the time cap (`limits.max_time_s`, default the sum of the legs' budgets
 also advances the progress bar and moves the logs' samples to disk every `LOG_SPOOL_S`
 (`mission.log_spool`: their memory does not grow with the dive). `MissionResult` holds what
 the report needs, read from the logs and the systems' Contexts after the run; true distances
-come from the exact point-to-mesh distance, on the true world.
+come from the exact point-to-mesh distance, on the true world, and the clearance is signed
+(`geometry.clearance`: negative inside the world or out of the water).
 """
 
 from __future__ import annotations
@@ -50,7 +51,9 @@ class MissionResult:
     Attributes:
         spec, site, plan: what was flown, where, and its off-line part.
         times: (n,) s; state: (n, 12) true state; estimated: (n, 12) navigation's.
-        distance: (n,) true distance to the target, m; clearance: (n,) to anything, m.
+        distance: (n,) true distance to the target, m; clearance: (n,) signed clearance to
+            anything, m (`geometry.clearance`: negative inside the world or above the sea
+            surface).
         leg_at: (n,) index of the leg flying at each sample.
         phases: the legs grouped by phase, on one time axis; outcomes: per leg ("goal",
             "timed out", "flying" when the time cap stopped it).
@@ -186,7 +189,7 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
     leg_at = begun[np.maximum(np.searchsorted(starts, times, side="right") - 1, 0)]
     position = VehicleState(state).position
     distance = mesh_distance(site.target_mesh, position)
-    clearance = mesh_distance(site.world, position)
+    clearance = site.clearance.signed(position)
     replanning = np.zeros((0, ReplanningStep.size()))
     if "replanning" in logs:
         table = logs["replanning"].data().T

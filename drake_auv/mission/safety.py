@@ -8,7 +8,11 @@ Detection (never from the true world or the injected fault itself):
   seabed), not silence.
 - thruster failure: the estimated position is more than `tracking_error_m` from the reference
   being tracked for `tracking_s` s (a failed thruster makes the others saturate and the error
-  grow; the allocation is not told which one failed).
+  grow; the allocation is not told which one failed), and the error did not shrink over those
+  `tracking_s` s at `closing_speed` or faster. A reference the flown autopilot moves in a step
+  (COLA2 holds a section's final depth from its first instant: a 9 m step on a steep wall) is
+  an error the healthy vehicle closes at its own speed: the window starts again, no fault. A
+  failed thruster or a current the thrusters cannot hold leaves the error standing or growing.
 - navigation jump: the estimated position moved more than `jump_m` in one supervisor period
   (the vehicle flies at most ~0.5 m/s: 0.25 m a period).
 
@@ -52,6 +56,7 @@ class SafetyRules:
     hold_max_s: float = param(60.0, **_POSITIVE)
     tracking_error_m: float = param(2.0, **_POSITIVE)
     tracking_s: float = param(5.0, **_POSITIVE)
+    closing_speed: float = param(0.1, **_POSITIVE, unit="m/s")
     jump_m: float = param(1.5, **_POSITIVE)
     backoff_m: float = param(5.0, **_POSITIVE)
     backoff_range_m: float = param(15.0, **_POSITIVE)
@@ -63,6 +68,12 @@ class SafetyRules:
 
     def __post_init__(self):
         validate(self)
+
+
+def closing(rules: SafetyRules, error0: float, error: float, elapsed: float) -> bool:
+    """Whether a tracking error of `error0` m `elapsed` s ago, `error` m now, shrank at
+    `closing_speed` or faster (the vehicle flying to a reference that stepped away)."""
+    return error0 - error >= rules.closing_speed * elapsed
 
 
 def relied_sensors(behaviour: str) -> tuple[str, ...]:

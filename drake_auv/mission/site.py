@@ -135,6 +135,14 @@ class Site:
         """The target faces as their own mesh (local frame), built once."""
         return self.world.submesh([np.flatnonzero(self.target_faces)], append=True)
 
+    @functools.cached_property
+    def clearance(self):
+        """The world's `geometry.clearance.WorldClearance` (local frame), built once: signed
+        clearance, negative inside the world or above the sea surface."""
+        from drake_auv.geometry.clearance import WorldClearance
+
+        return WorldClearance(self.world)
+
 
 def shift_prior(bathy: Bathymetry, error_m: float, seed: int) -> Bathymetry:
     """`bathy` moved horizontally by `error_m` (m, in [0, 5]) in a direction drawn from
@@ -314,11 +322,48 @@ def _deepest(site: Site, lo, hi) -> float:
     return float(-z.min())
 
 
+def check_in_water(site: Site, points, label: str, where: str, names) -> None:
+    """Raises MissionFileError (one line naming `where` and the point's name in `names`, one
+    per point, or one for all, "" for none) for the first local point (n, 3) inside the world
+    or above the sea surface (`Site.clearance`), with its depth against the world's top
+    there."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    names = [names] * len(points) if isinstance(names, str) else list(names)
+    for name, problem, (x, y, _) in zip(names, site.clearance.misplaced(points), points):
+        if problem is not None:
+            top = float(site.clearance.top([[x, y]])[0])
+            allowed = (f"a point in the water: depth in [0, {-top:.1f}) m there, outside the "
+                       "structures" if np.isfinite(top) and top < 0.0 else
+                       "a point in the water, outside the world")
+            raise MissionFileError(label, where, f"{name}: {problem}" if name else problem,
+                                   allowed)
+
+
+def check_path_in_water(path, site: Site, label: str, where: str) -> None:
+    """Raises MissionFileError (one line naming `where` and the sample) for the first sample of
+    a planned `path` (a `planning.path.Path`, local frame) above the sea surface or below the
+    prior map it was planned on (on the map's extent)."""
+    x, y, z = path.points.T
+    xmin, xmax, ymin, ymax = site.prior.extent
+    seabed = np.where((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax),
+                      site.prior.elevation_at(x, y), np.nan)
+    bad = np.flatnonzero((z > 0.0) | (z < np.nan_to_num(seabed, nan=-np.inf) - 1e-6))
+    if len(bad):
+        k = int(bad[0])
+        what = (f"{z[k]:.2f} m above the sea surface" if z[k] > 0.0 else
+                f"{seabed[k] - z[k]:.2f} m below the prior map's seabed there "
+                f"({-seabed[k]:.1f} m deep)")
+        raise MissionFileError(label, where, f"sample {k} of the planned path: depth "
+                               f"{-z[k]:.2f} m is {what}", "a path in the water the planner "
+                               "planned on the prior map")
+
+
 def check_against_site(spec: MissionSpec, site: Site) -> None:
     """Checks the mission values only the site can judge, against the prior map (what the
-    operator knows) and the world's bounds: starts inside the world and in the water, follow
-    depths above the seabed under the structure, plan offsets and contour depths that leave
-    water. Raises MissionFileError (one line) on the first problem."""
+    operator knows) and the world's bounds: starts inside the world's bounds and in the water
+    (`check_in_water`: against the world itself), follow depths above the seabed under the
+    structure, plan offsets and contour depths that leave water. Raises MissionFileError (one
+    line) on the first problem."""
     label = spec.source.name if spec.source is not None else spec.name
     (x0, y0), (x1, y1) = site.world.bounds[:, :2]
     (sx0, sy0), (sx1, sy1) = site.to_site(site.world.bounds[:, :2])
@@ -333,11 +378,7 @@ def check_against_site(spec: MissionSpec, site: Site) -> None:
 
     if spec.site.start is not None:
         x, y = check_xy(spec.site.start, "site.start")
-        seabed = float(site.prior.elevation_at(x, y))
-        z = spec.site.start[2]
-        if z >= 0.0 or (np.isfinite(seabed) and z <= seabed):
-            raise MissionFileError(label, "site.start", f"z = {z:g} m is not in the water",
-                                   f"z in ({seabed:.1f}, 0) m there")
+        check_in_water(site, [x, y, spec.site.start[2]], label, "site.start", "")
     target_lo, target_hi = site.target_mesh.bounds[:, :2]
     for i, step in enumerate(spec.steps):
         where = f"steps[{i}].{step.KIND}"

@@ -36,8 +36,8 @@ from pydrake.systems.framework import EventStatus, InputPortIndex, LeafSystem
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mission.legs import Leg, advance_progress, goal_reached, start_progress
 from drake_auv.mission.safety import (CAUSES, RESPONSES, SENSORS, SafetyRules, abort_target,
-                                      back_off_target, relied_sensors, response_record,
-                                      response_reference)
+                                      back_off_target, closing, relied_sensors,
+                                      response_record, response_reference)
 from drake_auv.signals import (ExplorerStatus, LegProgress, LegSignal, PathStatus, PilotStatus,
                                Reference, ReplannerStatus, Response, VehicleState, Watch)
 from drake_auv.sonar.returns import SonarReturns
@@ -138,14 +138,18 @@ class MissionSupervisor(LeafSystem):
                     setattr(watch, field, max(getattr(watch, field), returns.time))
         jumped = bool(np.linalg.norm(position - watch.position) > self.rules.jump_m)
         watch.position = position
+        tracking = False
         if self.reference_input.HasValue(context):
             reference = Reference(self.reference_input.Eval(context))
-            error = np.linalg.norm(position - reference.position)
-            since = watch.tracking_since_s
-            watch.tracking_since_s = (since if since >= 0 else t) \
-                if error > self.rules.tracking_error_m else -1.0
-        since = watch.tracking_since_s
-        tracking = since >= 0 and t - since >= self.rules.tracking_s
+            error = float(np.linalg.norm(position - reference.position))
+            since, error0 = watch.tracking_since_s, watch.tracking_error0_m
+            if error <= self.rules.tracking_error_m:
+                since = -1.0
+            elif since < 0 or (t - since >= self.rules.tracking_s
+                               and closing(self.rules, error0, error, t - since)):
+                since, error0 = t, error  # a new window (or a step being flown: a fresh one)
+            tracking = since >= 0 and t - since >= self.rules.tracking_s
+            watch.tracking_since_s, watch.tracking_error0_m = since, error0
         return watch[:], jumped, tracking
 
     def _respond(self, context, t: float, x: np.ndarray, watch: np.ndarray, jumped: bool,

@@ -11,7 +11,8 @@
   the axis and within the sensor range. Occlusion is not modelled (the grid method); on height
   fields at offsets of a few metres it matters little, and the simulator's coverage recorder
   ray-casts the true mesh instead.
-- clearance: distance from each sample to the terrain surface (3D, nearest point), m.
+- clearance: signed distance from each sample to the terrain surface (3D, nearest point), m:
+  negative below it or above the sea surface.
 """
 
 from __future__ import annotations
@@ -113,11 +114,12 @@ def surface_area_weights(surface: TerrainSurface) -> np.ndarray:
 
 
 def clearance(surface: TerrainSurface, points: np.ndarray, omega: float) -> np.ndarray:
-    """(N,) distance of each point to the surface, m (inf beyond 4 omega when some point is
-    nearer; exact otherwise)."""
-    d, _ = surface.distance(points, upper_bound=4.0 * omega)
+    """(N,) signed clearance of each point to the surface, m (`TerrainSurface.signed_distance`:
+    negative below it or above the sea surface; inf beyond 4 omega when some point is nearer;
+    exact otherwise)."""
+    d = surface.signed_distance(points, upper_bound=4.0 * omega)
     if not np.isfinite(d).any():
-        d, _ = surface.distance(points)
+        d = surface.signed_distance(points)
     return d
 
 

@@ -121,6 +121,17 @@ class TerrainSurface:
         nearest[found] = self._tree_points[idx[found]]
         return d, nearest
 
+    def signed_distance(self, points, upper_bound: float = np.inf) -> np.ndarray:
+        """(N,) `distance` signed: negative below the surface (on the grid's extent: inside the
+        ground) and above the sea surface (z > 0) at most -z, m. Points farther than
+        `upper_bound` above it get inf; those below it their exact distance."""
+        p = np.asarray(points, dtype=float).reshape(-1, 3)
+        d, _ = self.distance(p, upper_bound=upper_bound)
+        below = self.inside(p[:, 0], p[:, 1]) & (p[:, 2] < self.elevation(p[:, 0], p[:, 1]))
+        if below.any():
+            d[below] = -self.distance(p[below])[0]
+        return np.minimum(d, np.where(p[:, 2] > 0.0, -p[:, 2], np.inf))
+
     def clamp_to_grid(self, points: np.ndarray, copy: bool = True) -> np.ndarray:
         """Points with x, y clamped to the grid's extent (cell centres): the path stays over
         the mapped seabed. With `copy` False a float array is clamped in place."""
