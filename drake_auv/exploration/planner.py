@@ -168,8 +168,9 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
     """One planning step from the vehicle at `position` (3,) towards `current` (see the
     module); `seed` (an int or a `SeedSequence`): its child 0 draws the random strategy,
     child 1 STOMP's rollouts; `previous`: the last step's grid (`ViewStep.grid`) and `rays`
-    the beams inserted since (`scan_rays`), so only the cells they touched are read again, and `returns` the multibeam's return points
-    and beam directions since (`frontiers.multibeam_returns`: the faces it has seen);
+    the beams inserted since (`scan_rays`), so only the cells they touched are read again,
+    and `returns` the multibeam's return points and beam directions since
+    (`frontiers.multibeam_returns`: the faces it has seen);
     `visited` (v, 3): the targets reached before, m (a candidate within `VISITED_RADIUS` of one is not chosen again: what its view
     promised and did not give, behind rock or below the floor, it will not give later);
     `yaw`: the vehicle's, rad; `current_path` (k, 3): what is left of the path to `current`,
