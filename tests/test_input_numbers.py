@@ -105,3 +105,24 @@ def test_yaml_bombs_are_refused_at_once_in_one_line(tmp_path, text, message):
         load_mission(path)
     assert time.perf_counter() - start < 1.0 and len(str(info.value)) < 300
     assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--origin-lonlat", "500,100"], "origin_lonlat must be lon in [-180, 180]"),
+    (["--export", "qgc", "--origin-lonlat", "3,42", "--max-items", "0"], "--max-items"),
+    (["--export", "cola2"], "the grid has no CRS")])
+def test_export_options_are_refused_before_planning(tmp_path, capsys, monkeypatch, extra,
+                                                    message):
+    from drake_auv.planning import coverage_plan
+
+    def never(*args, **kwargs):
+        raise AssertionError("planned before the options were checked")
+
+    monkeypatch.setattr(coverage_plan, "plan_coverage", never)
+    grid = tmp_path / "g.npz"
+    np.savez(grid, z=-20.0 - 0.1 * np.arange(30.0)[None, :] * np.ones((25, 1)),
+             spacing=[1.0, 1.0])
+    assert main(["plan", str(grid), "-o", str(tmp_path / "o"), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "o" / "path.csv").exists()
