@@ -126,3 +126,16 @@ def test_export_options_are_refused_before_planning(tmp_path, capsys, monkeypatc
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0], err
     assert not (tmp_path / "o" / "path.csv").exists()
+
+
+def test_a_raster_larger_than_the_memory_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    from drake_auv import resources
+
+    z = -20.0 - 0.1 * np.arange(40.0)[None, :] * np.ones((30, 1))
+    path = tmp_path / "grid.tif"
+    write_geotiff(Bathymetry(z, (1.0, 1.0), (0.0, 0.0), "EPSG:32631"), path)
+    assert read_bathymetry(path).shape == (30, 40)
+    monkeypatch.setattr(resources, "available_memory", lambda: 1000)
+    with pytest.raises(ValueError, match=r"reading its 30 x 40 cells needs 0\.03 MiB of memory, "
+                                         r"more than the 0\.00 MiB available"):
+        read_bathymetry(path)
