@@ -33,4 +33,4 @@ def check_memory(need_bytes: float, what: str) -> None:
 
 
 def _size(n: float) -> str:
-    return f"{n / GiB:.1f} GiB" if n >= GiB else f"{n / MiB:.2f} MiB"
+    return f"{n / GiB:.3g} GiB" if n >= GiB else f"{n / MiB:.3g} MiB"

@@ -136,6 +136,26 @@ def test_a_raster_larger_than_the_memory_is_refused_before_it_is_read(tmp_path, 
     write_geotiff(Bathymetry(z, (1.0, 1.0), (0.0, 0.0), "EPSG:32631"), path)
     assert read_bathymetry(path).shape == (30, 40)
     monkeypatch.setattr(resources, "available_memory", lambda: 1000)
-    with pytest.raises(ValueError, match=r"reading its 30 x 40 cells needs 0\.03 MiB of memory, "
-                                         r"more than the 0\.00 MiB available"):
+    with pytest.raises(ValueError, match=r"reading its 30 x 40 cells needs 0\.0286 MiB of memory, "
+                                         r"more than the 0\.000954 MiB available"):
         read_bathymetry(path)
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--omega", "1e-6"], "omega 1e-06 m: the terrain's distance samples every 2.5e-07 m needs"),
+    (["--slice-count", "1000000000"], "slice_count must be a whole number in [1, 1000]"),
+    (["--slice-spacing", "1e-9"], "gives 1.2e+10 slicing planes over a high-slope region 12.0 m "
+                                  "high; allowed: at most 1000 planes")])
+def test_plans_that_would_not_fit_are_refused_at_once(tmp_path, capsys, extra, message):
+    import time
+
+    yy, xx = np.mgrid[0:60, 0:50] * 1.0
+    grid = tmp_path / "wall.npz"
+    np.savez(grid, z=-40.0 + 0.05 * yy + np.clip(xx - 20.0, 0.0, 12.0) * 0.9,
+             spacing=[1.0, 1.0])
+    start = time.perf_counter()
+    assert main(["plan", str(grid), "--no-figures", "--no-3d-metrics", *extra,
+                 "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert time.perf_counter() - start < 15.0
