@@ -159,3 +159,16 @@ def test_plans_that_would_not_fit_are_refused_at_once(tmp_path, capsys, extra, m
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0], err
     assert time.perf_counter() - start < 15.0
+
+
+def test_an_explore_region_larger_than_the_memory_is_refused_at_load(tmp_path, capsys):
+    from drake_auv.exploration.planner import ExploreParameters
+
+    assert ExploreParameters(region=(-13.0, -11.0, -40.5, 16.0, 11.0, -26.0)).cell_m == 1.0
+    with pytest.raises(ValueError, match=r"\(1e\+18 planning cells\) needs .* GiB of memory, "
+                                         "more than the"):
+        ExploreParameters(region=(0.0, 0.0, -1e6, 1e6, 1e6, -5.0))
+    assert main(["run", "boulder_explore", "-o", str(tmp_path / "o"), "--set",
+                 "steps.0.explore.region=[0, 0, -1000000, 1000000, 1000000, -5]"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "planning cells) needs" in err[0], err
