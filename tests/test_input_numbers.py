@@ -172,3 +172,20 @@ def test_an_explore_region_larger_than_the_memory_is_refused_at_load(tmp_path, c
                  "steps.0.explore.region=[0, 0, -1000000, 1000000, 1000000, -5]"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "planning cells) needs" in err[0], err
+
+
+def test_a_geojson_in_projected_metres_without_crs_is_refused_in_one_line(tmp_path, capsys):
+    yy, xx = np.mgrid[0:40, 0:30] * 1.0
+    grid = tmp_path / "utm.tif"
+    write_geotiff(Bathymetry(-40.0 + 0.05 * yy + np.clip(xx - 12.0, 0.0, 8.0) * 0.9, (1.0, 1.0),
+                             (500000.0, 4000000.0), "EPSG:32631"), grid)
+    ring = [[500005, 4000005], [500015, 4000005], [500015, 4000015], [500005, 4000015],
+            [500005, 4000005]]
+    zone = tmp_path / "zone.geojson"
+    zone.write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {},
+         "geometry": {"type": "Polygon", "coordinates": [ring]}}]}))
+    assert main(["plan", str(grid), "--no-go", str(zone), "--no-figures", "--no-3d-metrics",
+                 "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "are not longitudes and latitudes" in err[0], err
