@@ -189,3 +189,29 @@ def test_a_geojson_in_projected_metres_without_crs_is_refused_in_one_line(tmp_pa
                  "-o", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "are not longitudes and latitudes" in err[0], err
+
+
+def test_a_hold_longer_than_an_hour_in_a_flown_file_is_refused_naming_the_item(tmp_path):
+    import re
+
+    from drake_auv.planning.cola2 import read_cola2
+    from drake_auv.planning.qgc import read_qgc_plan
+
+    yy, xx = np.mgrid[0:40, 0:30] * 1.0
+    tif = tmp_path / "small.tif"
+    write_geotiff(Bathymetry(-40.0 + 0.05 * yy + np.clip(xx - 12.0, 0.0, 8.0) * 0.9, (1.0, 1.0),
+                             (1000.0, 2000.0), "EPSG:32631"), tif)
+    out = tmp_path / "o"
+    assert main(["plan", str(tif), "--omega", "2", "--no-figures", "--no-3d-metrics",
+                 "--export", "cola2,qgc", "-o", str(out)]) == 0
+    assert read_qgc_plan(out / "mission.plan").items and read_cola2(out / "mission.xml").items
+    plan = json.loads((out / "mission.plan").read_text())
+    waypoint = next(i for i in plan["mission"]["items"] if i["command"] == 16)
+    waypoint["params"][0] = 1.0e9
+    (out / "mission.plan").write_text(json.dumps(plan))
+    with pytest.raises(ValueError, match=r"hold \(param 1, s\) must be a number in \[0, 3600"):
+        read_qgc_plan(out / "mission.plan")
+    xml = (out / "mission.xml").read_text()
+    (out / "mission.xml").write_text(re.sub(r"<time>[^<]*</time>", "<time>1e9</time>", xml))
+    with pytest.raises(ValueError, match=r"park field 'time' must be in \[0, 3600\] s"):
+        read_cola2(out / "mission.xml")
