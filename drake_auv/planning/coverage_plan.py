@@ -20,8 +20,8 @@ from drake_auv.planning.lawnmower import (check_omega_fits, check_sensor_paramet
                                           plan_lawnmower, wet_grid)
 from drake_auv.planning.path import Path
 from drake_auv.planning.route import RouteBuilder
-from drake_auv.planning.slicing import (MAX_SLICES, Contour, fixed_depression, order_contours, slice_levels,
-                                        slice_region)
+from drake_auv.planning.slicing import (MAX_SLICES, Contour, fixed_depression, order_contours,
+                                        slice_levels, slice_region)
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.resources import check_memory
 from drake_auv.terrain.bathymetry import Bathymetry
