@@ -161,7 +161,8 @@ def test_a_real_scheduler_answers_the_probe(scheduler):
 
 def test_refused_arguments_write_nothing(tmp_path, capsys):
     out = tmp_path / "out"
-    for argv, message in ((["--workers", "0"], "--workers 0: allowed: an integer >= 1"),
+    for argv, message in ((["--workers", "0"], "--workers 0: this machine has"),
+                          (["--workers", "1000"], "allowed: an integer in [1, "),
                           (["--vary", "site.bogus=1,2"], "site.bogus: unknown key"),
                           (["--seeds", "3:1"], "--seeds: '3:1' is empty")):
         assert main(["campaign", "breakwater", "--seeds", "0:2", *argv, "-o", str(out)]) == 2

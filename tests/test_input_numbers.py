@@ -105,3 +105,113 @@ def test_yaml_bombs_are_refused_at_once_in_one_line(tmp_path, text, message):
         load_mission(path)
     assert time.perf_counter() - start < 1.0 and len(str(info.value)) < 300
     assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--origin-lonlat", "500,100"], "origin_lonlat must be lon in [-180, 180]"),
+    (["--export", "qgc", "--origin-lonlat", "3,42", "--max-items", "0"], "--max-items"),
+    (["--export", "cola2"], "the grid has no CRS")])
+def test_export_options_are_refused_before_planning(tmp_path, capsys, monkeypatch, extra,
+                                                    message):
+    from drake_auv.planning import coverage_plan
+
+    def never(*args, **kwargs):
+        raise AssertionError("planned before the options were checked")
+
+    monkeypatch.setattr(coverage_plan, "plan_coverage", never)
+    grid = tmp_path / "g.npz"
+    np.savez(grid, z=-20.0 - 0.1 * np.arange(30.0)[None, :] * np.ones((25, 1)),
+             spacing=[1.0, 1.0])
+    assert main(["plan", str(grid), "-o", str(tmp_path / "o"), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "o" / "path.csv").exists()
+
+
+def test_a_raster_larger_than_the_memory_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    from drake_auv import resources
+
+    z = -20.0 - 0.1 * np.arange(40.0)[None, :] * np.ones((30, 1))
+    path = tmp_path / "grid.tif"
+    write_geotiff(Bathymetry(z, (1.0, 1.0), (0.0, 0.0), "EPSG:32631"), path)
+    assert read_bathymetry(path).shape == (30, 40)
+    monkeypatch.setattr(resources, "available_memory", lambda: 1000)
+    with pytest.raises(ValueError, match=r"reading its 30 x 40 cells needs 0\.0286 MiB of memory, "
+                                         r"more than the 0\.000954 MiB available"):
+        read_bathymetry(path)
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--omega", "1e-6"], "omega 1e-06 m: the terrain's distance samples every 2.5e-07 m needs"),
+    (["--slice-count", "1000000000"], "slice_count must be a whole number in [1, 1000]"),
+    (["--slice-spacing", "1e-9"], "gives 1.2e+10 slicing planes over a high-slope region 12.0 m "
+                                  "high; allowed: at most 1000 planes")])
+def test_plans_that_would_not_fit_are_refused_at_once(tmp_path, capsys, extra, message):
+    import time
+
+    yy, xx = np.mgrid[0:60, 0:50] * 1.0
+    grid = tmp_path / "wall.npz"
+    np.savez(grid, z=-40.0 + 0.05 * yy + np.clip(xx - 20.0, 0.0, 12.0) * 0.9,
+             spacing=[1.0, 1.0])
+    start = time.perf_counter()
+    assert main(["plan", str(grid), "--no-figures", "--no-3d-metrics", *extra,
+                 "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert time.perf_counter() - start < 15.0
+
+
+def test_an_explore_region_larger_than_the_memory_is_refused_at_load(tmp_path, capsys):
+    from drake_auv.exploration.planner import ExploreParameters
+
+    assert ExploreParameters(region=(-13.0, -11.0, -40.5, 16.0, 11.0, -26.0)).cell_m == 1.0
+    with pytest.raises(ValueError, match=r"\(1e\+18 planning cells\) needs .* GiB of memory, "
+                                         "more than the"):
+        ExploreParameters(region=(0.0, 0.0, -1e6, 1e6, 1e6, -5.0))
+    assert main(["run", "boulder_explore", "-o", str(tmp_path / "o"), "--set",
+                 "steps.0.explore.region=[0, 0, -1000000, 1000000, 1000000, -5]"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "planning cells) needs" in err[0], err
+
+
+def test_a_geojson_in_projected_metres_without_crs_is_refused_in_one_line(tmp_path, capsys):
+    yy, xx = np.mgrid[0:40, 0:30] * 1.0
+    grid = tmp_path / "utm.tif"
+    write_geotiff(Bathymetry(-40.0 + 0.05 * yy + np.clip(xx - 12.0, 0.0, 8.0) * 0.9, (1.0, 1.0),
+                             (500000.0, 4000000.0), "EPSG:32631"), grid)
+    ring = [[500005, 4000005], [500015, 4000005], [500015, 4000015], [500005, 4000015],
+            [500005, 4000005]]
+    zone = tmp_path / "zone.geojson"
+    zone.write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {},
+         "geometry": {"type": "Polygon", "coordinates": [ring]}}]}))
+    assert main(["plan", str(grid), "--no-go", str(zone), "--no-figures", "--no-3d-metrics",
+                 "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "are not longitudes and latitudes" in err[0], err
+
+
+def test_a_hold_longer_than_an_hour_in_a_flown_file_is_refused_naming_the_item(tmp_path):
+    import re
+
+    from drake_auv.planning.cola2 import read_cola2
+    from drake_auv.planning.qgc import read_qgc_plan
+
+    yy, xx = np.mgrid[0:40, 0:30] * 1.0
+    tif = tmp_path / "small.tif"
+    write_geotiff(Bathymetry(-40.0 + 0.05 * yy + np.clip(xx - 12.0, 0.0, 8.0) * 0.9, (1.0, 1.0),
+                             (1000.0, 2000.0), "EPSG:32631"), tif)
+    out = tmp_path / "o"
+    assert main(["plan", str(tif), "--omega", "2", "--no-figures", "--no-3d-metrics",
+                 "--export", "cola2,qgc", "-o", str(out)]) == 0
+    assert read_qgc_plan(out / "mission.plan").items and read_cola2(out / "mission.xml").items
+    plan = json.loads((out / "mission.plan").read_text())
+    waypoint = next(i for i in plan["mission"]["items"] if i["command"] == 16)
+    waypoint["params"][0] = 1.0e9
+    (out / "mission.plan").write_text(json.dumps(plan))
+    with pytest.raises(ValueError, match=r"hold \(param 1, s\) must be a number in \[0, 3600"):
+        read_qgc_plan(out / "mission.plan")
+    xml = (out / "mission.xml").read_text()
+    (out / "mission.xml").write_text(re.sub(r"<time>[^<]*</time>", "<time>1e9</time>", xml))
+    with pytest.raises(ValueError, match=r"park field 'time' must be in \[0, 3600\] s"):
+        read_cola2(out / "mission.xml")

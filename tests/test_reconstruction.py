@@ -210,6 +210,20 @@ def test_bad_files_get_one_clear_line(tmp_path, capsys):
 
 
 @needs_open3d
+@pytest.mark.parametrize("points, message", [
+    (np.ones((500, 3)), "1 distinct position(s) among its 500 points"),
+    (np.outer(np.linspace(0.0, 10.0, 500), [1.0, 2.0, 3.0]), "500 points lie on one line")])
+def test_degenerate_clouds_are_refused_not_crashed_on(tmp_path, capsys, points, message):
+    # Open3D's Poisson ends the process (a segmentation fault) on these
+    n = len(points)
+    write_ply(PointCloud(points, np.zeros((n, 3)), np.zeros(n), np.zeros(n, np.uint8)),
+              tmp_path / "bad.ply")
+    code = main(["reconstruct", str(tmp_path / "bad.ply"), "-o", str(tmp_path / "m.ply")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err and message in err, err
+
+
+@needs_open3d
 def test_reconstruct_command_scores_against_a_target(tmp_path, sphere_scan, capsys):
     sphere, log = sphere_scan
     write_ply(from_scan_log(log).thin(0.05), tmp_path / "points.ply")

@@ -16,6 +16,9 @@ import numpy as np
 AUTOPILOTS = ("cola2", "ardusub")
 ITEM_KINDS = ("goto", "section", "park", "waypoint")
 Z_MODES = ("depth", "altitude")
+# The longest hold at an item, s: a COLA2 park or an ArduSub hold longer than an hour is not
+# part of a survey, and the dive's simulation would run through it.
+MAX_HOLD_S = 3600.0
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,9 @@ class MissionItem:
             if not np.isfinite(getattr(self, name)):
                 raise ValueError(f"mission item {name} must be finite, got "
                                  f"{getattr(self, name)}")
+        if not 0.0 <= self.hold_s <= MAX_HOLD_S:
+            raise ValueError(f"mission item hold_s must be in [0, {MAX_HOLD_S:g}] s, got "
+                             f"{self.hold_s}")
 
 
 @dataclass(frozen=True)

@@ -31,11 +31,24 @@ class CampaignError(ValueError):
     """A campaign that cannot start (an unreachable scheduler, a bad worker count)."""
 
 
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity, else the machine's count)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
 def check_workers(workers: int | None) -> int:
-    """The local worker count (default: this machine's cores); CampaignError below 1."""
-    workers = workers if workers is not None else (os.cpu_count() or 1)
-    if workers < 1:
-        raise CampaignError(f"--workers {workers}: allowed: an integer >= 1")
+    """The local worker count (default: the usable cores); CampaignError outside [1, twice the
+    usable cores]: a dive is CPU-bound, more processes than that only add memory and start-up
+    (1000 workers leaked semaphores and never finished a 12 s campaign)."""
+    cores = usable_cores()
+    workers = workers if workers is not None else cores
+    if not 1 <= workers <= 2 * cores:
+        raise CampaignError(f"--workers {workers}: this machine has {cores} usable core(s); "
+                            f"allowed: an integer in [1, {2 * cores}] (or --scheduler for a "
+                            "cluster)")
     return workers
 
 

@@ -97,7 +97,8 @@ def run(args) -> int:
 
     output_folder(args.out, "-o", 20 * MiB)  # path.csv, reports, figures, exports
     from drake_auv.planning.coverage_plan import plan_coverage
-    from drake_auv.planning.export import parse_exports, table3_markdown, write_outputs
+    from drake_auv.planning.export import (check_exports, parse_exports, table3_markdown,
+                                           write_outputs)
     from drake_auv.terrain.roi import parse_roi
 
     exports = parse_exports(args.export) if args.export is not None else None
@@ -115,6 +116,7 @@ def run(args) -> int:
         if origin is not None and bathy.crs is not None:
             raise ValueError(f"--origin-lonlat: {args.bathymetry} is georeferenced ({bathy.crs}"
                              "), which places it; the option is for grids without a CRS")
+    check_exports(bathy, exports, origin, args.max_items, args.ardusub_frames)  # before planning
     if args.roi and args.roi_file:
         raise ValueError("give --roi or --roi-file, not both")
     roi = parse_roi(args.roi) if args.roi else None

@@ -31,8 +31,12 @@ from drake_auv.exploration.gains import STRATEGIES, fan_rays, scores, view_gains
 from drake_auv.exploration.paths import PathCost, TravelField, path_clear, plan_path
 from drake_auv.params import param, validate
 from drake_auv.random_streams import child
+from drake_auv.resources import check_memory
 
 _FACE = ndimage.generate_binary_structure(3, 1)
+# Bytes a planning cell holds in one step: its label, the faces seen, the cost and travel
+# fields (float64 and index arrays) and their temporaries.
+VOXEL_BYTES = 64
 VISITED_RADIUS = 3.0  # m, around a reached target where no candidate is chosen again
 
 
@@ -92,6 +96,11 @@ class ExploreParameters:
         if not self.cluster_m >= self.cell_m:
             raise ValueError(f"cluster_m must be >= cell_m ({self.cell_m} m), got "
                              f"{self.cluster_m}")
+        margin = self.omega + self.clearance + self.cell_m  # as `plan_view` grows the region
+        sides = np.subtract(self.region[3:], self.region[:3]) + 2.0 * margin
+        voxels = float(np.prod(sides / self.cell_m + 1.0))
+        check_memory(VOXEL_BYTES * voxels, f"explore region {list(self.region)} at cell_m "
+                     f"{self.cell_m:g} m ({voxels:.3g} planning cells)")
 
     @property
     def sensor_azimuth(self) -> float:
@@ -168,8 +177,9 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
     """One planning step from the vehicle at `position` (3,) towards `current` (see the
     module); `seed` (an int or a `SeedSequence`): its child 0 draws the random strategy,
     child 1 STOMP's rollouts; `previous`: the last step's grid (`ViewStep.grid`) and `rays`
-    the beams inserted since (`scan_rays`), so only the cells they touched are read again, and `returns` the multibeam's return points
-    and beam directions since (`frontiers.multibeam_returns`: the faces it has seen);
+    the beams inserted since (`scan_rays`), so only the cells they touched are read again,
+    and `returns` the multibeam's return points and beam directions since
+    (`frontiers.multibeam_returns`: the faces it has seen);
     `visited` (v, 3): the targets reached before, m (a candidate within `VISITED_RADIUS` of one is not chosen again: what its view
     promised and did not give, behind rock or below the floor, it will not give later);
     `yaw`: the vehicle's, rad; `current_path` (k, 3): what is left of the path to `current`,

@@ -38,9 +38,9 @@ from pydrake.trajectories import PiecewisePolynomial
 from drake_auv.exploration.frontiers import LabelGrid, multibeam_returns, scan_rays
 from drake_auv.exploration.planner import ExploreParameters, Target, plan_view
 from drake_auv.leg_signal import LEG_SIZE, read_leg
-from drake_auv.random_streams import stream
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import Path
+from drake_auv.random_streams import stream
 from drake_auv.signals import (ExplorerProgress, ExplorerStatus, ExplorerStep, Reference,
                                VehicleState)
 from drake_auv.vehicle.path_reference import trajectory_reference

@@ -31,7 +31,7 @@ from pathlib import Path as FilePath
 import numpy as np
 
 from drake_auv.autopilot.cola2 import DEFAULT_SURGE, HEAVE_SPEED, held_band
-from drake_auv.autopilot.items import MissionItem, VehicleMission
+from drake_auv.autopilot.items import MAX_HOLD_S, MissionItem, VehicleMission
 from drake_auv.output_files import replacing
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.missions import ALTITUDE_LABELS
@@ -372,6 +372,8 @@ def _fields(name: str, k: int, kind: str, man) -> dict:
             raise ValueError(f"{where} must be 0 (depth), 1 (altitude) or 2 (both), got {text}")
         if tag in ("surge_velocity", "tolerance_xy", "time") and value < 0:
             raise ValueError(f"{where} must be >= 0, got {value}")
+        if tag == "time" and value > MAX_HOLD_S:
+            raise ValueError(f"{where} must be in [0, {MAX_HOLD_S:g}] s, got {value}")
         out[tag] = value
     return out
 

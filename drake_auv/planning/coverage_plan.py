@@ -20,9 +20,10 @@ from drake_auv.planning.lawnmower import (check_omega_fits, check_sensor_paramet
                                           plan_lawnmower, wet_grid)
 from drake_auv.planning.path import Path
 from drake_auv.planning.route import RouteBuilder
-from drake_auv.planning.slicing import (Contour, fixed_depression, order_contours, slice_levels,
-                                        slice_region)
+from drake_auv.planning.slicing import (MAX_SLICES, Contour, fixed_depression, order_contours,
+                                        slice_levels, slice_region)
 from drake_auv.planning.surface import TerrainSurface
+from drake_auv.resources import check_memory
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.roi import crop_to_roi
 from drake_auv.terrain.slope import TerrainLabels, classify
@@ -94,6 +95,27 @@ def _exterior_rings(geom) -> list[list[list[float]]]:
     return [np.round(np.asarray(p.exterior.coords), 3).tolist() for p in polys]
 
 
+# Bytes a terrain distance sample holds while its KD-tree is built (the x, y, z grids, their
+# (n, 3) stack, the tree's index), and about what a path sample holds (position, sensor axis,
+# heading, label, and their resampled copies).
+SAMPLE_BYTES = 64
+
+
+def check_samples(bathy: Bathymetry, omega: float, sample_spacing: float) -> None:
+    """ValueError (`resources.check_memory`) when the terrain's distance samples (every
+    min(cell, Omega / 4) over the grid) or a lane of path samples (every `sample_spacing`
+    across the grid's diagonal) would need more memory than the machine has: a tiny Omega or
+    sample spacing is refused before the planner allocates."""
+    xmin, xmax, ymin, ymax = bathy.extent
+    res = min(min(bathy.spacing), omega / 4.0)
+    samples = ((xmax - xmin) / res + 1.0) * ((ymax - ymin) / res + 1.0)
+    check_memory(SAMPLE_BYTES * samples,
+                 f"omega {omega:g} m: the terrain's distance samples every {res:.3g} m")
+    lane = float(np.hypot(xmax - xmin, ymax - ymin)) / sample_spacing
+    check_memory(SAMPLE_BYTES * lane,
+                 f"sample spacing {sample_spacing:.3g} m: the path's samples along one lane")
+
+
 def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_deg: float = 60.0,
                   overlap: float = 0.1, slope_threshold: float = 0.5,
                   sweep_angle_deg: float | None = None, slice_spacing: float | None = None,
@@ -146,8 +168,10 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         raise ValueError(f"plan_coverage needs a Bathymetry, got {type(bathy).__name__}")
     if slice_spacing is not None and not (np.isfinite(slice_spacing) and slice_spacing > 0):
         raise ValueError(f"slice_spacing must be > 0 m, got {slice_spacing}")
-    if slice_count is not None and not (int(slice_count) == slice_count and slice_count >= 1):
-        raise ValueError(f"slice_count must be a whole number >= 1, got {slice_count}")
+    if slice_count is not None and not (int(slice_count) == slice_count
+                                        and 1 <= slice_count <= MAX_SLICES):
+        raise ValueError(f"slice_count must be a whole number in [1, {MAX_SLICES}], got "
+                         f"{slice_count}")
     if sweep_angle_deg is not None and not np.isfinite(sweep_angle_deg):
         raise ValueError(f"sweep_angle_deg must be a finite angle in degrees, got {sweep_angle_deg}")
     if slice_sensor not in ("normal", "fixed-tilt"):
@@ -160,6 +184,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     if roi is not None:
         bathy = crop_to_roi(bathy, roi)
     check_omega_fits(omega, bathy)
+    check_samples(bathy, omega, ds)
     bathy = wet_grid(bathy, min_depth)
     nogo = None
     if no_go is not None:

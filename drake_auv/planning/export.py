@@ -242,6 +242,24 @@ def parse_exports(text: str | None) -> tuple[str, ...]:
     return names
 
 
+def check_exports(bathy, exports=None, origin_lonlat=None, max_items: int = 700,
+                  ardusub_frames: str = "terrain") -> tuple[tuple[str, ...], GeoFrame | None]:
+    """The exports of `write_outputs` (None: "geojson" when `bathy` is georeferenced or
+    `origin_lonlat` given) and their `GeoFrame`, every option checked (ValueError naming the
+    first bad one). Cheap, so a command checks them before it plans."""
+    georeferenced = bathy.crs is not None or origin_lonlat is not None
+    if exports is None:
+        exports = ("geojson",) if georeferenced else ()
+    for name in exports:
+        if name not in EXPORTS:
+            raise ValueError(f"unknown export {name!r}; choose from {', '.join(EXPORTS)}")
+    if "qgc" in exports:
+        from drake_auv.planning.qgc import check_options
+
+        check_options(max_items, ardusub_frames)
+    return tuple(exports), GeoFrame(bathy, origin_lonlat) if exports else None
+
+
 def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
@@ -264,17 +282,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
         heave_in_3d: the COLA2 vehicle interpolates depth along sections (its heave_in_3D);
             the report's `exports.cola2` gives the sections and their replay's figures.
     """
-    georeferenced = plan.bathy.crs is not None or origin_lonlat is not None
-    if exports is None:
-        exports = ("geojson",) if georeferenced else ()
-    for name in exports:
-        if name not in EXPORTS:
-            raise ValueError(f"unknown export {name!r}; choose from {', '.join(EXPORTS)}")
-    if "qgc" in exports:
-        from drake_auv.planning.qgc import check_options
-
-        check_options(max_items, ardusub_frames)
-    geo = GeoFrame(plan.bathy, origin_lonlat) if exports else None
+    exports, geo = check_exports(plan.bathy, exports, origin_lonlat, max_items, ardusub_frames)
     outdir = FilePath(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     written, extras = [], {}

@@ -39,7 +39,7 @@ import numpy as np
 
 from drake_auv.autopilot.ardusub import replay_ardusub
 from drake_auv.autopilot.replay import clearance_report
-from drake_auv.autopilot.items import LocalLeg, MissionItem, VehicleMission
+from drake_auv.autopilot.items import MAX_HOLD_S, LocalLeg, MissionItem, VehicleMission
 from drake_auv.output_files import open_replacing
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.metrics import evaluate_path, surface_area_weights
@@ -377,7 +377,7 @@ def read_qgc_plan(filename) -> VehicleMission:
         if frame not in (MAV_FRAME_GLOBAL_RELATIVE_ALT, MAV_FRAME_GLOBAL_TERRAIN_ALT):
             _fail(source, where, f"frame must be 3 (relative, depth) or 10 (terrain), got "
                                  f"{frame!r}")
-        hold = _number(source, where, params[0], "hold (param 1, s)", 0)
+        hold = _number(source, where, params[0], "hold (param 1, s)", 0, MAX_HOLD_S)
         radius = _number(source, where, params[1], "acceptance radius (param 2, m)", 0)
         yaw = None if params[3] is None else _number(source, where, params[3],
                                                      "yaw (param 4, deg)", -360, 360)

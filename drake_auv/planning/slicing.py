@@ -25,6 +25,8 @@ from scipy import ndimage
 from drake_auv.planning.polyline import length, resample
 from drake_auv.planning.surface import TerrainSurface
 
+MAX_SLICES = 1000  # slicing planes per high-slope region (a slice_count or a slice_spacing)
+
 
 @dataclass(frozen=True)
 class Contour:
@@ -64,6 +66,12 @@ def slice_levels(surface: TerrainSurface, region_mask: np.ndarray, slope: np.nda
         s_low = float(np.nanquantile(slope[region_mask], 0.1))
         s_low = max(s_low, 0.05)
         spacing = footprint * s_low / np.sqrt(1.0 + s_low ** 2)
+    n = ((zmax - zmin) / spacing if count is None else count)
+    if n > MAX_SLICES:
+        raise ValueError(f"slice_spacing {spacing:g} m gives {n:.3g} slicing planes over a "
+                         f"high-slope region {zmax - zmin:.1f} m high; allowed: at most "
+                         f"{MAX_SLICES} planes (slice_spacing >= "
+                         f"{(zmax - zmin) / MAX_SLICES:.3g} m there)")
     n = max(1, int(np.ceil((zmax - zmin) / spacing - 1e-9))) if count is None else int(count)
     first = zmin + 0.5 * ((zmax - zmin) - (n - 1) * spacing)
     return first + spacing * np.arange(n)

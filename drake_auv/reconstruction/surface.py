@@ -237,6 +237,20 @@ def outlier_mask(points, ratio: float = OUTLIERS,
     return mean <= ratio * np.median(mean)
 
 
+def check_spread(points: np.ndarray) -> None:
+    """ValueError when `points` (n, 3) cannot carry a surface: fewer than `MIN_POINTS` distinct
+    positions, or all on one line (Open3D's Poisson crashes the process on such clouds)."""
+    distinct = len(np.unique(points, axis=0))
+    if distinct < MIN_POINTS:
+        raise ValueError(f"the point cloud has {distinct} distinct position(s) among its "
+                         f"{len(points)} points; a surface needs at least {MIN_POINTS}")
+    centred = points - points.mean(axis=0)
+    spread = np.linalg.eigvalsh(centred.T @ centred)  # ascending
+    if spread[1] <= 1e-12 * spread[2]:
+        raise ValueError(f"the point cloud's {len(points)} points lie on one line; a surface "
+                         "needs them spread over an area")
+
+
 def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 200,
                 support: float = SUPPORT, progress: bool = True,
                 outliers: float = OUTLIERS) -> Reconstruction:
@@ -247,6 +261,7 @@ def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 
     check_parameters(len(cloud), depth, k, trim, support, outliers)
     cloud = cloud.subset(np.flatnonzero(outlier_mask(cloud.points, outliers)))
     check_parameters(len(cloud), depth, k, trim, support, outliers)
+    check_spread(cloud.points)
     with tqdm(total=3, desc="reconstruct", unit="stage", disable=not progress,
               leave=False) as bar:
         bar.set_postfix_str(f"normals (k = {k}) of {len(cloud)} points")

@@ -4,11 +4,10 @@ Inputs `true_state` (12, to cast against the true world) and `estimated_state` (
 the returns in the navigation frame); output `returns` (`SonarReturns`, the abstract state
 written by a periodic unrestricted update, so the beams are cast at the sensor's rate and not
 at every integrator step). Update n (n = 0, 1, ...) fires at t = n * period; its noise draws
-come from the run's stream of the sonar (`stream`, a name in `drake_auv.random_streams`), child
-n, so the same seed gives the same returns. With
-`axis_hits`, a second output `axis_hits` (`AxisHits`, true world, for scoring only) holds the
-faces the beams' axes hit in the same update, so a coverage recorder of the same beams need
-not cast them again.
+come from the sonar's stream of the run (`stream`, a name in `drake_auv.random_streams`),
+child n, so the same seed gives the same returns. With `axis_hits`, a second output
+`axis_hits` (`AxisHits`, true world, for scoring only) holds the faces the beams' axes hit in
+the same update, so a coverage recorder of the same beams need not cast them again.
 """
 
 from __future__ import annotations

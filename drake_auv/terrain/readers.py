@@ -19,10 +19,14 @@ from pathlib import Path as FilePath
 import numpy as np
 
 from drake_auv.output_files import replacing
+from drake_auv.resources import check_memory
 from drake_auv.terrain.bathymetry import Bathymetry
 
 _EARTH_RADIUS = 6378137.0  # WGS 84 semi-major axis, m (the sphere of Pseudo-Mercator)
 _MERCATOR_EPSG = {3857, 3395, 900913, 3785, 54004}
+# Reading a raster holds its band (up to float64), the mask, the float64 copy and the filled
+# grid at once: bytes per cell, checked against the machine before the read.
+READ_BYTES_PER_CELL = 25
 
 
 def read_bathymetry(path) -> Bathymetry:
@@ -112,6 +116,8 @@ def _read_raster(path: FilePath) -> Bathymetry:
                 if ds.count < 1:
                     source = _elevation_subdataset(path, ds.subdatasets)
             with rasterio.open(source) as ds:
+                check_memory(READ_BYTES_PER_CELL * ds.width * ds.height,
+                             f"{path}: reading its {ds.height} x {ds.width} cells")
                 band = ds.read(1, masked=True).astype(float)
                 transform = ds.transform
                 crs = ds.crs

@@ -49,8 +49,20 @@ def read_zones(filename, bathy: Bathymetry, what: str = "no-go zone"):
         raise ValueError(f"{filename} is in {file_crs} but the grid has no CRS: give a "
                          "georeferenced grid or a file without a CRS in the grid's coordinates")
     if file_crs and CRS.from_user_input(file_crs) != CRS.from_user_input(bathy.crs):
+        x0, y0, x1, y1 = geom.bounds
+        if CRS.from_user_input(file_crs).is_geographic and not (
+                -180.0 <= x0 <= x1 <= 180.0 and -90.0 <= y0 <= y1 <= 90.0):
+            raise ValueError(f"{filename}: its coordinates (x {x0:.6g} to {x1:.6g}, y {y0:.6g} to "
+                             f"{y1:.6g}) are not longitudes and latitudes, yet the file is in "
+                             f"{file_crs} (a GeoJSON without a crs member is WGS 84); allowed: "
+                             "degrees, or a file that names its projected CRS")
         t = Transformer.from_crs(file_crs, bathy.crs, always_xy=True)
-        geom = shapely.transform(geom, lambda xy: np.column_stack(t.transform(xy[:, 0], xy[:, 1])))
+        try:
+            geom = shapely.transform(
+                geom, lambda xy: np.column_stack(t.transform(xy[:, 0], xy[:, 1], errcheck=True)))
+        except Exception as err:  # pyproj's ProjError, GEOS on non-finite points
+            raise ValueError(f"{filename}: its polygons cannot be moved from {file_crs} to the "
+                             f"grid's {bathy.crs} ({' '.join(str(err).split())})") from None
     return geom
 
 
