@@ -163,3 +163,16 @@ def test_plan_figures_read_the_crs_latitude_longitude_and_north(small_tif):
     assert d / np.linalg.norm(d) == pytest.approx([-np.sin(azimuth), np.cos(azimuth)],
                                                   abs=1e-3)
     assert [t.get_text() for t in ax.texts if t.get_text()] == ["N"]
+
+
+def test_what_does_not_apply_is_left_out_of_the_report():
+    """A gentle slope: no high-slope region, so no row for it, and no "nan" or "n/a"."""
+    from drake_auv.planning.coverage_plan import plan_coverage
+    from drake_auv.planning.export import report_markdown
+
+    x = np.arange(40.0)[None, :] * np.ones((30, 1))
+    plan = plan_coverage(Bathymetry(-20.0 + 0.05 * x, (1.0, 1.0)), omega=2.0)
+    assert plan.labels.n_regions == 0 and plan.metrics.high_slope.samples == 0
+    text = report_markdown(plan)
+    assert "| Planar region |" in text and "| High-slope region |" not in text
+    assert "nan" not in text and "n/a" not in text and "Length ratio" in text

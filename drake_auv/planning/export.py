@@ -150,8 +150,13 @@ def _order_line(o: dict | None) -> str:
             f"{req}.")
 
 
-def _fmt(value: float | None) -> str:
-    return "n/a" if value is None else f"{value:.2f}"
+def _ratios_line(r: dict) -> str:
+    """The defined ratios of path to lawnmower (undefined ones, a zero or NaN term, left out)."""
+    parts = [f"{name}: {r[key]:.2f}" for key, name in (
+        ("length_total_over_lawnmower", "length ratio (total / lawnmower)"),
+        ("view_total_over_lawnmower", "viewing angle ratio")) if r[key] is not None]
+    text = "; ".join(parts)
+    return text[:1].upper() + text[1:] + "." if parts else ""
 
 
 def human_duration(seconds: float) -> str:
@@ -282,10 +287,13 @@ def report_dict(plan, metrics_3d=None, speed: float = 0.5, reference_table: bool
 
 
 def table3_markdown(metrics) -> str:
-    """The Table 3 comparison as a Markdown table."""
+    """The Table 3 comparison as a Markdown table; a region without samples (no high-slope
+    terrain, say) is left out."""
     lines = ["| path | length (m) | viewing angle (deg) | coverage | min clearance (m) |",
              "| --- | ---: | ---: | ---: | ---: |"]
     for name, m in metrics.rows():
+        if m.samples == 0:
+            continue
         lines.append(f"| {name} | {m.length:.1f} | {m.view_mean_deg:.1f} (sd {m.view_sd_deg:.1f}) "
                      f"| {100 * m.coverage:.1f} % | {m.min_clearance:.2f} |")
     return "\n".join(lines)
@@ -325,9 +333,7 @@ def _markdown(plan, metrics_3d, rep: dict) -> str:
         r = rep["ratios"]
         lines += ["## Comparison with a standard lawnmower (Table 3, on the grid: cone test, no "
                   "occlusion)", "",
-                  table3_markdown(plan.metrics), "",
-                  f"Length ratio (total / lawnmower): {_fmt(r['length_total_over_lawnmower'])}; "
-                  f"viewing angle ratio: {_fmt(r['view_total_over_lawnmower'])}.", ""]
+                  table3_markdown(plan.metrics), "", _ratios_line(r), ""]
     if metrics_3d is not None:
         from drake_auv.planning.metrics3d import table3d_markdown
 
