@@ -176,3 +176,40 @@ def test_what_does_not_apply_is_left_out_of_the_report():
     text = report_markdown(plan)
     assert "| Planar region |" in text and "| High-slope region |" not in text
     assert "nan" not in text and "n/a" not in text and "Length ratio" in text
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--omega", "0"], "omega"), (["--aperture", "190"], "aperture_deg"),
+    (["--slope-threshold", "-1"], "slope_threshold"), (["--roi", "0,0,10,10"], "outside the grid"),
+    (["--speed", "0"], "--speed")])
+def test_plan_reports_bad_input(tmp_path, small_tif, capsys, extra, message):
+    code = main(["plan", str(small_tif), "--no-figures", "-o", str(tmp_path / "o"), *extra])
+    assert code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_plan_missing_file(tmp_path, capsys):
+    assert main(["plan", str(tmp_path / "missing.tif"), "-o", str(tmp_path)]) == 2
+    assert "not found" in capsys.readouterr().err
+
+
+def _npz(tmp_path, name, z):
+    path = tmp_path / name
+    np.savez(path, z=z, spacing=[1.0, 1.0])
+    return path
+
+
+@pytest.mark.parametrize("case, extra, message", [
+    ("dry", [], "minimum operating depth"), ("inf", [], "infinite"),
+    ("ok", ["--omega", "1e9"], "omega (offset to the terrain) must be in (0, "),
+    ("ok", ["--min-depth", "-1"], "min_depth"),
+    ("ok", ["--origin-lonlat", "north"], "--origin-lonlat")])
+def test_bad_grids_and_values_give_one_line(tmp_path, capsys, case, extra, message):
+    x = np.arange(40.0)[None, :] * np.ones((30, 1))
+    z = {"dry": 5.0 + 0.1 * x, "inf": np.where(x == 7, np.inf, -20.0 + 0.1 * x),
+         "ok": -20.0 + 0.1 * x}[case]
+    code = main(["plan", str(_npz(tmp_path, f"{case}.npz", z)), "--no-figures",
+                 "-o", str(tmp_path / "o"), *extra])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and message in err[0], err
+    assert "Traceback" not in err[0]
