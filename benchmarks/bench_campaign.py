@@ -1,6 +1,6 @@
 """Campaign throughput on Dask: breakwater dives per core-hour and the efficiency of 2
-workers against 1 (issue 12's target: >= 1.7x, issue 21's: efficiency >= 0.85 on an external
-cluster).
+workers against 1 (targets: >= 1.7x the runs per minute of 1 worker on this 2-core machine,
+and an efficiency >= 0.85 on an external cluster).
 
 The same runs (breakwater, realistic sonars, seeds 0..runs-1, whole dives or capped at
 `--sim-s` simulated seconds) on a LocalCluster of 1 then 2 worker processes, and on an

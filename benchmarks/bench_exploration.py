@@ -1,5 +1,5 @@
-"""The exploration ablation (issue 23): the view planner's gain against nearest-frontier-first
-and a random frontier, and the issue's acceptance checks.
+"""The exploration ablation: the view planner's gain against nearest-frontier-first and a
+random frontier, and the acceptance checks.
 
 `--mission` (default `boulder_explore`, no prior map) is flown with its `explore` step's
 `strategy` set to gain, nearest and random on each seed of `--seeds` (`A:B`, seeds A .. B-1;
@@ -9,7 +9,7 @@ same seeds. Every dive writes its `report.json` to `--out/<mission>[-<strategy>]
 `examples/explore_vs_plan.py`'s, so the two share their plan + survey dives). Per strategy:
 median time to 80 % and 90 % multibeam coverage of the true target (a seed that never reached
 it counts as infinitely late), median and worst final coverage, contacts, median believed
-coverage. The checks (issue 23, on the gain strategy): no contact in any seed; >= 90 %
+coverage. The checks (on the gain strategy): no contact in any seed; >= 90 %
 multibeam coverage in every seed; median time to 90 % within 1.5x of plan + survey's; gain
 reaches 80 % sooner than nearest on the median; and the wreck of `examples/explore_wreck.py`
 (a site given as files, a world mesh and no prior, on a rough seabed; `--wreck-seeds`)
@@ -50,7 +50,7 @@ WRECK = "wreck (files, no prior)"
 
 
 def checks(groups: dict[str, list[dict]], plan_mode: str) -> list[tuple[str, bool, str]]:
-    """The issue's acceptance checks: (what, passed, the measured figures)."""
+    """The acceptance checks: (what, passed, the measured figures)."""
     gain, plan = groups["gain"], groups[plan_mode]
     wreck = [] if WRECK not in groups else [
         ("a site given as files, no prior (the wreck): >= 80 % multibeam, no contact",
@@ -130,7 +130,7 @@ def main(argv=None) -> int:
     figure({m: [s["coverage_vs_time"] for s in runs] for m, runs in by_mode.items()},
            args.figure, title)
     results = checks(groups, plan_mode)
-    text = (table(groups, title) + "\n## Acceptance (issue 23)\n\n| check | result | measured |\n"
+    text = (table(groups, title) + "\n## Acceptance\n\n| check | result | measured |\n"
             "| --- | --- | --- |\n"
             + "".join(f"| {what} | {'pass' if ok else '**FAIL**'} | {measured} |\n"
                       for what, ok, measured in results)

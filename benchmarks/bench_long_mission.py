@@ -1,4 +1,4 @@
-"""Survey-scale dive (issue 21): the built-in `monterey_wall` mission (a steep 160 m x 160 m
+"""Survey-scale dive: the built-in `monterey_wall` mission (a steep 160 m x 160 m
 window of a Monterey Bay tile, 1 m world, the ~10 m survey as prior, Omega 10 m, plan and
 replanned survey, about 3.8 h of dive), its cost per simulated hour.
 

@@ -1,5 +1,5 @@
-"""OctoMap insertion, lazy against eager, and several pings per insertion (issue 21): the
-per-ping cost and the tree's size.
+"""OctoMap insertion, lazy against eager, and several pings per insertion: the per-ping cost
+and the tree's size.
 
 Flies the first `--max-time` simulated seconds of the built-in `monterey_wall` mission, then
 inserts its recorded sonar batches again into two fresh OctoMap trees with the map's sensor
@@ -10,7 +10,7 @@ per ping (ms), the whole replay's time, and the leaves and `memoryUsage` of the 
 quarter of the batches; checks that both trees give the same label at every voxel centre the
 scans hit and at random points of the surveyed box.
 
-Then the lever issue 21 names, several pings per insertion: the multibeam's consecutive pings
+Then the lever of several pings per insertion: the multibeam's consecutive pings
 merged `--merge` at a time into one eager insertion (one point cloud, from the mean of their
 origins; OctoMap updates a voxel once per insertion, so the free water two pings share is
 updated once), the other sonars' batches as they are. Prints the multibeam's time per ping

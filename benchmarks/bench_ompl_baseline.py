@@ -1,4 +1,4 @@
-"""A peer baseline for the replanning step (issue 11): can an OMPL planner, its state validity
+"""A peer baseline for the replanning step: can an OMPL planner, its state validity
 a Python callback on the on-line map, plan one replanning section within the step budget
 (map query + planning: median <= 10 ms, p95 <= 25 ms)?
 

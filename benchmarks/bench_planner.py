@@ -4,13 +4,13 @@ Measures (median of --runs runs, after one warm-up):
 - the full plan, classification to combined path, 0.5 m cells (and with the lawnmower);
 - the metrics of both paths (Table 3), 0.5 m cells;
 - the full plan at 0.25 m cells (4x the cells), and its ratio to the 0.5 m time;
-- survey scale (issue 13): 1 km x 1 km and 2 km x 2 km at 1 m cells (1 M and 4 M cells) with
+- survey scale: 1 km x 1 km and 2 km x 2 km at 1 m cells (1 M and 4 M cells) with
   four steep mounds of 30-60 m radius, Omega = 2 m, the plan without the baseline, each in a
   fresh process for its peak memory (ru_maxrss), one run each; with the time of a reference
   numpy pass over the same grid (np.gradient, hypot, a threshold, a sum) and the ratio, since
   the shared machine's speed varies.
-Targets (issue 3): plan <= 0.25 s, metrics <= 1 s, 0.25 m cells <= 5x the 0.5 m time.
-Targets (issue 13): 2 km x 2 km <= 5 s wall and <= 1 GiB peak; 4 M / 1 M cells <= 4x (linear).
+Targets: plan <= 0.25 s, metrics <= 1 s, 0.25 m cells <= 5x the 0.5 m time; survey scale:
+2 km x 2 km <= 5 s wall and <= 1 GiB peak, 4 M / 1 M cells <= 4x (linear).
 
     .venv/bin/python benchmarks/bench_planner.py [--runs 7] [--survey-only]
 """

@@ -1,6 +1,6 @@
 """Profile following speed: the estimator, one follower update, and the pool mission.
 
-No target in issue 5; the figures show where the time goes. The profiler head runs at 30
+No target; the figures show where the time goes. The profiler head runs at 30
 pings/s batched at 10 Hz, so the controller updates at 10 Hz: one update must stay well below
 100 ms of wall time for a simulation faster than real time, and the first 120 s of the
 built-in `pool` mission (vehicle, both sonars, mapper, supervisor, horizontal following) are

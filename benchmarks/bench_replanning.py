@@ -9,12 +9,12 @@ Measures:
   optimisation;
 - that mission's real-time factor (vehicle, both sonars, mapper, replanner, supervisor and the
   two coverage recorders).
-Targets: step median <= 10 ms, p95 <= 25 ms (issue 11); insertion <= 5 ms per 480-beam
+Targets: step median <= 10 ms, p95 <= 25 ms; insertion <= 5 ms per 480-beam
 scan. Ratios to the vehicle-only reference measured in the same run (`_reference.py`): the
 mission's real-time factor over the reference's, and the step's median in vehicle-seconds
 (simulated seconds the vehicle alone advances in that wall time).
 
-With `--ablation N`, instead: the optimiser's contribution (issue 11), the breakwater mission
+With `--ablation N`, instead: the optimiser's contribution, the breakwater mission
 (5 m prior error, navigation drift, `sonar_noise: realistic` unless `--noise`) over seeds
 F .. F+N-1 (`--first-seed`, default 0) with `replanner.optimizer` stomp and none: true
 distance to the block (mean, sd, min, mean |d - Omega|), distance to the on-line map's voxels
@@ -24,7 +24,7 @@ averaged. `--set` adds mission overrides to every dive.
 Runs `--jobs` dives at once (each builds its own Diagram from the mission and seed).
 
 With `--long`, instead: the step's median and p95 per simulated hour on the 3.8 h real-data
-dive (`bench_long_mission.py`, issue 21; its options follow, e.g. `--long --surveys 2`).
+dive (`bench_long_mission.py`; its options follow, e.g. `--long --surveys 2`).
 
     .venv/bin/python benchmarks/bench_replanning.py [--error 5] [--seed 0] [--noise realistic]
     .venv/bin/python benchmarks/bench_replanning.py --ablation 10 [--jobs 2] [--json FILE]

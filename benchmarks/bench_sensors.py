@@ -7,7 +7,7 @@
    wall-time ratio of the sensors' run over the vehicle-only run (target <= 1.5x). Runs are
    interleaved and the median of RUNS is reported, with the process CPU time beside the wall
    time, as the machine is shared. The sonars are clean there (one ray a beam, the figure the
-   issue's target was set on); a row with the missions' sonars (`REALISTIC_NOISE`: side lobes,
+   1.5x target was set on); a row with the missions' sonars (`REALISTIC_NOISE`: side lobes,
    surface multipath, threshold, clutter, dropouts, range noise) gives what a mission pays.
 3. The floor of that ratio in this architecture, whatever a sonar computes: the same mission
    with two sonar LeafSystems that only fire their periodic updates at the sonars' rates (read

@@ -1,4 +1,4 @@
-"""What a replanning step of a survey-scale dive spends its time on, replayed (issue 21).
+"""What a replanning step of a survey-scale dive spends its time on, replayed.
 
 Flies the built-in `monterey_wall` mission to `--until` simulated seconds and records every
 replanning step that starts inside the `--windows` (the inputs of `replan_section` and the

@@ -1,6 +1,6 @@
 """Vehicle-only speed: 600 s of lawnmower tracking, real-time factor (median of runs).
 
-Target (issue 2): >= 200x real time on the 2-core machine. This run is the reference the
+Target: >= 200x real time on the 2-core machine. This run is the reference the
 other benchmarks divide by (`_reference.py`). Also reports the cost of one RK4 plant step and
 one tracker update, the share of a 50 ms simulated step they take (the rest is the framework:
 events, ports, navigation, logging), and the factor with Meshcat recording on, relative to

@@ -1,4 +1,4 @@
-"""The view planner's paths (issue 23, item 2): its grid search + STOMP against OMPL, on the
+"""The view planner's paths: its grid search + STOMP against OMPL, on the
 path queries of real exploration dives (results: docs/exploration_paths.md).
 
 `record` flies a mission (default `boulder_explore`) for each seed of `--seeds` (`A:B`),

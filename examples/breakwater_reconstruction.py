@@ -25,7 +25,7 @@ from tqdm import tqdm
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.runner import run_mission
 from drake_auv.reconstruction.figures import fig_reconstruction
-from drake_auv.reconstruction.products import ERROR_VMAX, mission_surface
+from drake_auv.reconstruction.products import mission_surface
 from drake_auv.signals import VehicleState
 
 RUNS = {"replanned": [], "nominal only": ["steps.1.survey.replanning=false"]}
@@ -98,7 +98,7 @@ def main(argv=None) -> None:
     table = "\n".join(lines) + "\n"
     (out / "breakwater_reconstruction.md").write_text(table)
     if panels:
-        fig_reconstruction(panels, vmax=ERROR_VMAX,
+        fig_reconstruction(panels,
                            title="Breakwater block, seed 0: reconstruction coloured by error"
                            ).savefig(out / "breakwater_reconstruction.png", dpi=100,
                                      bbox_inches="tight")

@@ -48,7 +48,7 @@ def main() -> None:
           f"{REFERENCE_TABLE3['total']['view_mean_deg'] / REFERENCE_TABLE3['lawnmower']['view_mean_deg']:.2f})")
     files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
                           exports=("cola2", "qgc", "geojson"), origin_lonlat=CALDERA_ORIGIN_LONLAT,
-                          metrics_3d=m3d)
+                          metrics_3d=m3d, reference_table=True)
     print(f"wrote {len(files)} files to {args.outdir}")
 
 

@@ -4,7 +4,6 @@ missions replayed safe on the Monterey tiles and on random seabeds, where the fo
 section per simplified waypoint, altitude mode at the minimum depth) is not."""
 
 import re
-from pathlib import Path as FilePath
 
 import numpy as np
 import pytest
@@ -19,11 +18,11 @@ from drake_auv.planning.cola2 import (Cola2Sections, cola2_sections, export_cola
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.missions import mission_waypoints
+from drake_auv.scenarios import DATA_DIR
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.synthetic import caldera_site, random_seabed
 
-DATA = FilePath(__file__).resolve().parents[1] / ".." / "shared" / "data"
-MONTEREY = sorted((DATA / "monterey").glob("*.tif"))
+MONTEREY = sorted((DATA_DIR / "monterey").glob("*.tif"))
 
 
 @pytest.fixture(scope="module")
@@ -173,7 +172,7 @@ def monterey_plans():
     return get
 
 
-@pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
+@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("heave_in_3d", [False, True], ids=["final-depth", "heave-in-3d"])
 @pytest.mark.parametrize("omega", [10.0, 20.0])
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
@@ -203,7 +202,7 @@ def waypoint_sections(plan) -> Cola2Sections:
                          np.zeros(k))
 
 
-@pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
+@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 def test_the_former_waypoint_export_fails_the_replay(monterey_plans, tmp_path):
     plan = monterey_plans(MONTEREY[0], 20.0)  # the seabed rises to -13 m: the ceiling holds
     geo = GeoFrame(plan.bathy)

@@ -9,17 +9,18 @@ from pathlib import Path as FilePath
 
 import numpy as np
 import pytest
+import shapely
 
 from drake_auv.cli import main
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.export import write_outputs
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.missions import douglas_peucker
+from drake_auv.scenarios import DATA_DIR
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.synthetic import caldera_site
 
-DATA = FilePath(__file__).resolve().parents[1] / ".." / "shared" / "data"
-MONTEREY = sorted((DATA / "monterey").glob("*.tif"))
+MONTEREY = sorted((DATA_DIR / "monterey").glob("*.tif"))
 ALL = ("cola2", "qgc", "geojson")
 
 
@@ -49,13 +50,17 @@ def read_qgc(outdir):
 
 
 def read_geojson(filename):
-    """The file and its (lon, lat, elevation) vertices: 2D positions, depths as properties."""
+    """The file, its route's (lon, lat) vertices and its waypoints' (lon, lat, elevation):
+    2D positions, depths as properties."""
     gj = json.loads(FilePath(filename).read_text())
     assert "crs" not in gj  # RFC 7946: WGS 84, no crs member
-    return gj, np.vstack([np.column_stack([f["geometry"]["coordinates"],
-                                           [-f["properties"]["depth_a"],
-                                            -f["properties"]["depth_b"]]])
-                          for f in gj["features"]])
+    route = gj["features"][0]
+    assert route["properties"]["kind"] == "route" and route["geometry"]["type"] == "LineString"
+    points = gj["features"][1:]
+    assert all(f["geometry"]["type"] == "Point" for f in points)
+    waypoints = np.array([[*f["geometry"]["coordinates"], -f["properties"]["depth"]]
+                          for f in points]).reshape(-1, 3)
+    return gj, np.array(route["geometry"]["coordinates"]), waypoints
 
 
 def nearest_distance(points, samples):
@@ -91,14 +96,16 @@ def check_exports(plan, outdir, origin=None):
     z = np.where(frames == 10, seabed + p[:, 2], p[:, 2])
     assert np.all(p[frames == 10, 2] > 0) and np.all(p[frames == 3, 2] < 0)
     assert nearest_distance(np.column_stack([xy, z]), pts).max() < 0.1
-    gj, coords = read_geojson(outdir / "path.geojson")
-    back = np.column_stack([geo.from_lonlat(coords[:, :2]), coords[:, 2]])
-    assert nearest_distance(back, pts).max() < 0.1
-    assert nearest_distance(pts, back).max() < 0.1  # every sample is in the file
-    for f in gj["features"]:
-        assert len(f["geometry"]["coordinates"]) == 2
-        assert f["properties"]["heave"] in ("altitude", "depth")
-    return coords[:, :2]
+    gj, route, waypoints = read_geojson(outdir / "path.geojson")
+    assert nearest_distance(geo.from_lonlat(route), pts[:, :2]).max() < 0.1
+    line = shapely.LineString(geo.from_lonlat(route))  # every sample lies on the route
+    assert shapely.distance(line, shapely.points(pts[:, :2])).max() < 0.15
+    # The waypoints are the vehicle files' items: COLA2's then QGC's, in order.
+    assert len(waypoints) == len(ll) + len(items)
+    np.testing.assert_allclose(waypoints[:len(ll), :2], ll[:, :2], atol=1e-6)
+    np.testing.assert_allclose(waypoints[len(ll):, :2], p[:, [1, 0]], atol=1e-6)
+    assert {f["properties"]["heave"] for f in gj["features"][1:]} <= {"altitude", "depth"}
+    return route
 
 
 def test_douglas_peucker_keeps_corners_and_bounds_the_error():
@@ -131,7 +138,7 @@ def test_exports_need_a_georeference(tmp_path):
         "path.csv", "report.md", "report.json"]
 
 
-@pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
+@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
 def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
     code = main(["plan", str(tile), "--omega", "20", "--export", "cola2,qgc,geojson",
@@ -142,9 +149,8 @@ def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
     path = Path.from_csv(tmp_path / "path.csv")
     bathy = read_bathymetry(tile)
     geo = GeoFrame(bathy)
-    _, coords = read_geojson(tmp_path / "path.geojson")
-    back = np.column_stack([geo.from_lonlat(coords[:, :2]), coords[:, 2]])
-    assert nearest_distance(back, path.points).max() < 0.1
+    _, route, _ = read_geojson(tmp_path / "path.geojson")
+    assert nearest_distance(geo.from_lonlat(route), path.points[:, :2]).max() < 0.1
     ll, _ = read_cola2(tmp_path / "mission.xml")
     assert nearest_distance(geo.from_lonlat(ll[:, :2]), path.points[:, :2]).max() < 0.1
     _, items = read_qgc(tmp_path)
@@ -157,9 +163,9 @@ def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
     # (its transform: 5.5 cells), and the path covers the raster's cell centres.
     lon0, lon1, lat0, lat1 = (float(v) for v in re.findall(r"-?\d+\.\d+", tile.stem))
     m = 0.00051
-    _, coords = read_geojson(tmp_path / "path.geojson")
+    _, coords, waypoints = read_geojson(tmp_path / "path.geojson")
     ll, _ = read_cola2(tmp_path / "mission.xml")
-    for c in (coords, ll):
+    for c in (coords, waypoints, ll):
         assert np.all((c[:, 0] >= lon0 - m) & (c[:, 0] <= lon1 + m))
         assert np.all((c[:, 1] >= lat0 - m) & (c[:, 1] <= lat1 + m))
     assert ll[:, 2].min() >= 1.0 - 1e-9  # nothing above the minimum operating depth

@@ -205,6 +205,9 @@ def test_demo_writes_every_output(tmp_path):
                   b"set_animation"):
         assert layer in commands, layer
     assert b"/Cameras/default" in commands and b"set_target" in commands  # framed
+    files = listed_files((out / "report.md").read_text())
+    assert {"plan.png", "mission.html", "trajectory.csv"} <= set(files)
+    assert all((out / name).stat().st_size > 0 for name in files)
     t = json.loads((out / "report.json").read_text())["timing"]  # end to end, the HTML too
     assert 0 < t["reconstruction_s"] < t["outputs_s"] and t["setup_s"] > 0
     assert t["total_s"] == pytest.approx(t["setup_s"] + t["simulation_s"] + t["outputs_s"],
@@ -223,4 +226,22 @@ def test_a_dive_stopped_before_its_survey_still_reports(tmp_path):
     assert not summary["mission"]["completed"] and summary["phases"][0]["name"] == "transit"
     from drake_auv.mission.report import report_markdown
 
-    assert "n/a" in report_markdown(summary)
+    text = report_markdown(summary)  # what does not apply is left out, not "n/a"
+    assert "n/a" not in text and "survey samples" not in text and "viewing angle" not in text
+    assert f"minimum over the dive {summary['distance_to_target']['min_m']:.2f} m" in text
+
+
+def listed_files(report_md: str) -> list[str]:
+    line = next(x for x in report_md.splitlines() if x.startswith("Files: "))
+    return re.findall(r"`([^`]+)`", line)
+
+
+def test_an_exploration_lists_the_files_it_writes(tmp_path):
+    """No off-line plan, no plan.png, and the report does not list one."""
+    out = tmp_path / "explore"
+    assert main(["run", "boulder_explore", "-o", str(out), "--quiet", "--no-html",
+                 "--set", "limits.max_time_s=5"]) == 0
+    files = listed_files((out / "report.md").read_text())
+    assert "plan.png" not in files and "mission.html" not in files
+    assert not (out / "plan.png").exists()
+    assert all((out / name).stat().st_size > 0 for name in files)

@@ -1,5 +1,6 @@
 """`drake-auv plan`: outputs on a small GeoTIFF, and clear errors."""
 
+import io
 import json
 
 import numpy as np
@@ -35,7 +36,8 @@ def test_plan_writes_every_output(tmp_path, small_tif, capsys):
     assert report["classification"]["high_slope_regions"] == 1
     assert report["metrics"]["total"]["coverage"] >= 0.95
     gj = json.loads((out / "path.geojson").read_text())
-    coords = np.vstack([f["geometry"]["coordinates"] for f in gj["features"]])
+    (route,) = gj["features"]  # no vehicle file asked for: the route alone
+    coords = np.array(route["geometry"]["coordinates"])
     assert coords.shape[1] == 2 and "crs" not in gj  # RFC 7946 positions: lon, lat
     # WGS 84 longitude/latitude of the file's map coordinates (EPSG:32631).
     from pyproj import Transformer
@@ -44,12 +46,142 @@ def test_plan_writes_every_output(tmp_path, small_tif, capsys):
         coords[:, 0], coords[:, 1])
     assert e.min() >= 999.5 and e.max() <= 1049.5
     assert n.min() >= 1999.5 and n.max() <= 2059.5
-    assert "Standard lawnmower path" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "Standard lawnmower path" in printed
+    t = report["mission_time"]
+    assert t["duration_s"] == pytest.approx(path.length / 0.5, rel=1e-3)  # the default speed
+    assert f"Mission time: {t['duration']} for the" in printed
+    md = (out / "report.md").read_text()
+    assert f"Mission time: {t['duration']}" in md
+    assert "reference_table3" not in report and "Santorini" not in md  # only when asked for
+
+
+def test_the_reference_table_when_asked_for(tmp_path, small_tif):
+    out = tmp_path / "out"
+    assert main(["plan", str(small_tif), "--no-figures", "--no-3d-metrics", "--export", "",
+                 "--speed", "1.25", "--reference-table", "-o", str(out)]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["reference_table3"]["total"]["length"] == 10838.5
+    assert "## The reference's Table 3 (Santorini caldera ROI)" in (out / "report.md").read_text()
+    t = report["mission_time"]
+    assert t["speed_m_s"] == 1.25 and t["duration_s"] == pytest.approx(t["length_m"] / 1.25)
+    assert t["lawnmower_duration_s"] == pytest.approx(report["metrics"]["lawnmower"]["length"]
+                                                      / 1.25)
+
+
+@pytest.mark.parametrize("seconds, text", [(42.4, "42 s"), (750.0, "12.5 min"),
+                                           (131_760.0, "36.6 h")])
+def test_human_duration(seconds, text):
+    from drake_auv.planning.export import human_duration
+
+    assert human_duration(seconds) == text
+
+
+def _violations(report):
+    """(file, count) of every violation report.json records for the vehicle files."""
+    ex, out = report["exports"], []
+    cola2 = ex["cola2"]
+    out += [("mission.xml", cola2[k]) for k in ("sections_over_deviation", "unresolved_sections")]
+    for name, r in (("mission.xml", cola2["replay"]), ("ArduSub", ex["qgc"]["clearance"])):
+        out += [(name, r[k]) for k in ("closer_than_half_omega", "shallower_than_min_depth")]
+    return [(name, n) for name, n in out if n]
+
+
+def test_plan_on_a_shipped_tile_says_what_matters(tmp_path, capsys):
+    """A wall of the Monterey canyon (a shipped tile, a 250 m x 310 m ROI): the mission time, a
+    warning line for each violation report.json records, the split QGC files in upload order,
+    a route and the vehicle files' waypoints in the GeoJSON, figures in EPSG:3857."""
+    from drake_auv.scenarios import DATA_DIR
+
+    tile = DATA_DIR / "monterey" / "MontereyBay.R_-121.815_-121.805_36.790_36.800.epsg3857.tif"
+    out = tmp_path / "out"
+    code = main(["plan", str(tile), "--roi=-13560435,4410686,-13560186,4410998", "--omega", "5",
+                 "--export", "cola2,qgc,geojson", "--no-3d-metrics", "-o", str(out)])
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    report = json.loads((out / "report.json").read_text())
+    t = report["mission_time"]
+    assert t["duration_s"] == pytest.approx(sum(report["path_length_by_label"].values()) / 0.5)
+    assert f"Mission time: {t['duration']} for the {t['length_m'] / 1000:.2f} km path" \
+        in printed.out
+    violations = _violations(report)
+    assert violations  # this wall makes COLA2 sections stray beyond the deviation tolerance
+    warnings = [line for line in printed.err.splitlines() if line.startswith("warning: ")]
+    md = [line for line in (out / "report.md").read_text().splitlines() if line.startswith("- ")]
+    assert len(warnings) == len(md) == len(violations), (warnings, violations)
+    for (name, n), line, md_line in zip(violations, warnings, md):
+        assert name in line and f" {n} " in line and md_line == "- " + line[len("warning: "):]
+    files = report["exports"]["qgc"]["files"]
+    assert files == [f"mission_{k + 1}.plan" for k in range(len(files))] and len(files) > 1
+    upload = next(line for line in printed.out.splitlines() if line.startswith("QGroundControl"))
+    assert [upload.index(f) for f in files] == sorted(upload.index(f) for f in files)
+    gj = json.loads((out / "path.geojson").read_text())
+    kinds = [f["properties"]["kind"] for f in gj["features"]]
+    assert kinds[0] == "route" and set(kinds[1:]) == {"waypoint"}
+    assert {f["properties"]["file"] for f in gj["features"][1:]} == {"mission.xml", *files}
+    assert (out / "lanes.png").stat().st_size > 0
+
+
+def test_plan_figures_read_the_crs_latitude_longitude_and_north(small_tif):
+    """UTM 31N (EPSG:32631): the bottom and left axes read eastings and northings, the top and
+    right edges the longitudes and latitudes there, and the arrow points to true north."""
+    from pyproj import Transformer
+
+    from drake_auv.planning.coverage_plan import plan_coverage
+    from drake_auv.planning.figures import fig_slope
+    from drake_auv.planning.geo import GeoFrame
+    from drake_auv.terrain.readers import read_bathymetry
+
+    bathy = read_bathymetry(small_tif)
+    plan = plan_coverage(bathy, omega=2.0, compute_metrics=False)
+    geo = GeoFrame(bathy)
+    fig = fig_slope(plan, geo)
+    fig.savefig(io.BytesIO(), format="png")  # lays the secondary axes out
+    ax = fig.axes[0]
+    by_label = {c.get_xlabel() or c.get_ylabel(): c for c in ax.child_axes}
+    east, north = by_label["easting (metre, EPSG:32631)"], by_label["northing (metre, EPSG:32631)"]
+    # The axes' edges in map coordinates: the grid's outer cell edges.
+    assert east.get_xlim() == pytest.approx((999.5, 1049.5))
+    assert north.get_ylim() == pytest.approx((1999.5, 2059.5))
+    to_ll = Transformer.from_crs("EPSG:32631", "EPSG:4326", always_xy=True)
+    top, right = (c for c in ax.child_axes if not (c.get_xlabel() or c.get_ylabel()))
+
+    def degrees(text):
+        return float(text[:-2]) * (-1 if text[-1] in "WS" else 1)
+
+    ticks = list(zip(top.get_xticks(), top.get_xticklabels()))
+    assert len(ticks) >= 2
+    for x, label in ticks:
+        lon, _ = to_ll.transform(*geo.world_to_map([[x, bathy.extent[3] + 0.5]])[0])
+        assert degrees(label.get_text()) == pytest.approx(lon, abs=2e-6), label
+    for y, label in zip(right.get_yticks(), right.get_yticklabels()):
+        _, lat = to_ll.transform(*geo.world_to_map([[bathy.extent[1] + 0.5, y]])[0])
+        assert degrees(label.get_text()) == pytest.approx(lat, abs=2e-6), label
+    (arrow,) = [t for t in ax.texts if hasattr(t, "xyann")]
+    d = np.subtract(arrow.xy, arrow.xyann)
+    azimuth = float(geo.grid_north_azimuth(np.array(arrow.xyann)[None])[0])
+    assert d / np.linalg.norm(d) == pytest.approx([-np.sin(azimuth), np.cos(azimuth)],
+                                                  abs=1e-3)
+    assert [t.get_text() for t in ax.texts if t.get_text()] == ["N"]
+
+
+def test_what_does_not_apply_is_left_out_of_the_report():
+    """A gentle slope: no high-slope region, so no row for it, and no "nan" or "n/a"."""
+    from drake_auv.planning.coverage_plan import plan_coverage
+    from drake_auv.planning.export import report_markdown
+
+    x = np.arange(40.0)[None, :] * np.ones((30, 1))
+    plan = plan_coverage(Bathymetry(-20.0 + 0.05 * x, (1.0, 1.0)), omega=2.0)
+    assert plan.labels.n_regions == 0 and plan.metrics.high_slope.samples == 0
+    text = report_markdown(plan)
+    assert "| Planar region |" in text and "| High-slope region |" not in text
+    assert "nan" not in text and "n/a" not in text and "Length ratio" in text
 
 
 @pytest.mark.parametrize("extra, message", [
     (["--omega", "0"], "omega"), (["--aperture", "190"], "aperture_deg"),
-    (["--slope-threshold", "-1"], "slope_threshold"), (["--roi", "0,0,10,10"], "outside the grid")])
+    (["--slope-threshold", "-1"], "slope_threshold"), (["--roi", "0,0,10,10"], "outside the grid"),
+    (["--speed", "0"], "--speed")])
 def test_plan_reports_bad_input(tmp_path, small_tif, capsys, extra, message):
     code = main(["plan", str(small_tif), "--no-figures", "-o", str(tmp_path / "o"), *extra])
     assert code == 2

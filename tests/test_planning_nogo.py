@@ -116,12 +116,11 @@ def test_bad_no_go_files_give_one_line(utm_tif, tmp_path, capsys, content, messa
 
 
 def test_no_go_across_the_middle_of_a_monterey_tile(tmp_path):
-    from pathlib import Path as FilePath
+    from drake_auv.scenarios import DATA_DIR
 
-    tiles = sorted((FilePath(__file__).resolve().parents[1] / ".." / "shared" / "data"
-                    / "monterey").glob("*.tif"))
+    tiles = sorted((DATA_DIR / "monterey").glob("*.tif"))
     if not tiles:
-        pytest.skip("shared Monterey tiles not present")
+        pytest.skip("the shipped Monterey tiles are missing")
     import re
 
     from drake_auv.terrain.readers import read_bathymetry

@@ -1,5 +1,5 @@
 """QGroundControl / ArduSub missions: read by MAVSDK's QGC importer item by item, within the
-board's budget, replayed as ArduSub AUTO flies them (frames 3 and 10) and safe on the shared
+board's budget, replayed as ArduSub AUTO flies them (frames 3 and 10) and safe on the shipped
 Monterey tiles and on random seabeds; the replay's semantics and the reader's errors."""
 
 import json
@@ -174,7 +174,7 @@ def test_long_missions_are_split_and_chain(tmp_path, caldera_plan, mavsdk_import
     check_safe(files, geo, caldera_plan.surface, 4.0)
 
 
-# -- the shared Monterey tiles ---------------------------------------------------------------
+# -- the shipped Monterey tiles --------------------------------------------------------------
 
 @pytest.fixture(scope="module")
 def monterey_plans():

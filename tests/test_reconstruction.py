@@ -363,3 +363,23 @@ def test_outliers_are_dropped_before_poisson():
         return float((np.abs(mesh.vertices[:, 2]) > 0.5).mean())
 
     assert above(3.0) < 0.05 < above(0.0)
+
+
+def test_the_figures_colour_scale_is_what_it_scores():
+    """Each colour bar runs to the 95th percentile of the distances it shows (the accuracy
+    p95 the report gives), so a surface whose median error is 7 cm is not drawn saturated."""
+    from drake_auv.reconstruction.figures import TRUTH_LABEL, colour_scale, fig_reconstruction
+    from drake_auv.reconstruction.products import SUPPORT_LABEL
+
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    rng = np.random.default_rng(0)
+    truth, support = rng.exponential(0.07, (2, len(mesh.vertices))) * [[1.0], [0.2]]
+    fig = fig_reconstruction([("sphere", mesh, truth), ("sphere", mesh, support, SUPPORT_LABEL)])
+    bars = {a._colorbar.ax.get_ylabel(): a._colorbar for a in fig.axes if hasattr(a, "_colorbar")}
+    assert set(bars) == {TRUTH_LABEL, SUPPORT_LABEL}
+    for label, d in ((TRUTH_LABEL, truth), (SUPPORT_LABEL, support)):
+        assert bars[label].norm.vmax == pytest.approx(np.percentile(d, 95))
+        assert bars[label].norm.vmax == colour_scale(d) and np.median(d) < 0.3 * colour_scale(d)
+    assert colour_scale([np.nan, 0.0]) == 0.01
+    one = fig_reconstruction([("sphere", mesh, truth)], vmax=1.0)
+    assert [a._colorbar.norm.vmax for a in one.axes if hasattr(a, "_colorbar")] == [1.0]

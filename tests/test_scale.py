@@ -1,4 +1,4 @@
-"""Survey-scale dives (issue 21): the scan log streamed to its file with a bounded memory
+"""Survey-scale dives: the scan log streamed to its file with a bounded memory
 window, box queries of the octree through its tiles, points.ply streamed, tile sites, and (slow)
 the long built-in mission on real data."""
 

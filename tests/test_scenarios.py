@@ -16,7 +16,7 @@ HAS_MONTEREY = (DATA_DIR / "monterey" / MONTEREY_TILE).exists()
 
 def _needs_data(name):
     if name == "monterey" and not HAS_MONTEREY:
-        pytest.skip(f"shared data not present at {DATA_DIR}")
+        pytest.skip(f"the Monterey tiles are missing from {DATA_DIR}")
 
 
 def _prior(name, error_m=0.0, seed=0, spacing=None):

@@ -5,13 +5,19 @@
     drake-auv plan map.tif --export cola2,qgc,geojson -o out/   missions a vehicle runs
     drake-auv plan caldera -o out/                         the synthetic caldera-rim site
 
-Writes path.csv (world frame), report.md and report.json (the Table 3 comparison), PNG figures
-and the --export formats (default geojson when the grid is georeferenced): mission.xml (COLA2),
-mission.plan (QGroundControl, ArduSub; mission_1.plan, ... past --max-items), path.geojson and lawnmower.geojson (WGS 84) into OUTDIR.
+Writes path.csv (world frame), report.md and report.json (mission time, the comparison with a
+lawnmower, each vehicle file's violations), PNG figures (in the grid's CRS) and the --export
+formats (default geojson when the grid is georeferenced): mission.xml (COLA2), mission.plan
+(QGroundControl, ArduSub; mission_1.plan, ... past --max-items, uploaded in that order),
+path.geojson (the route and the vehicle files' waypoints) and lawnmower.geojson (WGS 84) into
+the output folder. Prints the comparison, the mission time, the upload order of split QGC files
+and one warning line per violation of a vehicle file.
 """
 
 from __future__ import annotations
 
+import json
+import sys
 from pathlib import Path as FilePath
 
 
@@ -66,7 +72,8 @@ def add_parser(subparsers) -> None:
                              "cells are no-go (default 1)")
     parser.add_argument("--export", default=None,
                         help="comma-separated: cola2 (mission.xml), qgc (mission.plan), "
-                             "geojson (WGS 84) (default: geojson when georeferenced)")
+                             "geojson (WGS 84: the route and the waypoints of the vehicle files "
+                             "written with it) (default: geojson when georeferenced)")
     parser.add_argument("--origin-lonlat", default=None,
                         help="WGS 84 'LON,LAT' of the world origin, for grids without a CRS "
                              "(the caldera site defaults to the Santorini caldera)")
@@ -84,6 +91,9 @@ def add_parser(subparsers) -> None:
                              "rangefinder and ArduSub 4.5+) on lanes, depth = frame 3 "
                              "everywhere from the prior map (default terrain)")
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    parser.add_argument("--reference-table", action="store_true",
+                        help="add the reference's Table 3 (the Santorini caldera ROI) to the "
+                             "reports, to compare with `plan caldera`")
     parser.add_argument("--no-3d-metrics", action="store_true",
                         help="skip the occluded 3D metrics on the grid's mesh (seconds on large "
                              "grids)")
@@ -97,7 +107,8 @@ def run(args) -> int:
 
     output_folder(args.out, "-o", 20 * MiB)  # path.csv, reports, figures, exports
     from drake_auv.planning.coverage_plan import plan_coverage
-    from drake_auv.planning.export import (check_exports, parse_exports, table3_markdown,
+    from drake_auv.planning.export import (check_exports, export_warnings, mission_time_line,
+                                           parse_exports, table3_markdown, upload_line,
                                            write_outputs)
     from drake_auv.terrain.roi import parse_roi
 
@@ -140,7 +151,16 @@ def run(args) -> int:
     files = write_outputs(plan, args.out, figures=not args.no_figures, progress=True,
                           exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
                           metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
-                          ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d)
-    print(table3_markdown(plan.metrics))
+                          ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d,
+                          reference_table=args.reference_table)
+    report = json.loads((FilePath(args.out) / "report.json").read_text())
+    if plan.metrics is not None:
+        print(table3_markdown(plan.metrics))
+    print(mission_time_line(report["mission_time"]))
+    upload = upload_line(report)
+    if upload is not None:
+        print(upload)
+    for warning in export_warnings(report):
+        print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {len(files)} files to {args.out}")
     return 0

@@ -75,7 +75,8 @@ def run(args) -> int:
     from drake_auv.commands.outputs import MiB, output_file
     from drake_auv.mission.site import load_mesh
     from drake_auv.reconstruction.pointcloud import read_point_cloud
-    from drake_auv.reconstruction.products import ERROR_VMAX, SUPPORT_LABEL, error_colours
+    from drake_auv.reconstruction.figures import colour_scale
+    from drake_auv.reconstruction.products import SUPPORT_LABEL, error_colours
     from drake_auv.reconstruction.scoring import score
     from drake_auv.reconstruction.surface import check_parameters, load_open3d, reconstruct
 
@@ -107,7 +108,8 @@ def run(args) -> int:
     if target is not None:
         summary, errors = score(target, mesh, cloud.points, world=world)
         mesh = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False,
-                               vertex_colors=(255 * error_colours(errors)).astype(np.uint8))
+                               vertex_colors=(255 * error_colours(errors, colour_scale(errors)))
+                               .astype(np.uint8))
         s, p = summary["surface"], summary["point_cloud"]
         line += (f"; every vertex to the {summary['accuracy_to']}: accuracy median "
                  f"{s['accuracy_median_m']:.3f} m (mean {s['accuracy_mean_m']:.3f} m, p95 "
@@ -119,8 +121,7 @@ def run(args) -> int:
         from drake_auv.reconstruction.figures import fig_reconstruction
 
         with replacing(args.figure) as temporary:
-            fig_reconstruction(panels, vmax=ERROR_VMAX).savefig(temporary, dpi=110,
-                                                                bbox_inches="tight")
+            fig_reconstruction(panels).savefig(temporary, dpi=110, bbox_inches="tight")
     with replacing(args.out) as temporary:
         mesh.export(temporary)
     print(line)

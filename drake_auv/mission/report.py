@@ -249,11 +249,34 @@ def _rounded(value, digits: int = 4):
 
 
 def _fmt(value, spec: str, unit: str = "") -> str:
-    return "n/a" if value is None else f"{value:{spec}}{unit}"
+    """A table cell: "-" where the quantity does not apply."""
+    return "-" if value is None else f"{value:{spec}}{unit}"
 
 
-def report_markdown(summary: dict) -> str:
-    """The report as Markdown."""
+FILE_NOTES = {"plan.png": "the coverage plan", "mission.html": "Meshcat recording"}
+
+
+def _angle(mean, sd) -> str:
+    return "" if mean is None else f" (viewing angle {mean:.1f} deg, sd {sd:.1f})"
+
+
+def _distance_line(d: dict) -> str:
+    """The true (and on-line map) distance to the target; the survey's only where it had
+    samples."""
+    near = "" if d["near_m"] is None else f" within {d['near_m']:g} m"
+    parts = [] if d["mean_m"] is None else [
+        f"over {d['samples']} survey samples{near}: mean {d['mean_m']:.2f} m, sd "
+        f"{d['sd_m']:.2f} m"]
+    line = "- True distance to the target " + "; ".join(
+        parts + [f"minimum over the dive {d['min_m']:.2f} m"]) + "."
+    if d["map_mean_m"] is not None:
+        line += f" Against the on-line map: mean {d['map_mean_m']:.2f} m, sd {d['map_sd_m']:.2f} m."
+    return line
+
+
+def report_markdown(summary: dict, files=()) -> str:
+    """The report as Markdown; `files`: the names of the files written beside it, listed at the
+    end. Quantities that do not apply (no survey sample, nothing seen) are left out."""
     m, c, d = summary["mission"], summary["coverage"], summary["distance_to_target"]
     lines = [f"# Mission report: {m['name']}", "",
              f"Site `{m['site']}`, seed {m['seed']}; "
@@ -269,9 +292,10 @@ def report_markdown(summary: dict) -> str:
                   + ") |",
                   f"| planned duration | {plan['planned_duration_s']:.0f} s |",
                   f"| Omega | {plan['omega_m']:g} m |",
-                  f"| true distance of the nominal path to the target | mean "
-                  f"{_fmt(plan['nominal_true_distance_mean_m'], '.2f')} m, min "
-                  f"{plan['nominal_true_distance_min_m']:.2f} m |"]
+                  "| true distance of the nominal path to the target | "
+                  + ("" if plan["nominal_true_distance_mean_m"] is None else
+                     f"mean {plan['nominal_true_distance_mean_m']:.2f} m, ")
+                  + f"min {plan['nominal_true_distance_min_m']:.2f} m |"]
         if "planned_coverage_prior" in plan:
             lines += [f"| high-slope regions | {plan['high_slope_regions']} |",
                       f"| viewing angle on the prior map | {plan['planned_view_mean_deg']:.1f}"
@@ -291,16 +315,11 @@ def report_markdown(summary: dict) -> str:
                      + ", ".join(f"{k} ({o})" for k, o in zip(p["legs"], p["outcomes"])) + " |")
     lines += ["", "## Whole dive", "",
               f"- Target surface: {m['target_area_m2']:.0f} m^2. Covered by the multibeam: "
-              f"**{100 * c['multibeam']:.1f} %** (viewing angle "
-              f"{_fmt(c['multibeam_angle_mean_deg'], '.1f')} deg, sd "
-              f"{_fmt(c['multibeam_angle_sd_deg'], '.1f')}); by the camera: "
-              f"**{100 * c['camera']:.1f} %** ({_fmt(c['camera_angle_mean_deg'], '.1f')} deg, "
-              f"sd {_fmt(c['camera_angle_sd_deg'], '.1f')}).",
-              f"- True distance to the target over {d['samples']} survey samples"
-              + (f" within {d['near_m']:g} m" if d["near_m"] is not None else "")
-              + f": mean {_fmt(d['mean_m'], '.2f')} m, sd {_fmt(d['sd_m'], '.2f')} m;"
-              f" minimum over the dive {d['min_m']:.2f} m. Against the on-line map: mean "
-              f"{_fmt(d['map_mean_m'], '.2f')} m, sd {_fmt(d['map_sd_m'], '.2f')} m.",
+              f"**{100 * c['multibeam']:.1f} %**"
+              f"{_angle(c['multibeam_angle_mean_deg'], c['multibeam_angle_sd_deg'])}; by the "
+              f"camera: **{100 * c['camera']:.1f} %**"
+              f"{_angle(c['camera_angle_mean_deg'], c['camera_angle_sd_deg'])}.",
+              _distance_line(d),
               coverage_time_line(summary["coverage_vs_time"]),
               f"- Minimum signed clearance to anything (negative: inside the world or out "
               f"of the water): {summary['min_clearance_m']:.2f} m: "
@@ -321,10 +340,11 @@ def report_markdown(summary: dict) -> str:
         lines.append(f"- {t['replan_steps']} replanning steps: median "
                      f"{t['replan_median_ms']:.1f} ms, 95th percentile {t['replan_p95_ms']:.1f}"
                      " ms.")
-    lines += ["", "Files: `coverage.png`, `coverage_vs_time.png`, `distance.png`, `plan.png` "
-              "(coverage plans), "
-              "`mission.html` (Meshcat recording), `trajectory.csv`, `diagram.dot`.", ""]
-    return "\n".join(lines)
+    if files:
+        lines += ["", "Files: " + ", ".join(
+            f"`{name}`" + (f" ({FILE_NOTES[name]})" if name in FILE_NOTES else "")
+            for name in files) + "."]
+    return "\n".join(lines) + "\n"
 
 
 def fig_coverage(result: MissionResult) -> Figure:
@@ -472,13 +492,15 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
             fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
     write_trajectory(result, out / "trajectory.csv")
     write_text(out / "diagram.dot", result.diagram_dot)
+    files = [*figures, "trajectory.csv", "diagram.dot"]
     if finish is not None:
         finish(out)
+        files.append("mission.html")
     outputs_s = time.perf_counter() - start
     summary["timing"].update(_rounded(dict(
         setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
         total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
     write_json(out / "report.json", summary)
     write_text(out / "report.md",
-               report_markdown(summary) + products_markdown(summary["reconstruction"]))
+               report_markdown(summary, files) + products_markdown(summary["reconstruction"]))
     return summary

@@ -1,9 +1,10 @@
 """Exports of a `CoveragePlan`: CSV (world frame), RFC 7946 GeoJSON (WGS 84), the COLA2 and
 QGroundControl missions (`planning.missions`, `planning.qgc`), and the Table 3 report.
 
-GeoJSON: one 2D LineString feature per path segment, [lon, lat] through pyproj from the grid's
-CRS (no `crs` member: RFC 7946 is WGS 84), depths and altitudes as properties
-(`path_to_geojson`).
+GeoJSON: the route as one 2D LineString and the waypoints of the vehicle files as Points,
+[lon, lat] through pyproj from the grid's CRS (no `crs` member: RFC 7946 is WGS 84), depths and
+altitudes as properties (`path_to_geojson`). The reports give the mission time, each vehicle
+file's violations as warnings (`export_warnings`) and the QGroundControl files' upload order.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import numpy as np
 
 from drake_auv.output_files import write_json, write_text
 from drake_auv.planning.geo import GeoFrame
-from drake_auv.planning.missions import ALTITUDE_LABELS
+from drake_auv.planning.missions import douglas_peucker
 from drake_auv.planning.path import Path
 
 # The reference's Table 3 (Santorini caldera ROI, Omega = 2 m, 60 degree camera).
@@ -26,51 +27,67 @@ REFERENCE_TABLE3 = {
 }
 
 
-def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", surface=None) -> dict:
-    """A FeatureCollection (RFC 7946) of the path's segments in WGS 84, Shapefile-safe.
+ROUTE_TOLERANCE = 0.05  # m: the route's vertices, thinned below the 6 decimals (~0.1 m) kept
 
-    One 2D LineString [[lon, lat], [lon, lat]] (degrees, 6 decimals) per segment between
-    consecutive samples: RFC 7946's third coordinate is a height above the WGS 84 ellipsoid,
-    and the path's vertical references are depths below mean sea level and altitudes above the
-    seabed, so they are properties. Properties (scalars, names of at most 10 characters, as a Shapefile's DBF
-    takes them), a segment taking its end sample's label like `Path.length_by_label`:
-    `label`; `run` (index of the run of one label); `seq` (segment index); `heave`
-    ("altitude" on lanes, "depth" elsewhere); `depth_a`, `depth_b` (m below the sea surface at
-    the segment's start and end); `alt_a`, `alt_b` (m above the prior seabed, with `surface`;
-    else absent); `length_m` (3D); `sens_az`, `sens_dep` (the sensor axis at the end sample:
-    azimuth, degrees clockwise from true north, and depression, degrees below the horizontal;
-    90 looks straight down). A single-sample path gives one zero-length segment."""
-    pts = path.points
-    lonlat = np.round(geo.to_lonlat(pts[:, :2]), 6)  # RFC 7946 section 11.2: about 0.1 m
-    s = path.sensor_dir
-    azimuth = np.degrees(np.mod(np.arctan2(s[:, 0], s[:, 1])
-                                + geo.grid_north_azimuth(pts[:, :2]), 2 * np.pi))
-    depression = np.degrees(np.arcsin(np.clip(-s[:, 2], -1.0, 1.0)))
-    labels = path.labels.astype(str)
-    a = np.arange(max(len(path) - 1, 1))
-    b = np.minimum(a + 1, len(path) - 1)
-    run = np.concatenate([[0], np.cumsum(labels[1:] != labels[:-1])])
-    depth = np.round(-pts[:, 2], 3)
-    length = np.round(np.linalg.norm(pts[b] - pts[a], axis=1), 3)
-    alt = (None if surface is None else
-           np.round(pts[:, 2] - surface.elevation(pts[:, 0], pts[:, 1]), 3))
-    heave = np.where(np.isin(labels, ALTITUDE_LABELS), "altitude", "depth")
+
+def _waypoint_features(mission, geo: GeoFrame, surface) -> list[dict]:
+    """Point features of a `VehicleMission`'s items (see `path_to_geojson`)."""
+    lonlat = np.array([[it.lon, it.lat] for it in mission.items], float)
+    seabed = None
+    if surface is not None:
+        xy = geo.from_lonlat(lonlat)
+        seabed = surface.elevation(xy[:, 0], xy[:, 1])
     features = []
-    for k, (i, j) in enumerate(zip(a.tolist(), b.tolist())):
-        props = {"label": labels[j], "run": int(run[j]), "seq": k, "heave": str(heave[j]),
-                 "depth_a": float(depth[i]), "depth_b": float(depth[j])}
-        if alt is not None:
-            props.update(alt_a=float(alt[i]), alt_b=float(alt[j]))
-        props.update(length_m=float(length[k]), sens_az=round(float(azimuth[j]), 2),
-                     sens_dep=round(float(depression[j]), 2))
+    for k, it in enumerate(mission.items):
+        held = round(float(it.z), 3)
+        if it.z_mode == "depth":
+            depth, alt = held, None if seabed is None else round(float(-it.z - seabed[k]), 3)
+        else:
+            depth, alt = None if seabed is None else round(float(-(seabed[k] + it.z)), 3), held
+        props = {"kind": "waypoint", "file": FilePath(mission.source).name, "seq": k + 1,
+                 "item": it.kind, "heave": it.z_mode, "depth": depth, "alt": alt}
+        if it.yaw is not None:
+            props["yaw_deg"] = round(float(np.degrees(it.yaw)) % 360.0, 2)
         features.append({"type": "Feature", "properties": props,
-                         "geometry": {"type": "LineString",
-                                      "coordinates": [lonlat[i].tolist(), lonlat[j].tolist()]}})
+                         "geometry": {"type": "Point",
+                                      "coordinates": np.round(lonlat[k], 6).tolist()}})
+    return features
+
+
+def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", missions=(),
+                    surface=None) -> dict:
+    """A FeatureCollection (RFC 7946, WGS 84) of the route and the waypoints of the vehicle
+    missions written with it, property names of at most 10 characters (Shapefile-safe).
+
+    First the route: one 2D LineString [[lon, lat], ...] (degrees, 6 decimals) through the
+    path's samples, those within `ROUTE_TOLERANCE` of the line thinned out (Douglas-Peucker in
+    xy); properties `kind` "route", `name`, `samples`, `length_m` (3D), `depth_min`,
+    `depth_max` (m below the sea surface). Then one Point per item of each of `missions`
+    (`VehicleMission`s read back from the files, in the order flown): `kind` "waypoint",
+    `file` (its file name), `seq` (1-based order in the file), `item` (waypoint, goto, section
+    or park), `heave` (what the autopilot holds: "altitude" or "depth"), `depth` (m below the
+    sea surface), `alt` (m above the prior seabed; the one not held needs `surface`, else null),
+    `yaw_deg` (commanded heading, degrees clockwise from true north; absent where the autopilot
+    chooses it). RFC 7946's third coordinate is a height above the WGS 84 ellipsoid, and the
+    vehicle's vertical references are depths and altitudes, so they are properties."""
+    pts = path.points
+    keep = douglas_peucker(pts[:, :2], ROUTE_TOLERANCE) if len(path) > 1 else np.zeros(2, int)
+    lonlat = np.round(geo.to_lonlat(pts[keep, :2]), 6)  # RFC 7946 section 11.2: about 0.1 m
+    route = {"type": "Feature",
+             "properties": {"kind": "route", "name": name, "samples": len(path),
+                            "length_m": round(float(path.length), 3),
+                            "depth_min": round(float(-pts[:, 2].max()), 3),
+                            "depth_max": round(float(-pts[:, 2].min()), 3)},
+             "geometry": {"type": "LineString", "coordinates": lonlat.tolist()}}
+    features = [route]
+    for mission in missions:
+        features += _waypoint_features(mission, geo, surface)
     return {"type": "FeatureCollection", "name": name, "features": features}
 
 
-def write_geojson(path: Path, geo: GeoFrame, filename, name: str = "path", surface=None) -> None:
-    write_json(filename, path_to_geojson(path, geo, name, surface), indent=None,
+def write_geojson(path: Path, geo: GeoFrame, filename, name: str = "path", missions=(),
+                  surface=None) -> None:
+    write_json(filename, path_to_geojson(path, geo, name, missions, surface), indent=None,
                separators=(",", ":"))
 
 
@@ -133,13 +150,105 @@ def _order_line(o: dict | None) -> str:
             f"{req}.")
 
 
-def _fmt(value: float | None) -> str:
-    return "n/a" if value is None else f"{value:.2f}"
+def _ratios_line(r: dict) -> str:
+    """The defined ratios of path to lawnmower (undefined ones, a zero or NaN term, left out)."""
+    parts = [f"{name}: {r[key]:.2f}" for key, name in (
+        ("length_total_over_lawnmower", "length ratio (total / lawnmower)"),
+        ("view_total_over_lawnmower", "viewing angle ratio")) if r[key] is not None]
+    text = "; ".join(parts)
+    return text[:1].upper() + text[1:] + "." if parts else ""
 
 
-def report_dict(plan, metrics_3d=None) -> dict:
-    """Parameters, classification summary, Table 3 metrics (grid and, if given, the occluded
-    3D ones of `planning.metrics3d`), water column, survey order and the reference's Table 3."""
+def human_duration(seconds: float) -> str:
+    """'42 s', '12.5 min' or '36.6 h'."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.1f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+
+
+def mission_time(plan, speed: float) -> dict:
+    """Time to fly the path (and the lawnmower) at `speed` (m/s) along its 3D length, in still
+    water: `speed_m_s`, `length_m`, `duration_s`, `duration` (human), and the lawnmower's
+    `lawnmower_length_m`, `lawnmower_duration_s`, `lawnmower_duration`."""
+    if not (np.isfinite(speed) and speed > 0):
+        raise ValueError(f"speed (--speed) must be > 0 m/s, got {speed}")
+    out = {"speed_m_s": float(speed), "length_m": float(plan.path.length),
+           "duration_s": float(plan.path.length / speed)}
+    out["duration"] = human_duration(out["duration_s"])
+    if plan.lawnmower is not None:
+        out["lawnmower_length_m"] = float(plan.lawnmower.length)
+        out["lawnmower_duration_s"] = float(plan.lawnmower.length / speed)
+        out["lawnmower_duration"] = human_duration(out["lawnmower_duration_s"])
+    return out
+
+
+def mission_time_line(t: dict) -> str:
+    line = (f"Mission time: {t['duration']} for the {t['length_m'] / 1000:.2f} km path at "
+            f"{t['speed_m_s']:g} m/s")
+    if "lawnmower_duration" in t:
+        line += (f" (the lawnmower: {t['lawnmower_length_m'] / 1000:.2f} km, "
+                 f"{t['lawnmower_duration']})")
+    return line + "."
+
+
+def _replay_warnings(name: str, r: dict, omega: float, min_depth: float) -> list[str]:
+    """The violations of one export's replay (`autopilot.replay.clearance_report`)."""
+    out = []
+    if r["closer_than_half_omega"]:
+        cause = ("all where the minimum depth leaves no more" if not r["closer_than_reachable"]
+                 else f"{r['closer_than_reachable']} of them where the minimum depth does not "
+                      "force it")
+        out.append(f"{name}: flown as its autopilot flies it, {r['closer_than_half_omega']} of "
+                   f"{r['samples']} samples come nearer than Omega / 2 = {0.5 * omega:g} m to "
+                   f"the prior seabed (least {r['min_clearance_m']:.2f} m); {cause}")
+    if r["shallower_than_min_depth"]:
+        out.append(f"{name}: flown as its autopilot flies it, {r['shallower_than_min_depth']} "
+                   f"of {r['samples']} samples are shallower than the {min_depth:g} m minimum "
+                   f"depth (shallowest {r['shallowest_depth_m']:.3f} m)")
+    return out
+
+
+def export_warnings(rep: dict) -> list[str]:
+    """One line per violation the exports' figures in `rep` (a `report_dict`) record: COLA2
+    sections beyond the deviation tolerance or unresolved, and replayed samples of either
+    mission nearer than Omega / 2 to the prior seabed or above the minimum depth."""
+    ex = rep.get("exports", {})
+    p = rep["parameters"]
+    out = []
+    if "cola2" in ex:
+        c, name = ex["cola2"], "mission.xml (COLA2)"
+        if c["sections_over_deviation"]:
+            out.append(f"{name}: {c['sections_over_deviation']} of {c['sections']} sections "
+                       f"stray more than the {c['deviation_tolerance_m']:g} m deviation "
+                       f"tolerance from the path (worst {c['max_deviation_m']:.2f} m)")
+        if c["unresolved_sections"]:
+            out.append(f"{name}: {c['unresolved_sections']} sections hold the lowest safe depth "
+                       "(no target kept Omega / 2 from the seabed within the tolerance)")
+        out += _replay_warnings(name, c["replay"], p["omega"], p["min_depth"])
+    if "qgc" in ex:
+        files = ex["qgc"]["files"]
+        name = f"{files[0] if len(files) == 1 else files[0] + ' to ' + files[-1]} (ArduSub)"
+        out += _replay_warnings(name, ex["qgc"]["clearance"], p["omega"], p["min_depth"])
+    return out
+
+
+def upload_line(rep: dict) -> str | None:
+    """The QGroundControl files in upload order when the mission is split, else None."""
+    q = rep.get("exports", {}).get("qgc")
+    if q is None or len(q["files"]) == 1:
+        return None
+    order = ", then ".join(f"{f} ({n} items)" for f, n in zip(q["files"], q["items"]))
+    return (f"QGroundControl: the mission is split into {len(q['files'])} files of at most "
+            f"{q['max_items']} items; upload and fly them in this order: {order} (each starts "
+            "at the previous one's last waypoint).")
+
+
+def report_dict(plan, metrics_3d=None, speed: float = 0.5, reference_table: bool = False,
+                exports: dict | None = None) -> dict:
+    """Parameters, classification summary, mission time at `speed` (m/s), Table 3 metrics
+    (grid and, if given, the occluded 3D ones of `planning.metrics3d`), water column, survey
+    order, the `exports`' figures (see `write_outputs`) and, with `reference_table`, the
+    reference's Table 3."""
     labels = plan.labels
     dx, dy = plan.bathy.spacing
     out = {
@@ -154,10 +263,12 @@ def report_dict(plan, metrics_3d=None) -> dict:
         "contours": len(plan.contours),
         "visit_order": [f"{kind} {k}" for kind, k in plan.visit_order],
         "path_length_by_label": plan.path.length_by_label(),
+        "mission_time": mission_time(plan, speed),
         "water_column": water_column_summary(plan),
         "survey_order": _order(plan),
-        "reference_table3": REFERENCE_TABLE3,
     }
+    if reference_table:
+        out["reference_table3"] = REFERENCE_TABLE3
     if metrics_3d is not None:
         from drake_auv.planning.metrics3d import metrics3d_dict
 
@@ -170,44 +281,59 @@ def report_dict(plan, metrics_3d=None) -> dict:
             "view_total_over_lawnmower": _ratio(plan.metrics.total.view_mean_deg,
                                                 plan.metrics.lawnmower.view_mean_deg),
         }
+    if exports:
+        out["exports"] = exports
     return out
 
 
 def table3_markdown(metrics) -> str:
-    """The Table 3 comparison as a Markdown table."""
+    """The Table 3 comparison as a Markdown table; a region without samples (no high-slope
+    terrain, say) is left out."""
     lines = ["| path | length (m) | viewing angle (deg) | coverage | min clearance (m) |",
              "| --- | ---: | ---: | ---: | ---: |"]
     for name, m in metrics.rows():
+        if m.samples == 0:
+            continue
         lines.append(f"| {name} | {m.length:.1f} | {m.view_mean_deg:.1f} (sd {m.view_sd_deg:.1f}) "
                      f"| {100 * m.coverage:.1f} % | {m.min_clearance:.2f} |")
     return "\n".join(lines)
 
 
-def report_markdown(plan, metrics_3d=None) -> str:
-    """A human-readable report: parameters, classification, Table 3 (grid, and the occluded 3D
-    metrics if given), the reference's values."""
-    rep = report_dict(plan, metrics_3d)
+def report_markdown(plan, metrics_3d=None, speed: float = 0.5, reference_table: bool = False,
+                    exports: dict | None = None) -> str:
+    """A human-readable report: mission time, the exports' warnings and upload order,
+    parameters, classification, Table 3 (grid, and the occluded 3D metrics if given) and, with
+    `reference_table`, the reference's values."""
+    return _markdown(plan, metrics_3d, report_dict(plan, metrics_3d, speed, reference_table,
+                                                   exports))
+
+
+def _markdown(plan, metrics_3d, rep: dict) -> str:
     p = plan.parameters
-    lines = ["# Coverage plan report", "",
-             f"Offset Omega = {p['omega']} m, aperture {p['aperture_deg']} deg, overlap "
-             f"{p['overlap']}, slope threshold {p['slope_threshold']}, lane spacing "
-             f"{p['lane_spacing']:.2f} m, sweep angle {p['sweep_angle_deg']:.1f} deg.", "",
-             f"Grid {rep['grid']['shape'][1]} x {rep['grid']['shape'][0]} cells of "
-             f"{rep['grid']['spacing_m'][0]:.2f} m x {rep['grid']['spacing_m'][1]:.2f} m, "
-             f"CRS {rep['grid']['crs']}.", "",
-             f"Classification: {rep['classification']['high_slope_regions']} high-slope region(s) "
-             f"covering {100 * rep['classification']['high_slope_share']:.1f} % of the valid area; "
-             f"slope {rep['classification']['slope_min']:.3f} to "
-             f"{rep['classification']['slope_max']:.3f}. Planar area: {rep['cells']} boustrophedon "
-             f"cells. High-slope area: {rep['contours']} contour pieces.", "",
-             _water_column_line(rep["water_column"]), "", _order_line(rep["survey_order"]), ""]
+    lines = ["# Coverage plan report", "", mission_time_line(rep["mission_time"]), ""]
+    warnings = export_warnings(rep)
+    if warnings:
+        lines += ["## Warnings", "", *(f"- {w}" for w in warnings), ""]
+    upload = upload_line(rep)
+    if upload is not None:
+        lines += [upload, ""]
+    lines += [f"Offset Omega = {p['omega']} m, aperture {p['aperture_deg']} deg, overlap "
+              f"{p['overlap']}, slope threshold {p['slope_threshold']}, lane spacing "
+              f"{p['lane_spacing']:.2f} m, sweep angle {p['sweep_angle_deg']:.1f} deg.", "",
+              f"Grid {rep['grid']['shape'][1]} x {rep['grid']['shape'][0]} cells of "
+              f"{rep['grid']['spacing_m'][0]:.2f} m x {rep['grid']['spacing_m'][1]:.2f} m, "
+              f"CRS {rep['grid']['crs']}.", "",
+              f"Classification: {rep['classification']['high_slope_regions']} high-slope "
+              f"region(s) covering {100 * rep['classification']['high_slope_share']:.1f} % of "
+              f"the valid area; slope {rep['classification']['slope_min']:.3f} to "
+              f"{rep['classification']['slope_max']:.3f}. Planar area: {rep['cells']} "
+              f"boustrophedon cells. High-slope area: {rep['contours']} contour pieces.", "",
+              _water_column_line(rep["water_column"]), "", _order_line(rep["survey_order"]), ""]
     if plan.metrics is not None:
         r = rep["ratios"]
         lines += ["## Comparison with a standard lawnmower (Table 3, on the grid: cone test, no "
                   "occlusion)", "",
-                  table3_markdown(plan.metrics), "",
-                  f"Length ratio (total / lawnmower): {_fmt(r['length_total_over_lawnmower'])}; "
-                  f"viewing angle ratio: {_fmt(r['view_total_over_lawnmower'])}.", ""]
+                  table3_markdown(plan.metrics), "", _ratios_line(r), ""]
     if metrics_3d is not None:
         from drake_auv.planning.metrics3d import table3d_markdown
 
@@ -217,13 +343,15 @@ def report_markdown(plan, metrics_3d=None) -> str:
                   "and not occluded. On high-slope regions both sensor models: the planned one "
                   "and the reference's forward-looking sensor at one fixed tilt per region.", "",
                   table3d_markdown(metrics_3d), ""]
-    ref = REFERENCE_TABLE3
-    lines += ["## The reference's Table 3 (Santorini caldera ROI)", "",
-              "| path | length (m) | viewing angle (deg) |", "| --- | ---: | ---: |"]
-    for key, name in (("high_slope", "High-slope region"), ("planar", "Planar region"),
-                      ("total", "Total (both regions)"), ("lawnmower", "Standard lawnmower path")):
-        lines.append(f"| {name} | {ref[key]['length']:.1f} | {ref[key]['view_mean_deg']:.1f} "
-                     f"(sd {ref[key]['view_sd_deg']:.1f}) |")
+    if "reference_table3" in rep:
+        ref = rep["reference_table3"]
+        lines += ["## The reference's Table 3 (Santorini caldera ROI)", "",
+                  "| path | length (m) | viewing angle (deg) |", "| --- | ---: | ---: |"]
+        for key, name in (("high_slope", "High-slope region"), ("planar", "Planar region"),
+                          ("total", "Total (both regions)"),
+                          ("lawnmower", "Standard lawnmower path")):
+            lines.append(f"| {name} | {ref[key]['length']:.1f} | "
+                         f"{ref[key]['view_mean_deg']:.1f} (sd {ref[key]['view_sd_deg']:.1f}) |")
     return "\n".join(lines) + "\n"
 
 
@@ -245,7 +373,8 @@ def parse_exports(text: str | None) -> tuple[str, ...]:
 def check_exports(bathy, exports=None, origin_lonlat=None, max_items: int = 700,
                   ardusub_frames: str = "terrain") -> tuple[tuple[str, ...], GeoFrame | None]:
     """The exports of `write_outputs` (None: "geojson" when `bathy` is georeferenced or
-    `origin_lonlat` given) and their `GeoFrame`, every option checked (ValueError naming the
+    `origin_lonlat` given) and the `GeoFrame` of the exports and figures (None for a grid
+    with neither), every option checked (ValueError naming the
     first bad one). Cheap, so a command checks them before it plans."""
     georeferenced = bathy.crs is not None or origin_lonlat is not None
     if exports is None:
@@ -257,71 +386,75 @@ def check_exports(bathy, exports=None, origin_lonlat=None, max_items: int = 700,
         from drake_auv.planning.qgc import check_options
 
         check_options(max_items, ardusub_frames)
-    return tuple(exports), GeoFrame(bathy, origin_lonlat) if exports else None
+    return tuple(exports), GeoFrame(bathy, origin_lonlat) if exports or georeferenced else None
 
 
 def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
                   metrics_3d=True, max_items: int = 700, ardusub_frames: str = "terrain",
-                  heave_in_3d: bool = False) -> list[FilePath]:
+                  heave_in_3d: bool = False, reference_table: bool = False) -> list[FilePath]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
     Args:
         exports: any of "cola2" (mission.xml), "qgc" (mission.plan, or mission_1.plan, ...
-            past `max_items`; report.json gains exports.qgc), "geojson" (path.geojson
-            and lawnmower.geojson, WGS 84); None: "geojson" when the grid is georeferenced
-            (a CRS or `origin_lonlat`), else none.
+            past `max_items`; report.json gains exports.qgc), "geojson" (path.geojson: the
+            route and the waypoints of the vehicle files written with it; lawnmower.geojson;
+            WGS 84); None: "geojson" when the grid is georeferenced (a CRS or
+            `origin_lonlat`), else none.
         origin_lonlat: WGS 84 (lon, lat) of the world origin, for grids without a CRS.
-        surge_velocity: mission speed, m/s; tolerance_xy: waypoint arrival tolerance, m.
+        surge_velocity: mission speed, m/s (> 0; also the report's mission time);
+            tolerance_xy: waypoint arrival tolerance, m.
         max_items, ardusub_frames: the QGC mission's items per file and ArduSub frames
             ("terrain" or "depth"), see `planning.qgc.write_qgc`.
         metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report: True
             computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
         heave_in_3d: the COLA2 vehicle interpolates depth along sections (its heave_in_3D);
             the report's `exports.cola2` gives the sections and their replay's figures.
+        reference_table: add the reference's Table 3 (the Santorini caldera) to the reports.
     """
     exports, geo = check_exports(plan.bathy, exports, origin_lonlat, max_items, ardusub_frames)
+    mission_time(plan, surge_velocity)  # the speed, checked before any file is written
     outdir = FilePath(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    written, extras = [], {}
+    written, extras, missions = [], {}, []
     plan.path.to_csv(outdir / "path.csv")
     written.append(outdir / "path.csv")
-    if "geojson" in exports:
-        write_geojson(plan.path, geo, outdir / "path.geojson", "coverage path", plan.surface)
-        written.append(outdir / "path.geojson")
-        if plan.lawnmower is not None:
-            write_geojson(plan.lawnmower, geo, outdir / "lawnmower.geojson", "lawnmower",
-                          plan.surface)
-            written.append(outdir / "lawnmower.geojson")
     if "cola2" in exports:
-        from drake_auv.planning.cola2 import export_cola2
+        from drake_auv.planning.cola2 import export_cola2, read_cola2
 
         extras["cola2"] = export_cola2(plan.path, plan.surface, plan.parameters["omega"],
                                        plan.parameters["min_depth"], geo, outdir / "mission.xml",
                                        surge_velocity, tolerance_xy, heave_in_3d)
         written.append(outdir / "mission.xml")
+        missions.append(read_cola2(outdir / "mission.xml"))
     if "qgc" in exports:
-        from drake_auv.planning.qgc import write_qgc
+        from drake_auv.planning.qgc import read_qgc_plan, write_qgc
 
         files, extras["qgc"] = write_qgc(plan, geo, outdir, max_items=max_items,
                                          frames=ardusub_frames, speed=surge_velocity,
                                          acceptance_radius=tolerance_xy)
         written += files
+        missions += [read_qgc_plan(f) for f in files]
+    if "geojson" in exports:
+        write_geojson(plan.path, geo, outdir / "path.geojson", "coverage path", missions,
+                      plan.surface)
+        written.append(outdir / "path.geojson")
+        if plan.lawnmower is not None:
+            write_geojson(plan.lawnmower, geo, outdir / "lawnmower.geojson", "lawnmower")
+            written.append(outdir / "lawnmower.geojson")
     m3d = metrics_3d if isinstance(metrics_3d, dict) else None
     if metrics_3d is True:
         from drake_auv.planning.metrics3d import evaluate_plan_3d
 
         m3d = evaluate_plan_3d(plan)
-    write_text(outdir / "report.md", report_markdown(plan, m3d))
-    rep = report_dict(plan, m3d)
-    if extras:
-        rep["exports"] = extras
+    rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
+    write_text(outdir / "report.md", _markdown(plan, m3d, rep))
     write_json(outdir / "report.json", rep)
     written += [outdir / "report.md", outdir / "report.json"]
     if figures:
         from drake_auv.planning.figures import write_figures
 
-        written += write_figures(plan, outdir, progress=progress)
+        written += write_figures(plan, outdir, progress=progress, geo=geo)
     return written

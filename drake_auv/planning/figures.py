@@ -1,6 +1,10 @@
 """PNG figures of a `CoveragePlan`, like the reference's Figures 76 to 80.
 
-Uses `matplotlib.figure.Figure` directly (no pyplot, no display backend needed).
+Plan views are drawn in the world frame (ground metres, equal aspect); with a `GeoFrame` their
+axes read the grid's CRS coordinates (where the grid is not rotated in it), latitude and
+longitude are marked where the meridians and parallels cross the top and right edges, and an
+arrow points to true north. Uses `matplotlib.figure.Figure` directly (no pyplot, no display
+backend needed).
 """
 
 from __future__ import annotations
@@ -23,16 +27,76 @@ def _extent(bathy):
     return (xmin - dx / 2, xmax + dx / 2, ymin - dy / 2, ymax + dy / 2)
 
 
-def _plan_axes(fig, bathy, title):
+def _plan_axes(fig, bathy, title, geo=None):
     ax = fig.add_subplot(1, 1, 1)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
     ax.set_title(title)
     e = _extent(bathy)
     ax.set_xlim(e[0], e[1])
     ax.set_ylim(e[2], e[3])
+    if geo is None:
+        ax.set_xlabel("x (m, grid frame)")
+        ax.set_ylabel("y (m, grid frame)")
+    else:
+        _georeference(ax, geo, e)
     return ax
+
+
+def _crs_name(geo) -> str:
+    epsg = geo.crs.to_epsg()
+    return f"EPSG:{epsg}" if epsg else "local transverse Mercator"
+
+
+def _georeference(ax, geo, e):
+    """The grid's CRS coordinates on the bottom and left axes, longitude and latitude on the
+    top and right ones, a north arrow."""
+    a = geo.world_to_map(np.eye(2)) - geo.world_to_map(np.zeros((1, 2)))
+    names = [f"{axis.name.lower()} ({axis.unit_name}, {_crs_name(geo)})"
+             for axis in geo.crs.axis_info[:2]]
+    if abs(a[0, 1]) < 1e-12 and abs(a[1, 0]) < 1e-12:  # map axes along world x and y
+        for k, (make, name) in enumerate(((ax.secondary_xaxis, names[0]),
+                                          (ax.secondary_yaxis, names[1]))):
+            scale, shift = a[k, k], float(geo.world_to_map(np.zeros((1, 2)))[0, k])
+            sec = make("bottom" if k == 0 else "left",
+                       functions=(lambda v, s=scale, c=shift: s * np.asarray(v) + c,
+                                  lambda v, s=scale, c=shift: (np.asarray(v) - c) / s))
+            sec.set_xlabel(name) if k == 0 else sec.set_ylabel(name)
+            sec.ticklabel_format(useOffset=False, style="plain")
+        ax.tick_params(bottom=False, left=False, labelbottom=False, labelleft=False)
+    else:
+        ax.set_xlabel("x (m, grid frame)")
+        ax.set_ylabel("y (m, grid frame)")
+    from matplotlib.ticker import MaxNLocator
+
+    for k, (edge, side) in enumerate(((e[3], "top"), (e[1], "right"))):
+        t = np.linspace(e[0], e[1], 400) if k == 0 else np.linspace(e[2], e[3], 400)
+        xy = (np.column_stack([t, np.full_like(t, edge)]) if k == 0 else
+              np.column_stack([np.full_like(t, edge), t]))
+        value = geo.to_lonlat(xy)[:, k]  # longitude along the top, latitude along the right
+        order = np.argsort(value)
+        ticks = [v for v in MaxNLocator(4).tick_values(value.min(), value.max())
+                 if value.min() <= v <= value.max()]
+        where = np.interp(ticks, value[order], t[order])
+        hemi = ("E", "W") if k == 0 else ("N", "S")
+        labels = [f"{abs(v):.{_decimals(ticks)}f}°{hemi[int(v < 0)]}" for v in ticks]
+        sec = ax.secondary_xaxis("top") if k == 0 else ax.secondary_yaxis("right")
+        (sec.set_xticks if k == 0 else sec.set_yticks)(where, labels=labels)
+        sec.tick_params(labelsize=7)
+    centre = np.array([[0.5 * (e[0] + e[1]), 0.5 * (e[2] + e[3])]])
+    azimuth = float(geo.grid_north_azimuth(centre)[0])  # of world +y, clockwise from north
+    north = np.array([-np.sin(azimuth), np.cos(azimuth)])
+    size = 0.08 * min(e[1] - e[0], e[3] - e[2])
+    base = np.array([e[1] - 1.6 * size, e[2] + 0.6 * size])
+    ax.annotate("", xy=base + size * north, xytext=base,
+                arrowprops={"arrowstyle": "-|>", "color": "k", "lw": 1.2})
+    ax.text(*(base + 1.35 * size * north), "N", ha="center", va="center", fontsize=9,
+            fontweight="bold")
+
+
+def _decimals(ticks) -> int:
+    """The fewest decimals that write every tick exactly (at most 6, ~0.1 m)."""
+    return next((d for d in range(7) if np.allclose(np.round(ticks, d), ticks, rtol=0,
+                                                     atol=1e-9)), 6)
 
 
 def _figsize(bathy, width=7.0):
@@ -60,26 +124,26 @@ def _path_lines(ax, path, colours=LABEL_COLOURS, widths=None):
                                          label=name))
 
 
-def fig_slope(plan) -> Figure:
+def fig_slope(plan, geo=None) -> Figure:
     fig = Figure(figsize=_figsize(plan.bathy))
-    ax = _plan_axes(fig, plan.bathy, "Slope map S = |grad z|")
+    ax = _plan_axes(fig, plan.bathy, "Slope map S = |grad z|", geo)
     im = ax.imshow(plan.labels.slope, origin="lower", extent=_extent(plan.bathy), cmap="viridis")
     fig.colorbar(im, ax=ax, label="slope (rise / run)")
     return fig
 
 
-def fig_classification(plan) -> Figure:
+def fig_classification(plan, geo=None) -> Figure:
     fig = Figure(figsize=_figsize(plan.bathy))
     ax = _plan_axes(fig, plan.bathy, f"Classification: {plan.labels.n_regions} high-slope "
-                    f"region(s), delta_s = {plan.parameters['slope_threshold']}")
+                    f"region(s), delta_s = {plan.parameters['slope_threshold']}", geo)
     _classification_image(ax, plan)
     return fig
 
 
-def fig_cells(plan) -> Figure:
+def fig_cells(plan, geo=None) -> Figure:
     fig = Figure(figsize=_figsize(plan.bathy))
     ax = _plan_axes(fig, plan.bathy, f"Boustrophedon cells ({len(plan.cells.cells)}) and "
-                    "adjacency graph")
+                    "adjacency graph", geo)
     _classification_image(ax, plan, alpha=0.5)
     frame = plan.cells.frame
     centres = [c.centroid(frame) for c in plan.cells.cells]
@@ -95,10 +159,10 @@ def fig_cells(plan) -> Figure:
     return fig
 
 
-def fig_lanes(plan) -> Figure:
+def fig_lanes(plan, geo=None) -> Figure:
     fig = Figure(figsize=_figsize(plan.bathy))
     ax = _plan_axes(fig, plan.bathy, f"Lanes in each cell, spacing "
-                    f"{plan.parameters['lane_spacing']:.2f} m")
+                    f"{plan.parameters['lane_spacing']:.2f} m", geo)
     _classification_image(ax, plan, alpha=0.5)
     _path_lines(ax, plan.path.select(plan.path.labels != "slice"),
                 colours={"planar": "tab:blue", "transit": "0.6"})
@@ -106,9 +170,9 @@ def fig_lanes(plan) -> Figure:
     return fig
 
 
-def fig_contours(plan) -> Figure:
+def fig_contours(plan, geo=None) -> Figure:
     fig = Figure(figsize=_figsize(plan.bathy))
-    ax = _plan_axes(fig, plan.bathy, f"Slicing contours ({len(plan.contours)} pieces)")
+    ax = _plan_axes(fig, plan.bathy, f"Slicing contours ({len(plan.contours)} pieces)", geo)
     _classification_image(ax, plan, alpha=0.5)
     if plan.contours:
         levels = np.array([c.level for c in plan.contours])
@@ -144,24 +208,29 @@ def fig_path3d(plan, which: str = "path") -> Figure:
     return fig
 
 
-FIGURES = {
+PLAN_VIEWS = {
     "slope.png": fig_slope,
     "classification.png": fig_classification,
     "cells.png": fig_cells,
     "lanes.png": fig_lanes,
     "contours.png": fig_contours,
+}
+VIEWS_3D = {
     "path3d.png": lambda plan: fig_path3d(plan, "path"),
     "lawnmower.png": lambda plan: fig_path3d(plan, "lawnmower"),
 }
 
 
-def write_figures(plan, outdir, dpi: int = 110, progress: bool = False) -> list[FilePath]:
-    """Writes every figure of `FIGURES` into `outdir`; returns the files."""
+def write_figures(plan, outdir, dpi: int = 110, progress: bool = False,
+                  geo=None) -> list[FilePath]:
+    """Writes every figure of `PLAN_VIEWS` (in `geo`'s CRS, with latitude, longitude and
+    north, when given) and `VIEWS_3D` into `outdir`; returns the files."""
     from tqdm import tqdm
 
     outdir = FilePath(outdir)
     written = []
-    for name, make in tqdm(FIGURES.items(), desc="figures", disable=not progress, leave=False):
+    makers = {**{k: (lambda plan, f=f: f(plan, geo)) for k, f in PLAN_VIEWS.items()}, **VIEWS_3D}
+    for name, make in tqdm(makers.items(), desc="figures", disable=not progress, leave=False):
         fig = make(plan)
         with replacing(outdir / name) as temporary:
             fig.savefig(temporary, dpi=dpi, bbox_inches="tight")

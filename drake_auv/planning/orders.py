@@ -1,10 +1,10 @@
 """IHO S-44 edition 6 survey orders: the coverage each asks for, set through the lane spacing,
 and what the plan achieves.
 
-From the standard's table (as summarised in REFERENCE-NOTES; its uncertainty limits are not
-used here): Exclusive order, cubic features > 0.5 m detected, 200 % coverage; Special, > 1 m,
-100 %; 1a, > 2 m down to 40 m depth and 10 % of the depth beyond, 100 %; 1b and 2, no feature
-detection, 5 %.
+From the standard's table of minimum standards (IHO S-44 ed. 6.0.0, 2020; its uncertainty
+limits are not used here): Exclusive order, cubic features > 0.5 m detected, 200 %
+coverage; Special, > 1 m, 100 %; 1a, > 2 m down to 40 m depth and 10 % of the depth beyond,
+100 %; 1b and 2, no feature detection, 5 %.
 
 Lane spacing: the footprint 2 Omega tan(aperture / 2), shrunk by the overlap margin, divided by
 the coverage factor (2 for 200 %: every point under two swaths; 0.05 for 5 %: systematic

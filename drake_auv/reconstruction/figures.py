@@ -32,29 +32,44 @@ def decimated(mesh: trimesh.Trimesh, errors: np.ndarray, max_faces: int = MAX_FA
 
 
 TRUTH_LABEL = "distance of the surface to the true structure (m)"
+SCALE_PERCENTILE = 95  # the colour scale's top: the accuracy's p95, as the report scores it
 
 
-def fig_reconstruction(panels, vmax: float = 1.0, title: str = "") -> Figure:
+def colour_scale(distances) -> float:
+    """Top of a distance colour scale, m: the `SCALE_PERCENTILE`th percentile of the finite
+    distances (the accuracy p95 the scoring reports), at least 1 cm."""
+    d = np.asarray(distances, dtype=float)
+    d = d[np.isfinite(d)]
+    return max(float(np.percentile(d, SCALE_PERCENTILE)) if d.size else 0.0, 0.01)
+
+
+def fig_reconstruction(panels, vmax: float | None = None, title: str = "") -> Figure:
     """Top and slanted views of each reconstruction, one row per panel.
 
     Args:
         panels: [(label, mesh, distances[, colour label])]: a mesh (any frame, m) and a
-            per-vertex distance (m; by default to the truth, `TRUTH_LABEL`), colour 0 (dark)
-            to `vmax` m (yellow) and above; one colour bar per distinct colour label.
+            per-vertex distance (m; by default to the truth, `TRUTH_LABEL`); one colour bar
+            per distinct colour label, from 0 (dark) to its scale (yellow, and above).
+        vmax: every scale's top, m; None: each colour label's own, `colour_scale` of its
+            panels' distances together (so panels of one label compare).
     """
     from matplotlib import colormaps
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    norm, cmap = Normalize(0.0, vmax), colormaps["inferno"]
+    cmap = colormaps["inferno"]
+    measures = [p[3] if len(p) > 3 else TRUTH_LABEL for p in panels]
+    norms = {m: Normalize(0.0, vmax if vmax is not None else colour_scale(np.concatenate(
+        [np.asarray(p[2], dtype=float) for p, pm in zip(panels, measures) if pm == m])))
+        for m in measures}
     fig = Figure(figsize=(11, 4.8 * len(panels)))
     rows: dict[str, list] = {}
-    for row, (label, mesh, errors, *measure) in enumerate(panels):
-        rows.setdefault(measure[0] if measure else TRUTH_LABEL, [])
+    for row, ((label, mesh, errors, *_), measure) in enumerate(zip(panels, measures)):
+        rows.setdefault(measure, [])
         small, err = decimated(mesh, np.asarray(errors, dtype=float))
         triangles = np.asarray(small.triangles)
-        colours = cmap(norm(err[small.faces].mean(axis=1)))
+        colours = cmap(norms[measure](err[small.faces].mean(axis=1)))
         light = np.abs(small.face_normals @ LIGHT)
         colours[:, :3] *= (0.6 + 0.4 * light)[:, None]
         lo, hi = small.bounds
@@ -69,9 +84,10 @@ def fig_reconstruction(panels, vmax: float = 1.0, title: str = "") -> Figure:
             ax.view_init(elev=elev, azim=azim)
             if elev == 90:
                 ax.set_zticks([])
-            rows[measure[0] if measure else TRUTH_LABEL].append(ax)
+            rows[measure].append(ax)
     for colour_label, axes in rows.items():
-        fig.colorbar(ScalarMappable(norm, cmap), ax=axes, shrink=0.6, label=colour_label)
+        fig.colorbar(ScalarMappable(norms[colour_label], cmap), ax=axes, shrink=0.6,
+                     extend="max", label=colour_label)
     if title:
         fig.suptitle(title)
     return fig

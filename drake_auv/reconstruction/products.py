@@ -33,7 +33,6 @@ from drake_auv.reconstruction.surface import (OUTLIERS, SUPPORT, Reconstruction,
 CROP_MARGIN = 1.0  # m around the target's bounding box: its returns decide whether to build
 THIN_VOXEL = 0.1  # m, one return per cube before the normals and Poisson
 MIN_POINTS = 1000  # returns in the target's box below which no surface is built
-ERROR_VMAX = 1.0  # m, the top of the error colour scale
 SUPPORT_LABEL = "distance of the surface to the nearest return (m)"
 
 
@@ -96,8 +95,9 @@ def mission_surface(result, depth: int = 9, trim: float = 0.05, k: int = 200,
     return MissionSurface(cloud, surface, errors, summary)
 
 
-def error_colours(errors: np.ndarray, vmax: float = ERROR_VMAX) -> np.ndarray:
-    """(n, 4) RGBA in [0, 1] of distances (m) on the figures' colour scale."""
+def error_colours(errors: np.ndarray, vmax: float) -> np.ndarray:
+    """(n, 4) RGBA in [0, 1] of distances (m) on a colour scale from 0 to `vmax` (m), the
+    figures' (`figures.colour_scale`)."""
     from matplotlib import colormaps
 
     return colormaps["inferno"](np.clip(np.asarray(errors) / vmax, 0.0, 1.0))
@@ -107,7 +107,7 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
     """Writes points.ply and, when a surface was built, reconstruction.ply and
     reconstruction.png into `outdir`; returns the report's `reconstruction` section (with
     `built` False and the `reason` when none was)."""
-    from drake_auv.reconstruction.figures import fig_reconstruction
+    from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
 
     out = FilePath(outdir)
     write_points(result, out / "points.ply")
@@ -119,7 +119,7 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
         return dict(built=False, reason=f"fewer than {MIN_POINTS} returns in the target's box "
                                         f"(+{CROP_MARGIN:g} m)")
     mesh = surface.reconstruction.mesh
-    colours = (255 * error_colours(surface.errors)).astype(np.uint8)
+    colours = (255 * error_colours(surface.errors, colour_scale(surface.errors))).astype(np.uint8)
     with replacing(out / "reconstruction.ply") as temporary:
         trimesh.Trimesh(result.site.to_site(mesh.vertices), mesh.faces, vertex_colors=colours,
                         process=False).export(temporary)
@@ -127,7 +127,6 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
     fig = fig_reconstruction(
         [("to the true world", mesh, surface.errors),
          ("to the returns", mesh, surface.reconstruction.support_m, SUPPORT_LABEL)],
-        vmax=ERROR_VMAX,
         title=f"Screened Poisson surface of the dive's returns, support-trimmed: accuracy "
               f"median {s['accuracy_median_m']:.2f} m (p95 {s['accuracy_p95_m']:.2f} m) over "
               f"the whole mesh; {100 * s['completeness_seen']:.1f} % of the seen target")

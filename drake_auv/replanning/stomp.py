@@ -2,9 +2,8 @@
 
 A trajectory is N points in D dimensions (rows are timesteps) with its first point fixed and
 its last one fixed or free (a goal set: the state cost prices where it ends); the other points
-are optimised. Pure numpy; the cost is a callable so the
-same optimiser serves any map. Checked against the description in REFERENCE-NOTES (ros-industrial
-implementation): finite-difference acceleration matrix A (rows 1, -2, 1), R = A^T A, rollout
+are optimised. Pure numpy; the cost is a callable so the same optimiser serves any map. As
+the paper and ROS-Industrial's implementation (stomp_core) have it: finite-difference acceleration matrix A (rows 1, -2, 1), R = A^T A, rollout
 noise from N(0, R^-1), per-timestep probabilities with sensitivity h, update smoothed by
 M = R^-1 with columns scaled to a maximum of 1/N.
 

@@ -1,7 +1,7 @@
 """GIRONA 500 model: parameters, YAML loader, thruster geometry, and the 6-DOF Fossen model.
 
 Pure numpy (no Drake), so it is unit-tested on its own; `drake_auv.vehicle.dynamics` wraps it.
-Frames follow DESIGN.md: world z up; body FLU (x forward, y left, z up), origin at the centre of
+Frames: world z up; body FLU (x forward, y left, z up), origin at the centre of
 buoyancy (CB). The YAML file gives positions in its source's NED/FRD body frame; `load_girona500`
 converts them to FLU once, here, by flipping y and z.
 
@@ -184,7 +184,7 @@ def load_girona500(filename=None) -> Girona500Params:
     frame = _get(tree, "frame", filename)
     if frame not in ("FRD", "FLU"):
         raise ValueError(f"{filename}: field 'frame' must be 'FRD' or 'FLU', got {frame!r}")
-    # The one conversion of source coordinates to the body frame FLU of DESIGN.md.
+    # The one conversion of source coordinates to the body frame FLU.
     to_flu = FRD_TO_FLU if frame == "FRD" else np.eye(3)
 
     units = _get(tree, "thrusters.units", filename)
