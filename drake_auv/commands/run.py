@@ -6,6 +6,8 @@ sections (`--set replanner.optimizer=none`, `--set sonar_noise=clean`,
 `--set steps.2.survey.replanning=false`). `--meshcat` serves the scene on localhost while the
 mission flies (the leg, the replanner's section and the reference drawn as they change), paced
 by `--realtime R` (1 = real time, 0 = as fast as possible); the outputs are the same.
+`--mcap` (or the mission key `outputs.mcap`) also writes `dive.mcap`, the dive as ROS 2
+messages (`drake_auv.rosio`, docs/ros.md), as it flies.
 """
 
 from __future__ import annotations
@@ -30,6 +32,9 @@ def add_parser(subparsers) -> None:
     parser.add_argument("mission", help="a mission YAML file or a built-in mission's name")
     parser.add_argument("-o", "--out", required=True, help="output folder")
     add_mission_options(parser)
+    parser.add_argument("--mcap", action="store_true",
+                        help="also write dive.mcap: the dive as ROS 2 messages (TF, odometry, "
+                             "sonar point clouds, plan, map) for Foxglove and ros2 bag")
     add_recording_options(parser, playback_speed=20.0, realtime=False)
     parser.set_defaults(func=run)
 
@@ -54,13 +59,14 @@ def add_mission_options(parser) -> None:
 
 def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         playback_speed: float = 20.0, progress: bool = True, meshcat: bool = False,
-        realtime: float = 1.0) -> dict:
+        realtime: float = 1.0, mcap: bool = False) -> dict:
     """Loads, flies and reports `mission` into `out`; returns the report's summary. The
     mission and its site are checked before the simulation's modules (Drake, matplotlib) are
     imported, so a bad file is reported at once. With `meshcat` the scene is served on
     localhost during the dive, which flies at `realtime` times real time (0: at full speed).
     The report's `timing` has the end-to-end figures: `setup_s` is everything of this call
-    before the outputs but the simulation."""
+    before the outputs but the simulation. With `mcap` (or the mission's `outputs.mcap`) the
+    dive is also written to `out`/dive.mcap as it flies."""
     start = time.perf_counter()
     if meshcat and not (math.isfinite(realtime) and realtime >= 0):
         raise ValueError(f"--realtime must be >= 0 (0 = as fast as possible), got {realtime}")
@@ -87,8 +93,13 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         prepare_scene(scene, site, plan)
         if html:
             scene.start_recording(playback_speed=playback_speed, live=meshcat)
+    log = None
+    if mcap or spec.outputs.mcap:
+        from drake_auv.rosio.writer import dive_log
+
+        log = dive_log(FilePath(out) / "dive.mcap", spec, site)
     result = run_mission(spec, site, scene=scene, progress=progress, plan=plan,
-                         realtime_rate=realtime if meshcat else 0.0)
+                         realtime_rate=realtime if meshcat else 0.0, mcap=log)
     setup_s = time.perf_counter() - start - result.wall_s
 
     def finish(out):
@@ -104,7 +115,7 @@ RUN_NEEDS_BYTES = 300 * MiB  # a dive's outputs: the boulder demo writes 135 MB 
 def run(args) -> int:
     output_folder(args.out, "-o", RUN_NEEDS_BYTES)
     summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
-                  args.playback_speed, not args.quiet, args.meshcat, args.realtime)
+                  args.playback_speed, not args.quiet, args.meshcat, args.realtime, args.mcap)
     c = summary["coverage"]
     print(f"{summary['mission']['name']}: multibeam coverage {100 * c['multibeam']:.1f} %, "
           f"camera {100 * c['camera']:.1f} %, minimum clearance "

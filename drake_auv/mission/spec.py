@@ -205,6 +205,17 @@ class LimitsSpec:
 
 
 @dataclass(frozen=True)
+class OutputsSpec:
+    """Attributes: mcap: write `dive.mcap`, the dive as ROS 2 messages (`drake_auv.rosio`),
+    as it flies."""
+
+    mcap: bool = param(False, kind="bool")
+
+    def __post_init__(self):
+        validate(self)
+
+
+@dataclass(frozen=True)
 class PlanStep:
     """Off-line plan on the prior map; a later `survey` flies it.
 
@@ -448,6 +459,7 @@ class MissionSpec:
     replanner: ReplannerSpec = ReplannerSpec()
     payload: PayloadSpec = PayloadSpec()
     limits: LimitsSpec = LimitsSpec()
+    outputs: OutputsSpec = OutputsSpec()
     faults: FaultsSpec = FaultsSpec()
     source: Path | None = field(default=None, compare=False)
 
@@ -458,6 +470,6 @@ class MissionSpec:
 # The sections of a mission file besides `sonar_noise`, `faults` and `steps`, read by
 # `mission_keys` of their class.
 SECTIONS = dict(site=SiteSpec, navigation=NavigationParams, replanner=ReplannerSpec,
-                payload=PayloadSpec, limits=LimitsSpec)
+                payload=PayloadSpec, limits=LimitsSpec, outputs=OutputsSpec)
 TOP_KEYS = ("name", "description", "seed", "site", "navigation", "sonar_noise", "replanner",
-            "payload", "limits", "faults", "steps")
+            "payload", "limits", "outputs", "faults", "steps")
