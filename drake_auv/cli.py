@@ -9,7 +9,7 @@ import sys
 import warnings
 
 COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "reconstruct",
-            "campaign")
+            "campaign", "replay")
 
 
 def build_parser() -> argparse.ArgumentParser:

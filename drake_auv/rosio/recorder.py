@@ -62,8 +62,9 @@ class McapRecorder(LeafSystem):
 
     Args:
         log: the `McapLog` written to (closed by its owner).
-        sonars: {name: (SonarMount, update period s)}: an input `{name}_returns` each; the
-            periods must be multiples of `tick`.
+        sonars: {name: (SonarMount, update period s, max range m)}: an input
+            `{name}_returns` each; the periods must be multiples of `tick`. Their max ranges
+            go into the log's metadata (`sensors`: `{name}_max_range_m`).
         laser_scans: the sonars also written as `LaserScan` (equiangular fans).
         coverage: names of the `coverage_{name}` inputs (1: the seen share of the target).
         world, target: trimesh meshes drawn once in `map` (None: not drawn).
@@ -85,10 +86,12 @@ class McapRecorder(LeafSystem):
         self.laser_scans = tuple(s for s in laser_scans if s in self.sonars)
         self._every = {"coverage": self._ticks(coverage_period, "coverage_period"),
                        "map": self._ticks(map_period, "map_period")}
-        depth = 1 + max([self._ticks(p, f"{name}'s period") for name, (_, p)
+        depth = 1 + max([self._ticks(p, f"{name}'s period") for name, (_, p, _)
                          in self.sonars.items()], default=1)
         self.world, self.target = world, target
         self.plan = None if plan is None else np.asarray(plan, dtype=float).reshape(-1, 3)
+        log.add_metadata("sensors", {f"{name}_max_range_m": repr(float(r))
+                                     for name, (_, _, r) in self.sonars.items()})
         self.state_input = self.DeclareVectorInputPort("state", VehicleState.size())
         self.estimated_state_input = self.DeclareVectorInputPort("estimated_state",
                                                                  VehicleState.size())
@@ -134,7 +137,7 @@ class McapRecorder(LeafSystem):
         for k, (name, port) in enumerate(self.returns_inputs.items()):
             returns = port.Eval(context)
             if returns.sequence != sequences[k] and len(returns):
-                self._write_returns(name, returns, poses)
+                self._write_returns(name, returns, poses, t)
                 sequences[k] = returns.sequence
         if self.section_input is not None:
             section = np.asarray(self.section_input.Eval(context), dtype=float)
@@ -160,7 +163,7 @@ class McapRecorder(LeafSystem):
     def _write_static(self, t: float) -> None:
         self.log.write(TOPICS["tf_static"], "tf2_msgs/msg/TFMessage", m.tf_message(
             m.transform(t, m.BASE, name, mount.position, mount.rotation)
-            for name, (mount, _) in self.sonars.items()), t)
+            for name, (mount, _, _) in self.sonars.items()), t)
         if self.plan is not None and len(self.plan):
             stride = max(1, -(-len(self.plan) // MAX_PATH_POSES))
             self.log.write(TOPICS["plan"], "nav_msgs/msg/Path",
@@ -193,12 +196,15 @@ class McapRecorder(LeafSystem):
         self.log.write(TOPICS["thrust"], "std_msgs/msg/Float64MultiArray",
                        m.float_array(self.thrust_input.Eval(context), THRUSTER_NAMES), t)
 
-    def _write_returns(self, name: str, returns: SonarReturns, poses: np.ndarray) -> None:
+    def _write_returns(self, name: str, returns: SonarReturns, poses: np.ndarray,
+                       now: float) -> None:
         """One sonar update in its frame, with the estimated pose that placed it: the recent
         tick whose pose puts the sensor at the returns' origin, that of their update time
         when several do (the DVL places its last measurement at the current pose: its cloud
-        is stamped with that tick)."""
-        mount, period = self.sonars[name]
+        is stamped with that tick). Logged at `now`, the tick that received it (as a
+        recorder's receive time): in log order, the updates reach a replay in the order the
+        mapper recorded them."""
+        mount, period, _ = self.sonars[name]
         rows = poses[np.isfinite(poses[:, 0])]
         rotations = [rotation_world_body(*VehicleState(row[1:]).attitude) for row in rows]
         origins = np.array([row[1:4] + r @ mount.position for row, r in zip(rows, rotations)])
@@ -211,10 +217,10 @@ class McapRecorder(LeafSystem):
         t = float(rows[k, 0])
         beams = np.asarray(returns.directions_nav) @ (rotations[k] @ mount.rotation)
         self.log.write(points_topic(name), "sensor_msgs/msg/PointCloud2",
-                       m.point_cloud(t, name, returns.ranges, beams), t)
+                       m.point_cloud(t, name, returns.ranges, beams), now)
         if name in self.laser_scans:
             self.log.write(scan_topic(name), "sensor_msgs/msg/LaserScan", m.laser_scan(
-                t, name, returns.angles, returns.ranges, returns.max_range, period), t)
+                t, name, returns.angles, returns.ranges, returns.max_range, period), now)
 
 
 def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supervisor,
@@ -248,9 +254,9 @@ def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supe
 
 
 def _mount_and_period(sonar):
-    """(SonarMount, period s) of a `RangeSonar` or a `DvlAltimeter`."""
+    """(SonarMount, period s, max range m) of a `RangeSonar` or a `DvlAltimeter`."""
     if hasattr(sonar, "model"):
-        return sonar.model.mount, sonar.period
+        return sonar.model.mount, sonar.period, sonar.model.max_range
     from drake_auv.sonar.beams import SonarMount
 
-    return SonarMount(), 1.0 / sonar.params.rate
+    return SonarMount(), 1.0 / sonar.params.rate, sonar.params.max_range

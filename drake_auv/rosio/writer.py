@@ -40,7 +40,11 @@ class McapLog:
         self._channels: dict[str, tuple[int, str]] = {}
         self.counts: dict[str, int] = {}
         if metadata:
-            self._writer.add_metadata("drake_auv", {k: str(v) for k, v in metadata.items()})
+            self.add_metadata("drake_auv", metadata)
+
+    def add_metadata(self, name: str, values: dict) -> None:
+        """A metadata record `name` of string values."""
+        self._writer.add_metadata(name, {k: str(v) for k, v in values.items()})
 
     def _channel(self, topic: str, typename: str) -> int:
         channel = self._channels.get(topic)
@@ -80,9 +84,16 @@ class McapLog:
 
 
 def dive_log(filename, spec, site) -> McapLog:
-    """The `McapLog` of a mission's dive, its metadata naming the mission and the `map`
-    frame: ENU, local, `map` (0, 0) at the site's CRS coordinates `origin_x`, `origin_y`."""
+    """The `McapLog` of a mission's dive, its metadata (`drake_auv`) naming the mission, the
+    `map` frame (ENU, local: `map` (0, 0) at the site's CRS coordinates `origin_x`,
+    `origin_y`) and the on-line map's settings (`voxel_m`, `multibeam_stride`, `discretize`,
+    `no_return_clear_m`), which `drake-auv replay` takes as its defaults."""
+    clear = min((s.no_return_clear_m for s in spec.steps if s.KIND == "explore"),
+                default=float("inf"))
     return McapLog(filename, metadata=dict(
         mission=spec.name, seed=spec.seed, site=site.name, frame="map", convention="ENU",
         origin_x=repr(float(site.origin[0])), origin_y=repr(float(site.origin[1])),
-        crs=site.crs or "", time="simulated, s from the dive's start"))
+        crs=site.crs or "", time="simulated, s from the dive's start",
+        voxel_m=repr(float(spec.replanner.voxel_m)),
+        multibeam_stride=spec.replanner.multibeam_stride,
+        discretize=spec.replanner.discretize, no_return_clear_m=repr(float(clear))))
