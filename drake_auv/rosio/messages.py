@@ -52,7 +52,11 @@ def serialize(message, typename: str) -> bytes:
 
 def make(typename: str, **fields):
     """A message of `typename` with `fields`, every other field zero or empty."""
-    store = typestore()
+    return make_in(typestore(), typename, **fields)
+
+
+def make_in(store, typename: str, **fields):
+    """`make` with the types of another rosbags type store (ROS 1 Noetic's, say)."""
     cls = store.types[typename]
     values = {}
     for name, (kind, spec) in store.fielddefs[typename][1]:
@@ -61,11 +65,11 @@ def make(typename: str, **fields):
         elif kind == 1:  # a base type: (name, string bound)
             values[name] = "" if spec[0] == "string" else (False if spec[0] == "bool" else 0)
         elif kind == 2:  # a message
-            values[name] = make(spec)
+            values[name] = make_in(store, spec)
         elif kind == 3:  # a fixed array
             base, length = spec
             values[name] = (np.zeros(length, _NUMPY.get(base[1][0], float)) if base[0] == 1
-                            else [make(base[1]) for _ in range(length)])
+                            else [make_in(store, base[1]) for _ in range(length)])
         else:  # a sequence
             base = spec[0]
             values[name] = (np.zeros(0, _NUMPY[base[1][0]]) if base[0] == 1
