@@ -20,6 +20,8 @@ Stamps are simulated time (s from the dive's start) as `builtin_interfaces/Time`
 from __future__ import annotations
 
 import functools
+import math
+import struct
 
 import numpy as np
 from rosbags.typesys import Stores, get_typestore
@@ -57,29 +59,81 @@ def make(typename: str, **fields):
 
 def make_in(store, typename: str, **fields):
     """`make` with the types of another rosbags type store (ROS 1 Noetic's, say)."""
-    cls = store.types[typename]
-    values = {}
+    cls, defaults = _layout(store, typename)
+    for name, default in defaults:
+        if name not in fields:
+            fields[name] = default()
+    return cls(**fields)
+
+
+@functools.cache
+def _layout(store, typename: str):
+    """(class, [(field, zero-value factory)]) of `typename` in `store`."""
+    defaults = []
     for name, (kind, spec) in store.fielddefs[typename][1]:
-        if name in fields:
-            values[name] = fields[name]
-        elif kind == 1:  # a base type: (name, string bound)
-            values[name] = "" if spec[0] == "string" else (False if spec[0] == "bool" else 0)
+        if kind == 1:  # a base type: (name, string bound)
+            value = "" if spec[0] == "string" else (False if spec[0] == "bool" else 0)
+            defaults.append((name, lambda value=value: value))
         elif kind == 2:  # a message
-            values[name] = make_in(store, spec)
+            defaults.append((name, functools.partial(make_in, store, spec)))
         elif kind == 3:  # a fixed array
             base, length = spec
-            values[name] = (np.zeros(length, _NUMPY.get(base[1][0], float)) if base[0] == 1
-                            else [make_in(store, base[1]) for _ in range(length)])
+            defaults.append((name, functools.partial(np.zeros, length, _NUMPY.get(
+                base[1][0], float))) if base[0] == 1 else
+                (name, lambda s=base[1], n=length: [make_in(store, s) for _ in range(n)]))
         else:  # a sequence
             base = spec[0]
-            values[name] = (np.zeros(0, _NUMPY[base[1][0]]) if base[0] == 1
-                            and base[1][0] in _NUMPY else [])
-    return cls(**values)
+            defaults.append((name, functools.partial(np.zeros, 0, _NUMPY[base[1][0]]))
+                            if base[0] == 1 and base[1][0] in _NUMPY else (name, list))
+    return store.types[typename], defaults
 
 
 _NUMPY = {"float64": np.float64, "float32": np.float32, "uint8": np.uint8, "int8": np.int8,
           "int32": np.int32, "uint32": np.uint32, "int16": np.int16, "uint16": np.uint16,
           "int64": np.int64, "uint64": np.uint64}
+
+
+class CdrTemplate:
+    """A message of fixed layout serialised once, its numbers written into a copy per message.
+
+    `build(floats, stamps, counts)` makes the message from `n_floats` float64 values,
+    `n_stamps` `builtin_interfaces/Time`s and `n_counts` uint32 values; it is built once with
+    sentinel values, serialised by rosbags, and each sentinel's bytes located (each must
+    occur once). `cdr(floats, stamps_ns, counts)` then packs the values at those offsets:
+    the bytes rosbags would write for the same message, at a few microseconds a message (the
+    recorder writes several each tick)."""
+
+    def __init__(self, typename: str, build, n_floats: int, n_stamps: int = 1,
+                 n_counts: int = 0):
+        self.typename = typename
+        floats = [float(np.float64(-1.2345678e301) * (1.0 + 1e-9 * k)) for k in range(n_floats)]
+        stamps = [(0x5E_C0_00_00 + k, 0x3A_5E_C0_00 + k) for k in range(n_stamps)]
+        counts = [0x7C_0A_70_00 + k for k in range(n_counts)]
+        data = serialize(build(floats, [make("builtin_interfaces/msg/Time", sec=sec, nanosec=ns)
+                                        for sec, ns in stamps], counts), typename)
+        self._floats = [self._find(data, _F64.pack(v)) for v in floats]
+        self._stamps = [self._find(data, _STAMP.pack(*v)) for v in stamps]
+        self._counts = [self._find(data, _U32.pack(v)) for v in counts]
+        self.data = bytes(data)
+
+    def _find(self, data: bytes, mark: bytes) -> int:
+        at = data.find(mark)
+        if at < 0 or data.find(mark, at + 1) >= 0:
+            raise ValueError(f"CdrTemplate({self.typename}): a value must occur once")
+        return at
+
+    def cdr(self, floats=(), stamps_ns=(), counts=()) -> bytearray:
+        buf = bytearray(self.data)
+        for at, value in zip(self._floats, floats):
+            _F64.pack_into(buf, at, value)
+        for at, ns in zip(self._stamps, stamps_ns):
+            _STAMP.pack_into(buf, at, ns // 1_000_000_000, ns % 1_000_000_000)
+        for at, value in zip(self._counts, counts):
+            _U32.pack_into(buf, at, value)
+        return buf
+
+
+_F64, _STAMP, _U32 = struct.Struct("<d"), struct.Struct("<iI"), struct.Struct("<I")
 
 
 def nanoseconds(t: float) -> int:
@@ -99,8 +153,10 @@ def seconds(time_msg) -> float:
     return time_msg.sec + 1e-9 * time_msg.nanosec
 
 
-def header(t: float, frame: str):
-    return make("std_msgs/msg/Header", stamp=stamp(t), frame_id=frame)
+def header(t, frame: str):
+    """`std_msgs/Header`; `t` s, or a `builtin_interfaces/Time`."""
+    return make("std_msgs/msg/Header", stamp=t if hasattr(t, "nanosec") else stamp(t),
+                frame_id=frame)
 
 
 def quaternion(rotation: np.ndarray) -> np.ndarray:
@@ -122,6 +178,16 @@ def quaternion(rotation: np.ndarray) -> np.ndarray:
     return -q if q[3] < 0 else q
 
 
+def quaternion_rpy(roll: float, pitch: float, yaw: float) -> tuple:
+    """(x, y, z, w) of R = Rz(yaw) Ry(pitch) Rx(roll) (the vehicle's attitude), w >= 0."""
+    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
+    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
+    cy, sy = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+    q = (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
+         cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
+    return tuple(-v for v in q) if q[3] < 0 else q
+
+
 def rotation_matrix(q) -> np.ndarray:
     """3x3 rotation of an (x, y, z, w) quaternion (normalised first)."""
     x, y, z, w = np.asarray(q, dtype=float) / np.linalg.norm(q)
@@ -139,19 +205,25 @@ def _quaternion_msg(q):
                 w=float(q[3]))
 
 
+def _as_quaternion(rotation):
+    """A 3x3 rotation or an (x, y, z, w) quaternion as a quaternion."""
+    return quaternion(rotation) if np.ndim(rotation) == 2 else rotation
+
+
 def pose(position, rotation):
+    """`geometry_msgs/Pose`; `rotation` a 3x3 matrix or an (x, y, z, w) quaternion."""
     return make("geometry_msgs/msg/Pose", position=_vector("geometry_msgs/msg/Point", position),
-                orientation=_quaternion_msg(quaternion(rotation)))
+                orientation=_quaternion_msg(_as_quaternion(rotation)))
 
 
 def transform(t: float, parent: str, child: str, position, rotation):
     """`geometry_msgs/TransformStamped`: `child`'s pose in `parent` (position m, rotation
-    R_parent_child)."""
+    R_parent_child as a 3x3 matrix or an (x, y, z, w) quaternion)."""
     return make("geometry_msgs/msg/TransformStamped", header=header(t, parent),
                 child_frame_id=child, transform=make(
                     "geometry_msgs/msg/Transform",
                     translation=_vector("geometry_msgs/msg/Vector3", position),
-                    rotation=_quaternion_msg(quaternion(rotation))))
+                    rotation=_quaternion_msg(_as_quaternion(rotation))))
 
 
 def tf_message(transforms):
@@ -176,6 +248,33 @@ def pose_stamped(t: float, frame: str, position, rotation):
                 pose=pose(position, rotation))
 
 
+def tf_template(parent: str, children) -> CdrTemplate:
+    """`/tf` of `children` in `parent`: floats per child (x, y, z, qx, qy, qz, qw), one
+    stamp per child."""
+    return CdrTemplate("tf2_msgs/msg/TFMessage", lambda f, s, _: tf_message(
+        transform(s[k], parent, child, f[7 * k:7 * k + 3], f[7 * k + 3:7 * k + 7])
+        for k, child in enumerate(children)), 7 * len(children), len(children))
+
+
+def odometry_template(child: str) -> CdrTemplate:
+    """`nav_msgs/Odometry` of `child` in `map`: floats (x, y, z, qx, qy, qz, qw, u, v, w, p,
+    q, r)."""
+    return CdrTemplate("nav_msgs/msg/Odometry", lambda f, s, _: odometry(
+        s[0], child, f[:3], f[3:7], f[7:10], f[10:13]), 13)
+
+
+def pose_template(frame: str) -> CdrTemplate:
+    """`geometry_msgs/PoseStamped` in `frame`: floats (x, y, z, qx, qy, qz, qw)."""
+    return CdrTemplate("geometry_msgs/msg/PoseStamped",
+                       lambda f, s, _: pose_stamped(s[0], frame, f[:3], f[3:7]), 7)
+
+
+def array_template(labels) -> CdrTemplate:
+    """`std_msgs/Float64MultiArray` of len(labels) values (no stamp)."""
+    return CdrTemplate("std_msgs/msg/Float64MultiArray",
+                       lambda f, s, _: float_array(f, labels), len(labels), 0)
+
+
 def path(t: float, frame: str, points, yaws=None):
     """`nav_msgs/Path` through (n, 3) `points`, each pose heading along `yaws` (rad, default
     towards the next point)."""
@@ -195,9 +294,14 @@ def _yaw_rotation(yaw: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def point_cloud(t: float, frame: str, ranges, beams_sensor):
-    """The organised `sensor_msgs/PointCloud2` of one sonar update (module doc): `ranges` (n,)
-    m, NaN without echo; `beams_sensor` (n, 3) unit directions in the sensor frame."""
+def _cloud_fields():
+    return [make("sensor_msgs/msg/PointField", name=name, offset=_CLOUD_DTYPE.fields[name][1],
+                 datatype=kind, count=1) for name, kind in CLOUD_FIELDS]
+
+
+def cloud_data(ranges, beams_sensor) -> np.ndarray:
+    """The (n,) records (`CLOUD_FIELDS`) of n beams: `ranges` (n,) m, NaN without echo;
+    `beams_sensor` (n, 3) unit directions in the sensor frame."""
     ranges = np.asarray(ranges, dtype=float)
     beams = np.asarray(beams_sensor, dtype=float).reshape(-1, 3)
     data = np.empty(len(ranges), _CLOUD_DTYPE)
@@ -205,13 +309,37 @@ def point_cloud(t: float, frame: str, ranges, beams_sensor):
     data["x"], data["y"], data["z"] = points.T
     data["range"] = ranges
     data["beam_x"], data["beam_y"], data["beam_z"] = beams.T
-    fields = [make("sensor_msgs/msg/PointField", name=name, offset=_CLOUD_DTYPE.fields[name][1],
-                   datatype=kind, count=1) for name, kind in CLOUD_FIELDS]
+    return data
+
+
+def point_cloud(t: float, frame: str, ranges, beams_sensor):
+    """The organised `sensor_msgs/PointCloud2` of one sonar update (module doc): `ranges` (n,)
+    m, NaN without echo; `beams_sensor` (n, 3) unit directions in the sensor frame."""
+    data = cloud_data(ranges, beams_sensor)
     return make("sensor_msgs/msg/PointCloud2", header=header(t, frame), height=1,
-                width=len(ranges), fields=fields, is_bigendian=False,
-                point_step=_CLOUD_DTYPE.itemsize, row_step=_CLOUD_DTYPE.itemsize * len(ranges),
+                width=len(data), fields=_cloud_fields(), is_bigendian=False,
+                point_step=_CLOUD_DTYPE.itemsize, row_step=_CLOUD_DTYPE.itemsize * len(data),
                 data=np.frombuffer(data.tobytes(), np.uint8),
-                is_dense=bool(np.isfinite(ranges).all()))
+                is_dense=bool(np.isfinite(data["range"]).all()))
+
+
+class CloudWriter:
+    """`point_cloud`'s CDR bytes in `frame` without building the message: the part before
+    `data` is a `CdrTemplate` (stamp, width, row_step); `data` (uint8[], no alignment) and
+    `is_dense` (bool) end the message."""
+
+    def __init__(self, frame: str):
+        self._template = CdrTemplate("sensor_msgs/msg/PointCloud2", lambda f, s, c: make(
+            "sensor_msgs/msg/PointCloud2", header=header(s[0], frame), height=1, width=c[0],
+            fields=_cloud_fields(), is_bigendian=False, point_step=_CLOUD_DTYPE.itemsize,
+            row_step=c[1], data=np.zeros(0, np.uint8), is_dense=False), 0, 1, 2)
+        self._prefix_bytes = len(self._template.data) - 5  # an empty data's length, is_dense
+
+    def cdr(self, t: float, ranges, beams_sensor) -> bytes:
+        data = cloud_data(ranges, beams_sensor)
+        head = self._template.cdr((), (nanoseconds(t),), (len(data), data.nbytes))
+        return b"".join((head[:self._prefix_bytes], _U32.pack(data.nbytes), data.tobytes(),
+                         b"\x01" if np.isfinite(data["range"]).all() else b"\x00"))
 
 
 def laser_scan(t: float, frame: str, angles, ranges, max_range: float, period: float):
@@ -246,28 +374,46 @@ def _colour(rgba):
                 a=float(rgba[3]))
 
 
-def _points(array):
-    cls = typestore().types["geometry_msgs/msg/Point"]
-    return [cls(x=float(x), y=float(y), z=float(z)) for x, y, z in np.asarray(array, float)]
+def _sentinel(k: int) -> np.ndarray:
+    """A point no marker holds, unique to marker k of an array: its bytes mark where the
+    serialised points go."""
+    return np.array([1.0e300 + k * 1.0e286, -7.0e299, 3.0e298])
 
 
-def marker(t: float, ns: str, kind: int, points, scale, rgba, marker_id: int = 0):
-    """A `visualization_msgs/Marker` in `map` (identity pose) of (n, 3) `points`: kind 6
-    CUBE_LIST (a cube of edge `scale` at each), 11 TRIANGLE_LIST (each three a triangle)."""
+def marker(t: float, ns: str, kind: int, scale, rgba, marker_id: int = 0):
+    """A `visualization_msgs/Marker` in `map` (identity pose) whose points are given to
+    `marker_array_cdr`: kind 6 CUBE_LIST (a cube of edge `scale` at each), 11 TRIANGLE_LIST
+    (each three a triangle)."""
     return make("visualization_msgs/msg/Marker", header=header(t, MAP), ns=ns, id=marker_id,
                 type=kind, action=0, pose=pose(np.zeros(3), np.eye(3)),
                 scale=_vector("geometry_msgs/msg/Vector3", np.broadcast_to(scale, 3)),
-                color=_colour(rgba), points=_points(points))
+                color=_colour(rgba))
 
 
 CUBE_LIST, TRIANGLE_LIST = 6, 11
 
 
-def mesh_marker(t: float, ns: str, vertices, faces, rgba):
-    """A TRIANGLE_LIST marker of a triangle mesh (its faces' corners in order)."""
-    corners = np.asarray(vertices, float)[np.asarray(faces).reshape(-1)]
-    return marker(t, ns, TRIANGLE_LIST, corners, 1.0, rgba)
+def marker_array_cdr(markers, points) -> bytes:
+    """CDR bytes of a `visualization_msgs/MarkerArray` of `markers` (from `marker`), marker k
+    with the (n_k, 3) `points[k]`, m. rosbags serialises the markers with one sentinel point
+    each, whose 24 bytes are then replaced by the n_k points' float64 bytes and its sequence
+    length by n_k: a sequence of float64 triples ends 8-aligned whatever its length, so the
+    rest of the message keeps its alignment (a million points without a million objects)."""
+    cls = typestore().types["geometry_msgs/msg/Point"]
+    for k, msg in enumerate(markers):
+        msg.points = [cls(*_sentinel(k))]
+    data = serialize(make("visualization_msgs/msg/MarkerArray", markers=list(markers)),
+                     "visualization_msgs/msg/MarkerArray")
+    for k, array in enumerate(points):
+        mark = _sentinel(k).astype("<f8").tobytes()
+        at = data.index(mark)
+        count = at - 4 if data[at - 4:at] == b"\x01\x00\x00\x00" else at - 8
+        array = np.ascontiguousarray(np.asarray(array, dtype="<f8").reshape(-1, 3))
+        data = (data[:count] + np.uint32(len(array)).astype("<u4").tobytes()
+                + data[count + 4:at] + array.tobytes() + data[at + 24:])
+    return data
 
 
-def marker_array(markers):
-    return make("visualization_msgs/msg/MarkerArray", markers=list(markers))
+def mesh_corners(vertices, faces) -> np.ndarray:
+    """The (3 m, 3) corners of a mesh's m faces, in order: a TRIANGLE_LIST's points."""
+    return np.asarray(vertices, float)[np.asarray(faces).reshape(-1)]

@@ -3,11 +3,12 @@
 Every `tick` (0.1 s, the state logs' period) a periodic unrestricted update (the mapper's
 kind, at its times, so both see the same sonar updates) writes `/tf` (`map` -> `base_link`,
 the navigation estimate, and `map` -> `base_link_truth`), the two `nav_msgs/Odometry`, the
-tracked reference (`geometry_msgs/PoseStamped`), the leg and safety response
-(`std_msgs/Int32`), the thrusts (`std_msgs/Float64MultiArray`, N) and each sonar update not
+tracked reference (`geometry_msgs/PoseStamped`), the thrusts (`std_msgs/Float64MultiArray`, N) and each sonar update not
 yet written (`sensor_msgs/PointCloud2` in the sensor's frame, the multibeam also as
 `sensor_msgs/LaserScan`); each new replanned section (`nav_msgs/Path`); every
-`coverage_period` the coverage shares (`std_msgs/Float64`); every `map_period` the on-line
+`mission_period` the leg and the safety response (`std_msgs/Int32`: the leg's index, the
+response's `mission.safety.RESPONSES` index); every `coverage_period` the coverage shares
+(`std_msgs/Float64`); every `map_period` the on-line
 map's occupied voxels (`visualization_msgs/MarkerArray`). The first tick writes `/tf_static`
 (`base_link` -> each sensor), the plan (`nav_msgs/Path`) and the world and target meshes.
 
@@ -72,6 +73,7 @@ class McapRecorder(LeafSystem):
         section_input: declare `section` ((k, 3) the replanner's current section).
         map_input: declare `map` (an `OnlineMap`), its occupied voxels written every
             `map_period` s.
+        mission_period: s between the leg and response messages (the supervisor's).
     Inputs: `state`, `estimated_state` (12, `signals.VehicleState`), `reference` (8), `leg`
     (2), `response` (10), `thrust` (5, N), and the optional ones above.
     """
@@ -79,17 +81,24 @@ class McapRecorder(LeafSystem):
     def __init__(self, log: McapLog, sonars: dict, laser_scans=("multibeam",), coverage=(),
                  world=None, target=None, plan=None, section_input: bool = False,
                  map_input: bool = False, tick: float = 0.1, coverage_period: float = 1.0,
-                 map_period: float = 10.0):
+                 map_period: float = 10.0, mission_period: float = 0.5):
         super().__init__()
         self.log, self.tick = log, float(tick)
         self.sonars = dict(sonars)
         self.laser_scans = tuple(s for s in laser_scans if s in self.sonars)
         self._every = {"coverage": self._ticks(coverage_period, "coverage_period"),
-                       "map": self._ticks(map_period, "map_period")}
+                       "map": self._ticks(map_period, "map_period"),
+                       "mission": self._ticks(mission_period, "mission_period")}
         depth = 1 + max([self._ticks(p, f"{name}'s period") for name, (_, p, _)
                          in self.sonars.items()], default=1)
         self.world, self.target = world, target
         self.plan = None if plan is None else np.asarray(plan, dtype=float).reshape(-1, 3)
+        # the messages of each tick, serialised once and filled in (`messages.CdrTemplate`)
+        self._templates = dict(
+            tf=m.tf_template(m.MAP, (m.BASE, m.TRUTH)), odometry=m.odometry_template(m.BASE),
+            odometry_truth=m.odometry_template(m.TRUTH), reference=m.pose_template(m.MAP),
+            thrust=m.array_template(THRUSTER_NAMES))
+        self._clouds = {name: m.CloudWriter(name) for name in self.sonars}
         log.add_metadata("sensors", {f"{name}_max_range_m": repr(float(r))
                                      for name, (_, _, r) in self.sonars.items()})
         self.state_input = self.DeclareVectorInputPort("state", VehicleState.size())
@@ -132,7 +141,7 @@ class McapRecorder(LeafSystem):
         estimated = self.estimated_state_input.Eval(context)
         poses = context.get_discrete_state(self._poses).get_value().reshape(-1, 13)
         poses = np.vstack([np.r_[t, estimated][None], poses[:-1]])
-        self._write_vehicle(context, t, estimated)
+        self._write_vehicle(context, t, tick, estimated)
         sequences = context.get_discrete_state(self._sequences).get_value().copy()
         for k, (name, port) in enumerate(self.returns_inputs.items()):
             returns = port.Eval(context)
@@ -151,10 +160,11 @@ class McapRecorder(LeafSystem):
                 self.log.write(coverage_topic(name), "std_msgs/msg/Float64",
                                m.scalar("std_msgs/msg/Float64", float(port.Eval(context)[0])), t)
         if self.map_input is not None and tick % self._every["map"] == 0:
-            occupied = self.map_input.Eval(context).map
-            self.log.write(TOPICS["map"], "visualization_msgs/msg/MarkerArray", m.marker_array([
-                m.marker(t, "octomap", m.CUBE_LIST, occupied.occupied_points(),
-                         occupied.resolution, (0.2, 0.6, 1.0, 0.8))]), t)
+            octree = self.map_input.Eval(context).map
+            self.log.write_cdr(TOPICS["map"], "visualization_msgs/msg/MarkerArray",
+                               m.marker_array_cdr([m.marker(
+                                   t, "octomap", m.CUBE_LIST, octree.resolution,
+                                   (0.2, 0.6, 1.0, 0.8))], [octree.occupied_points()]), t)
         progress[0] = tick + 1
         state.get_mutable_discrete_state(self._poses).set_value(poses.reshape(-1))
         state.get_mutable_discrete_state(self._sequences).set_value(sequences)
@@ -168,33 +178,41 @@ class McapRecorder(LeafSystem):
             stride = max(1, -(-len(self.plan) // MAX_PATH_POSES))
             self.log.write(TOPICS["plan"], "nav_msgs/msg/Path",
                            m.path(t, m.MAP, self.plan[::stride]), t)
-        markers = [m.mesh_marker(t, ns, mesh.vertices, mesh.faces, rgba)
-                   for ns, mesh, rgba in (("world", self.world, (0.55, 0.5, 0.42, 1.0)),
-                                          ("target", self.target, (0.9, 0.6, 0.2, 1.0)))
-                   if mesh is not None]
-        if markers:
-            self.log.write(TOPICS["world"], "visualization_msgs/msg/MarkerArray",
-                           m.marker_array(markers), t)
+        meshes = [(ns, mesh, rgba) for ns, mesh, rgba in (
+            ("world", self.world, (0.55, 0.5, 0.42, 1.0)),
+            ("target", self.target, (0.9, 0.6, 0.2, 1.0))) if mesh is not None]
+        if meshes:
+            self.log.write_cdr(TOPICS["world"], "visualization_msgs/msg/MarkerArray",
+                               m.marker_array_cdr(
+                                   [m.marker(t, ns, m.TRIANGLE_LIST, 1.0, rgba, k)
+                                    for k, (ns, _, rgba) in enumerate(meshes)],
+                                   [m.mesh_corners(mesh.vertices, mesh.faces)
+                                    for _, mesh, _ in meshes]), t)
 
-    def _write_vehicle(self, context, t: float, estimated) -> None:
-        frames = []
-        for topic, child, x in (("odometry", m.BASE, VehicleState(estimated)),
-                                ("odometry_truth", m.TRUTH,
-                                 VehicleState(self.state_input.Eval(context)))):
-            rotation = rotation_world_body(*x.attitude)
-            frames.append(m.transform(t, m.MAP, child, x.position, rotation))
-            self.log.write(TOPICS[topic], "nav_msgs/msg/Odometry", m.odometry(
-                t, child, x.position, rotation, x.linear_velocity, x.angular_velocity), t)
-        self.log.write(TOPICS["tf"], "tf2_msgs/msg/TFMessage", m.tf_message(frames), t)
+    def _write_vehicle(self, context, t: float, tick: int, estimated) -> None:
+        ns = m.nanoseconds(t)
+        poses = []
+        for topic, x in (("odometry", VehicleState(estimated)),
+                         ("odometry_truth", VehicleState(self.state_input.Eval(context)))):
+            pose = (*x.position, *m.quaternion_rpy(*x.attitude))
+            poses += pose
+            self._write_fixed(topic, (*pose, *x.linear_velocity, *x.angular_velocity), ns, t)
+        self._write_fixed("tf", poses, (ns, ns), t)
         reference = Reference(self.reference_input.Eval(context))
-        self.log.write(TOPICS["reference"], "geometry_msgs/msg/PoseStamped", m.pose_stamped(
-            t, m.MAP, reference.position, rotation_world_body(0.0, 0.0, reference.yaw)), t)
-        self.log.write(TOPICS["leg"], "std_msgs/msg/Int32", m.scalar(
-            "std_msgs/msg/Int32", int(LegSignal(self.leg_input.Eval(context)).index)), t)
-        self.log.write(TOPICS["response"], "std_msgs/msg/Int32", m.scalar(
-            "std_msgs/msg/Int32", int(Response(self.response_input.Eval(context)).mode)), t)
-        self.log.write(TOPICS["thrust"], "std_msgs/msg/Float64MultiArray",
-                       m.float_array(self.thrust_input.Eval(context), THRUSTER_NAMES), t)
+        self._write_fixed("reference", (*reference.position,
+                                        *m.quaternion_rpy(0.0, 0.0, reference.yaw)), ns, t)
+        self._write_fixed("thrust", self.thrust_input.Eval(context), (), t)
+        if tick % self._every["mission"] == 0:
+            self.log.write(TOPICS["leg"], "std_msgs/msg/Int32", m.scalar(
+                "std_msgs/msg/Int32", int(LegSignal(self.leg_input.Eval(context)).index)), t)
+            self.log.write(TOPICS["response"], "std_msgs/msg/Int32", m.scalar(
+                "std_msgs/msg/Int32", int(Response(self.response_input.Eval(context)).mode)), t)
+
+    def _write_fixed(self, topic: str, floats, stamps, t: float) -> None:
+        template = self._templates[topic]
+        self.log.write_cdr(TOPICS[topic], template.typename,
+                           template.cdr(floats, stamps if isinstance(stamps, tuple)
+                                        else (stamps,)), t)
 
     def _write_returns(self, name: str, returns: SonarReturns, poses: np.ndarray,
                        now: float) -> None:
@@ -205,19 +223,21 @@ class McapRecorder(LeafSystem):
         recorder's receive time): in log order, the updates reach a replay in the order the
         mapper recorded them."""
         mount, period, _ = self.sonars[name]
-        rows = poses[np.isfinite(poses[:, 0])]
-        rotations = [rotation_world_body(*VehicleState(row[1:]).attitude) for row in rows]
-        origins = np.array([row[1:4] + r @ mount.position for row, r in zip(rows, rotations)])
-        placed = np.linalg.norm(origins - returns.origin_nav, axis=1) < 1e-9
-        if not placed.any():
+        rows = [row for row in poses if row[0] == row[0]]  # NaN: no tick yet
+        rows.sort(key=lambda row: abs(row[0] - returns.time))  # on time first
+        origin_nav = returns.origin_nav
+        for row in rows:
+            rotation = rotation_world_body(*row[4:7])
+            origin = row[1:4] + rotation @ mount.position
+            if max(abs(origin - origin_nav)) < 1e-9:
+                break
+        else:
             raise ValueError(f"McapRecorder: {name} returns at {returns.time:.3f} s were not "
                              f"placed at any of the last {len(rows)} ticks' estimated poses")
-        on_time = placed & (np.abs(rows[:, 0] - returns.time) < 1e-9)
-        k = int(np.flatnonzero(on_time if on_time.any() else placed)[0])
-        t = float(rows[k, 0])
-        beams = np.asarray(returns.directions_nav) @ (rotations[k] @ mount.rotation)
-        self.log.write(points_topic(name), "sensor_msgs/msg/PointCloud2",
-                       m.point_cloud(t, name, returns.ranges, beams), now)
+        t = float(row[0])
+        beams = np.asarray(returns.directions_nav) @ (rotation @ mount.rotation)
+        self.log.write_cdr(points_topic(name), "sensor_msgs/msg/PointCloud2",
+                           self._clouds[name].cdr(t, returns.ranges, beams), now)
         if name in self.laser_scans:
             self.log.write(scan_topic(name), "sensor_msgs/msg/LaserScan", m.laser_scan(
                 t, name, returns.angles, returns.ranges, returns.max_range, period), now)

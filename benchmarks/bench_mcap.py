@@ -1,0 +1,84 @@
+"""What writing `dive.mcap` costs a dive: wall time and memory, the same run with and without.
+
+Flies the built-in `boulder` mission capped at `--cap` simulated seconds, alternately without
+and with the MCAP log (`rosio.McapRecorder`), `--runs` times each, and prints the medians of
+the dive's wall and CPU time (`run_mission`: the Diagram's build, the simulation and the
+results; the simulation alone is not the measure, because the log's octree markers bring the
+map up to date during it, work a run without the log does after it) and their ratios
+(target <= 1.15; on a shared machine the CPU ratio is the one that does not move with the
+load), the log's size per simulated second, and the resident memory's growth over the
+dive's second half (read by a probe at the simulator's steps): a log streamed to disk adds
+none that grows with the dive.
+
+    .venv/bin/python benchmarks/bench_mcap.py [--runs 3] [--cap 120]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from drake_auv.mission.config import load_mission
+from drake_auv.mission.plan import plan_mission
+from drake_auv.mission.runner import run_mission
+from drake_auv.mission.site import load_site
+from drake_auv.rosio.writer import dive_log
+
+PAGE = os.sysconf("SC_PAGE_SIZE")
+
+
+def rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * PAGE / 2**20
+
+
+def one_run(spec, site, plan, folder: Path | None, cap: float) -> tuple:
+    """(wall s, CPU s, RSS growth over the second half MB) of one dive."""
+    marks = {}
+
+    def probe(context):
+        t = context.get_time()
+        for key, at in (("half", 0.5 * cap), ("end", cap - 1.0)):
+            if key not in marks and t >= at:
+                marks[key] = rss_mb()
+
+    wall, cpu = time.perf_counter(), time.process_time()
+    log = dive_log(folder / "dive.mcap", spec, site) if folder is not None else None
+    run_mission(spec, site, progress=False, plan=plan, probe=probe, mcap=log)
+    return (time.perf_counter() - wall, time.process_time() - cpu,
+            marks.get("end", np.nan) - marks.get("half", np.nan))
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--cap", type=float, default=120.0, help="simulated s (default 120)")
+    args = parser.parse_args(argv)
+    spec = load_mission("boulder", overrides=[f"limits.max_time_s={args.cap}"])
+    site = load_site(spec.site, spec.seed, label=spec.name)
+    plan = plan_mission(spec, site)
+    runs = {False: [], True: []}
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        for _ in range(args.runs):
+            for mcap in (False, True):
+                runs[mcap].append(one_run(spec, site, plan, folder if mcap else None, args.cap))
+        size = (folder / "dive.mcap").stat().st_size / 2**20
+    without, with_ = (np.median(runs[k], axis=0) for k in (False, True))
+    print(f"boulder capped at {args.cap:g} s, median of {args.runs} runs each:")
+    for k, what in ((0, "wall"), (1, "CPU")):
+        print(f"  dive {what} time without the log {without[k]:.2f} s, with it {with_[k]:.2f} "
+              f"s: ratio {with_[k] / without[k]:.3f} (target <= 1.15)")
+    print(f"  dive.mcap {size:.1f} MB, {size / args.cap * 1024:.0f} kB per simulated s")
+    print(f"  RSS growth over the dive's second half: without {without[2]:.1f} MB, with "
+          f"{with_[2]:.1f} MB")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
