@@ -374,3 +374,83 @@ def test_replay_rejects_a_log_without_returns_topics_and_a_truncated_file(boulde
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and str(cut) in err, err
     assert not (tmp_path / "b" / "points.ply").exists()
+
+
+# --- the writer's pieces ------------------------------------------------------------------
+
+def test_templates_write_the_bytes_rosbags_writes():
+    q = m.quaternion_rpy(0.1, -0.2, 2.5)
+    from drake_auv.vehicle.control import rotation_world_body
+
+    np.testing.assert_allclose(q, m.quaternion(rotation_world_body(0.1, -0.2, 2.5)), atol=1e-15)
+    np.testing.assert_allclose(m.rotation_matrix(q), rotation_world_body(0.1, -0.2, 2.5),
+                               atol=1e-15)
+    ns = m.nanoseconds(12.3)
+    odometry = m.odometry(12.3, m.BASE, (1, 2, 3), q, (0.5, 0, 0), (0, 0, 0.1))
+    assert bytes(m.odometry_template(m.BASE).cdr(
+        (1, 2, 3, *q, 0.5, 0, 0, 0, 0, 0.1), (ns,))) == m.serialize(odometry,
+                                                                      "nav_msgs/msg/Odometry")
+    tf = m.tf_message([m.transform(12.3, m.MAP, m.BASE, (1, 2, 3), q),
+                       m.transform(12.3, m.MAP, m.TRUTH, (4, 5, 6), q)])
+    assert bytes(m.tf_template(m.MAP, (m.BASE, m.TRUTH)).cdr(
+        (1, 2, 3, *q, 4, 5, 6, *q), (ns, ns))) == m.serialize(tf, "tf2_msgs/msg/TFMessage")
+    ranges = np.array([2.0, np.nan, 3.5])
+    beams = np.array([[1.0, 0, 0], [0, 1.0, 0], [0.6, 0.8, 0]])
+    assert m.CloudWriter("profiler").cdr(12.3, ranges, beams) == m.serialize(
+        m.point_cloud(12.3, "profiler", ranges, beams), "sensor_msgs/msg/PointCloud2")
+
+
+def test_marker_points_spliced_into_the_serialisation_decode():
+    from mcap.records import Schema
+    from mcap_ros2.decoder import DecoderFactory
+
+    points = [np.arange(12.0).reshape(4, 3), np.zeros((0, 3)), np.ones((2, 3))]
+    markers = [m.marker(1.0, f"m{k}", m.CUBE_LIST, 0.5, (1, 0, 0, 1), k) for k in range(3)]
+    data = m.marker_array_cdr(markers, points)
+    typename = "visualization_msgs/msg/MarkerArray"
+    decoder = DecoderFactory().decoder_for("cdr", Schema(
+        id=1, name=typename, encoding="ros2msg", data=m.msgdef(typename).encode()))
+    decoded = decoder(data)
+    assert [mk.ns for mk in decoded.markers] == ["m0", "m1", "m2"]
+    for mk, expected in zip(decoded.markers, points):
+        got = np.array([[p.x, p.y, p.z] for p in mk.points]).reshape(-1, 3)
+        np.testing.assert_array_equal(got, expected)
+    again = m.typestore().deserialize_cdr(data, typename)
+    assert again.markers[2].color.r == 1.0 and len(again.markers[0].points) == 4
+
+
+def test_recorder_periods_must_be_multiples_of_its_tick(tmp_path):
+    from drake_auv.rosio.recorder import McapRecorder
+    from drake_auv.rosio.writer import McapLog
+
+    log = McapLog(tmp_path / "x.mcap")
+    with pytest.raises(ValueError, match="coverage_period must be a multiple of its tick"):
+        McapRecorder(log, {}, coverage_period=0.15)
+    log.close()
+
+
+def test_foxglove_layout_names_the_logs_topics(boulder):
+    """Every topic the layout shows is one a dive writes (the replanned sections: with a
+    replanning leg, which the capped dive does not reach)."""
+    import json
+    import re
+    from importlib.resources import files
+
+    from drake_auv.rosio.recorder import TOPICS
+
+    layout = json.loads(files("drake_auv.rosio").joinpath("foxglove_layout.json").read_text())
+    folder, _ = boulder
+    topics = {topic for topic, _, _, _ in _mcap_messages(folder / "dive.mcap")}
+    text = json.dumps(layout["configById"])
+    named = set(re.findall(r'"(/[a-z_/]+)(?:[."]|\[)', text))
+    assert named and named <= topics | {TOPICS["section"]}, named - topics
+    panels = set(re.findall(r'"([A-Za-z0-9]+![a-z]+)"', json.dumps(layout["layout"])))
+    assert panels == set(layout["configById"])
+
+
+def test_run_writes_dive_mcap_from_the_mission_key(tmp_path):
+    out = tmp_path / "run"
+    assert main(["run", "pool", "-o", str(out), "--set", "limits.max_time_s=2", "--set",
+                 "outputs.mcap=true", "--no-html", "--quiet"]) == 0
+    index = open_log(out / "dive.mcap")
+    assert index.sources["multibeam"]["count"] > 10
