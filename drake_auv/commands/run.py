@@ -32,15 +32,13 @@ def add_parser(subparsers) -> None:
     parser.add_argument("mission", help="a mission YAML file or a built-in mission's name")
     parser.add_argument("-o", "--out", required=True, help="output folder")
     add_mission_options(parser)
-    parser.add_argument("--mcap", action="store_true",
-                        help="also write dive.mcap: the dive as ROS 2 messages (TF, odometry, "
-                             "sonar point clouds, plan, map) for Foxglove and ros2 bag")
     add_recording_options(parser, playback_speed=20.0, realtime=False)
     parser.set_defaults(func=run)
 
 
 def add_mission_options(parser) -> None:
-    """`--seed`, `--set`, `--meshcat` and `--realtime`, shared with `drake-auv demo`."""
+    """`--seed`, `--set`, `--meshcat`, `--realtime` and `--mcap`, shared with `drake-auv
+    demo`."""
     parser.add_argument("--seed", type=int, default=None,
                         help="seed of the prior-map error, navigation drift, sonar noise and "
                              "STOMP (default: the file's)")
@@ -55,6 +53,9 @@ def add_mission_options(parser) -> None:
     parser.add_argument("--realtime", type=float, default=1.0, metavar="R",
                         help="with --meshcat, fly at R times real time (default 1; 0 = as fast "
                              "as possible)")
+    parser.add_argument("--mcap", action="store_true",
+                        help="also write dive.mcap: the dive as ROS 2 messages (TF, odometry, "
+                             "sonar point clouds, plan, map) for Foxglove and ros2 bag")
 
 
 def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
@@ -97,6 +98,7 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     if mcap or spec.outputs.mcap:
         from drake_auv.rosio.writer import dive_log
 
+        FilePath(out).mkdir(parents=True, exist_ok=True)
         log = dive_log(FilePath(out) / "dive.mcap", spec, site)
     result = run_mission(spec, site, scene=scene, progress=progress, plan=plan,
                          realtime_rate=realtime if meshcat else 0.0, mcap=log)

@@ -206,8 +206,8 @@ class LimitsSpec:
 
 @dataclass(frozen=True)
 class OutputsSpec:
-    """Attributes: mcap: write `dive.mcap`, the dive as ROS 2 messages (`drake_auv.rosio`),
-    as it flies."""
+    """Attributes: mcap: `drake-auv run` and `demo` write `dive.mcap`, the dive as ROS 2
+    messages (`drake_auv.rosio`), as it flies (a campaign's runs write none)."""
 
     mcap: bool = param(False, kind="bool")
 

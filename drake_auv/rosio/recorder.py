@@ -3,21 +3,22 @@
 Every `tick` (0.1 s, the state logs' period) a periodic unrestricted update (the mapper's
 kind, at its times, so both see the same sonar updates) writes `/tf` (`map` -> `base_link`,
 the navigation estimate, and `map` -> `base_link_truth`), the two `nav_msgs/Odometry`, the
-tracked reference (`geometry_msgs/PoseStamped`), the thrusts (`std_msgs/Float64MultiArray`, N) and each sonar update not
-yet written (`sensor_msgs/PointCloud2` in the sensor's frame, the multibeam also as
-`sensor_msgs/LaserScan`); each new replanned section (`nav_msgs/Path`); every
-`mission_period` the leg and the safety response (`std_msgs/Int32`: the leg's index, the
-response's `mission.safety.RESPONSES` index); every `coverage_period` the coverage shares
-(`std_msgs/Float64`); every `map_period` the on-line
-map's occupied voxels (`visualization_msgs/MarkerArray`). The first tick writes `/tf_static`
-(`base_link` -> each sensor), the plan (`nav_msgs/Path`) and the world and target meshes.
+tracked reference (`geometry_msgs/PoseStamped`), the thrusts (`std_msgs/Float64MultiArray`,
+N) and each sonar update not yet written (`sensor_msgs/PointCloud2` in the sensor's frame,
+the multibeam also as `sensor_msgs/LaserScan`); each new replanned section
+(`nav_msgs/Path`); every `mission_period` the leg and the safety response (`std_msgs/Int32`:
+the leg's index, the response's `mission.safety.RESPONSES` index); every `coverage_period`
+the coverage shares (`std_msgs/Float64`); every `map_period` the on-line map's occupied
+voxels (`visualization_msgs/MarkerArray`). The first tick writes `/tf_static` (`base_link`
+-> each sensor), the plan (`nav_msgs/Path`) and the world and target meshes.
 
 A sonar's returns are placed with the estimated pose at their update (the update at t is seen
 at the next tick, as the mapper sees it): the Context keeps the last few ticks' estimated
 states (`poses`) to express the beams in the sensor frame with exactly the pose that placed
-them, and the cloud is stamped with that tick, whose `/tf` carried the pose. The `McapLog` is an output device, like an LCM interface: the
-system writes to it and keeps its own bookkeeping (which sonar updates and section it has
-written, the recent poses) in the Context. Frames and fields: `drake_auv.rosio.messages`.
+them, and the cloud is stamped with that tick, whose `/tf` carried the pose. The `McapLog`
+is an output device, like an LCM interface: the system writes to it and keeps its own
+bookkeeping (which sonar updates and section it has written, the recent poses) in the
+Context. Frames and fields: `drake_auv.rosio.messages`.
 """
 
 from __future__ import annotations
