@@ -215,7 +215,8 @@ def _vehicle_log(n: int = 100):
     return poses, (p_bs, r_bs), d_s, pings
 
 
-def _ros1_bag(path: Path, odom_topic="/nav/odom", cloud_topic="/mbes/cloud", ping_shift=0):
+def _ros1_bag(path: Path, odom_topic="/nav/odom", cloud_topic="/mbes/cloud", ping_shift=0,
+              cloud_frame="mbes"):
     from rosbags.rosbag1 import Writer
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -266,7 +267,7 @@ def _ros1_bag(path: Path, odom_topic="/nav/odom", cloud_topic="/mbes/cloud", pin
             fields = [m.make_in(store, "sensor_msgs/msg/PointField", name=k, offset=4 * i,
                                 datatype=m.FLOAT32, count=1) for i, k in enumerate("xyz")]
             put(cloud_topic, "sensor_msgs/msg/PointCloud2", ns, m.make_in(
-                store, "sensor_msgs/msg/PointCloud2", header=header(ns + ping_shift, "mbes"),
+                store, "sensor_msgs/msg/PointCloud2", header=header(ns + ping_shift, cloud_frame),
                 height=1, width=len(xyz), fields=fields, point_step=12, row_step=12 * len(xyz),
                 data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=True))
     return path
@@ -357,6 +358,15 @@ def test_replay_rejects_returns_without_a_transform_at_their_stamp(tmp_path, cap
     assert len(err.splitlines()) == 1
     assert "frame 'mbes' have no transform to 'world' at their stamp" in err, err
     assert not (out / "points.ply").exists()
+
+
+def test_replay_rejects_returns_in_a_frame_without_a_path_to_the_world(tmp_path, capsys):
+    bag = _ros1_bag(tmp_path / "v.bag", cloud_frame="sidescan")  # not in the TF tree
+    assert main(["replay", str(bag), "-o", str(tmp_path / "out"), "--topics",
+                 "odometry=/nav/odom,multibeam=/mbes/cloud"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "returns in frame 'sidescan' have no transform to the world frame 'world'" in err
 
 
 def test_replay_rejects_a_log_without_returns_topics_and_a_truncated_file(boulder, tmp_path,

@@ -21,7 +21,6 @@ echo, any other is dropped (REP 117).
 
 from __future__ import annotations
 
-import heapq
 from dataclasses import dataclass, field
 from pathlib import Path as FilePath
 from typing import Iterator
@@ -363,7 +362,7 @@ def iter_batches(index: LogIndex, multibeam_stride: int = 1) -> Iterator[ScanBat
 
 
 def _batches(index, group, stride) -> Iterator[ScanBatch]:
-    for source, _, msg in heapq.nsmallest(len(group), group, key=lambda g: g[:2]):
+    for source, _, msg in sorted(group, key=lambda g: g[:2]):
         name = SOURCES[source]
         directions, ranges = (scan_beams(msg) if hasattr(msg, "angle_min")
                               else cloud_beams(msg))
