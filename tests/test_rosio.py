@@ -186,14 +186,13 @@ def test_replay_of_a_pool_dive_gives_its_coverage(tmp_path):
 
 # --- a vehicle's own logs: other topic names, a sonar on a static transform -----------------
 
-WALL_X = 8.0  # m, a vertical wall x = 8 facing the vehicle
+WALL_X = 8.0  # m, a vertical wall x = 8 facing the vehicle: 12 m long, 8 m high, 1 m thick
+WALL_LO, WALL_HI = np.array([WALL_X, -14.0, -16.0]), np.array([WALL_X + 1.0, -2.0, -8.0])
 MB_ANGLES = np.radians(np.linspace(-60, 60, 121))
 
 
 def _wall():
-    return trimesh.creation.box(extents=(1.0, 30.0, 16.0),
-                                transform=trimesh.transformations.translation_matrix(
-                                    (WALL_X + 0.5, 0.0, -12.0)))
+    return trimesh.creation.box(bounds=np.array([WALL_LO, WALL_HI]))
 
 
 def _vehicle_log(n: int = 100):
@@ -210,7 +209,9 @@ def _vehicle_log(n: int = 100):
     for ns, p, r in poses[1:-1]:
         origin, d_w = p + r @ p_bs, d_s @ (r @ r_bs).T
         ranges = (WALL_X - origin[0]) / d_w[:, 0]
-        ranges[(ranges > 20.0) | (d_w[:, 0] <= 0)] = np.nan
+        hit = origin + d_w * ranges[:, None]
+        on_wall = (hit[:, 1:] >= WALL_LO[1:]).all(axis=1) & (hit[:, 1:] <= WALL_HI[1:]).all(axis=1)
+        ranges[(ranges > 20.0) | (d_w[:, 0] <= 0) | ~on_wall] = np.nan
         pings.append((ns + 50_000_000, ranges))  # between two poses: interpolated
     return poses, (p_bs, r_bs), d_s, pings
 
@@ -464,3 +465,58 @@ def test_run_writes_dive_mcap_from_the_mission_key(tmp_path):
                  "outputs.mcap=true", "--no-html", "--quiet"]) == 0
     index = open_log(out / "dive.mcap")
     assert index.sources["multibeam"]["count"] > 10
+
+
+def test_recorder_alone_with_fixed_inputs(tmp_path):
+    """The recorder with `FixValue` inputs: one message per tick, a sonar update written
+    once, in its frame with the pose of its update time, a section each time it changes."""
+    from pydrake.systems.analysis import Simulator
+
+    from drake_auv.rosio.recorder import McapRecorder
+    from drake_auv.rosio.writer import McapLog
+    from drake_auv.sonar.beams import SonarMount
+    from drake_auv.sonar.returns import SonarReturns
+    from drake_auv.vehicle.control import rotation_world_body
+
+    log = McapLog(tmp_path / "r.mcap")
+    mount = SonarMount.named("port", (0.3, 0.0, -0.2))
+    recorder = McapRecorder(log, {"multibeam": (mount, 0.1, 20.0)}, coverage=("multibeam",),
+                            section_input=True)
+    context = recorder.CreateDefaultContext()
+    estimated = np.array([1.0, 2.0, -3.0, 0.02, -0.01, 0.5, 0.3, 0, 0, 0, 0, 0.01])
+    r_nb = rotation_world_body(0.02, -0.01, 0.5)
+    d_s = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    d_nav = d_s @ (r_nb @ mount.rotation).T
+    origin = estimated[:3] + r_nb @ mount.position
+    ranges = np.array([4.0, np.nan])
+    points = origin + d_nav * ranges[:, None]
+    returns = SonarReturns(0.0, origin, np.zeros(2), ranges, d_nav, points, np.zeros((2, 3)),
+                           20.0, 1)
+    for port, value in ((recorder.state_input, np.zeros(12)),
+                        (recorder.estimated_state_input, estimated),
+                        (recorder.reference_input, np.zeros(8)),
+                        (recorder.leg_input, [1, 0]), (recorder.response_input, np.zeros(10)),
+                        (recorder.thrust_input, np.arange(5.0)),
+                        (recorder.coverage_inputs["multibeam"], [0.25])):
+        port.FixValue(context, np.asarray(value, dtype=float))
+    recorder.returns_inputs["multibeam"].FixValue(context, returns)
+    recorder.section_input.FixValue(context, np.zeros((2, 3)) + [[0, 0, -5], [1, 0, -5]])
+    simulator = Simulator(recorder, context)
+    simulator.AdvanceTo(0.35)  # ticks at 0, 0.1, 0.2, 0.3
+    recorder.section_input.FixValue(context, np.zeros((2, 3)) + [[0, 0, -6], [2, 0, -6]])
+    simulator.AdvanceTo(0.45)
+    log.close()
+    decoded = _mcap_messages(tmp_path / "r.mcap")
+    counts = Counter(topic for topic, _, _, _ in decoded)
+    assert counts["/tf"] == counts["/odometry/navigation"] == counts["/thrust"] == 5
+    assert counts["/plan/section"] == 2 and counts["/sonar/multibeam/points"] == 1
+    assert counts["/mission/leg"] == 1 and counts["/coverage/multibeam"] == 1
+    cloud = next(d for t, _, _, d in decoded if t == "/sonar/multibeam/points")
+    assert cloud.header.frame_id == "multibeam" and cloud.width == 2 and not cloud.is_dense
+    assert (cloud.header.stamp.sec, cloud.header.stamp.nanosec) == (0, 0)
+    data = np.frombuffer(bytes(cloud.data), np.float32, count=3)  # x, y, z of beam 0
+    np.testing.assert_allclose(data, [4.0, 0.0, 0.0], atol=1e-6)
+    static, dynamic = _tf_lookup(decoded)
+    p_bs, r_bs = static["multibeam"][1]
+    p_mb, r_mb = dynamic["base_link"][0]
+    np.testing.assert_allclose(p_mb + r_mb @ (p_bs + r_bs @ [4.0, 0, 0]), points[0], atol=1e-12)
