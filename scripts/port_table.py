@@ -1,7 +1,8 @@
 """The builder and port tables of docs/architecture.md, generated from the code.
 
 `port_rows()` builds the boulder mission's Diagram with every fault spliced in and a live
-scene (so the fault gates and the viewers are there too), adds the systems only a fly step
+scene and an MCAP log (so the fault gates, the viewers and the recorder are there too), adds
+the systems only a fly step
 brings (the DVL and the autopilot pilot) and the one an explore step brings (the view
 planner), and walks every drake_auv system's ports: its name,
 direction and type (a vector's size, an abstract port's value class). The meaning of each port
@@ -19,6 +20,7 @@ from __future__ import annotations
 import inspect
 import re
 import sys
+import tempfile
 from pathlib import Path
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
@@ -58,13 +60,17 @@ def _systems():
     from drake_auv.mission.diagram import build_mission_diagram
     from drake_auv.mission.plan import plan_mission
     from drake_auv.mission.site import load_site
+    from drake_auv.rosio.writer import McapLog
     from drake_auv.sonar.altimeter import DvlAltimeter
     from drake_auv.visualization import Scene
 
     spec = load_mission("boulder", overrides=FAULTS)
     site = load_site(spec.site, spec.seed, label=spec.name)
-    diagram, handles = build_mission_diagram(site, spec, plan_mission(spec, site),
-                                             scene=Scene(live=True))
+    with tempfile.TemporaryDirectory() as folder:  # the MCAP recorder of `run --mcap` too
+        log = McapLog(Path(folder) / "dive.mcap")
+        diagram, handles = build_mission_diagram(site, spec, plan_mission(spec, site),
+                                                 scene=Scene(live=True), mcap=log)
+        log.close()
     found: dict[str, tuple[list[str], object]] = {}
     for name, system in [*((s.get_name(), s) for s in diagram.GetSystems()),
                          ("dvl (fly, explore steps)", DvlAltimeter(handles.caster)),
@@ -100,13 +106,14 @@ def port_rows(known: dict) -> list[str]:
 
 def builder_rows() -> list[str]:
     from drake_auv.mission import diagram
+    from drake_auv.rosio.recorder import add_mcap_recorder
     from drake_auv.vehicle.diagram import add_girona500
     from drake_auv.visualization.live import add_mission_view
 
     rows = []
     for function in (add_girona500, diagram.add_faults, diagram.add_sonars,
                      diagram.add_autopilot, diagram.add_behaviours,
-                     diagram.add_coverage_recorders, add_mission_view,
+                     diagram.add_coverage_recorders, add_mission_view, add_mcap_recorder,
                      diagram.build_mission_diagram):
         parameters = ", ".join(inspect.signature(function).parameters)
         summary = re.split(r"(?<=\.)\s", " ".join(inspect.getdoc(function).split()))[0]

@@ -6,6 +6,8 @@ sections (`--set replanner.optimizer=none`, `--set sonar_noise=clean`,
 `--set steps.2.survey.replanning=false`). `--meshcat` serves the scene on localhost while the
 mission flies (the leg, the replanner's section and the reference drawn as they change), paced
 by `--realtime R` (1 = real time, 0 = as fast as possible); the outputs are the same.
+`--mcap` (or the mission key `outputs.mcap`) also writes `dive.mcap`, the dive as ROS 2
+messages (`drake_auv.rosio`, docs/ros.md), as it flies.
 """
 
 from __future__ import annotations
@@ -35,7 +37,8 @@ def add_parser(subparsers) -> None:
 
 
 def add_mission_options(parser) -> None:
-    """`--seed`, `--set`, `--meshcat` and `--realtime`, shared with `drake-auv demo`."""
+    """`--seed`, `--set`, `--meshcat`, `--realtime` and `--mcap`, shared with `drake-auv
+    demo`."""
     parser.add_argument("--seed", type=int, default=None,
                         help="seed of the prior-map error, navigation drift, sonar noise and "
                              "STOMP (default: the file's)")
@@ -54,6 +57,9 @@ def add_mission_options(parser) -> None:
                         help="with --meshcat, serve the live view on this port of localhost "
                              f"({MESHCAT_PORTS[0]}-{MESHCAT_PORTS[1]}; default: the first free "
                              "one from 7000)")
+    parser.add_argument("--mcap", action="store_true",
+                        help="also write dive.mcap: the dive as ROS 2 messages (TF, odometry, "
+                             "sonar point clouds, plan, map) for Foxglove and ros2 bag")
 
 
 MESHCAT_PORTS = (1024, 65535)
@@ -79,13 +85,15 @@ def check_live_options(meshcat: bool, realtime, port) -> float:
 
 def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         playback_speed: float = 20.0, progress: bool = True, meshcat: bool = False,
-        realtime: float | None = None, meshcat_port: int | None = None) -> dict:
+        realtime: float | None = None, meshcat_port: int | None = None,
+        mcap: bool = False) -> dict:
     """Loads, flies and reports `mission` into `out`; returns the report's summary. The
     mission and its site are checked before the simulation's modules (Drake, matplotlib) are
     imported, so a bad file is reported at once. With `meshcat` the scene is served on
     localhost during the dive, which flies at `realtime` times real time (0: at full speed).
     The report's `timing` has the end-to-end figures: `setup_s` is everything of this call
-    before the outputs but the simulation."""
+    before the outputs but the simulation. With `mcap` (or the mission's `outputs.mcap`) the
+    dive is also written to `out`/dive.mcap as it flies."""
     start = time.perf_counter()
     realtime = check_live_options(meshcat, realtime, meshcat_port)
     from drake_auv.mission.config import load_mission
@@ -111,8 +119,14 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         prepare_scene(scene, site, plan)
         if html:
             scene.start_recording(playback_speed=playback_speed, live=meshcat)
+    log = None
+    if mcap or spec.outputs.mcap:
+        from drake_auv.rosio.writer import dive_log
+
+        FilePath(out).mkdir(parents=True, exist_ok=True)
+        log = dive_log(FilePath(out) / "dive.mcap", spec, site)
     result = run_mission(spec, site, scene=scene, progress=progress, plan=plan,
-                         realtime_rate=realtime)
+                         realtime_rate=realtime, mcap=log)
     setup_s = time.perf_counter() - start - result.wall_s
 
     def finish(out):
@@ -129,7 +143,7 @@ def run(args) -> int:
     output_folder(args.out, "-o", RUN_NEEDS_BYTES)
     summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
                   args.playback_speed, not args.quiet, args.meshcat, args.realtime,
-                  args.meshcat_port)
+                  args.meshcat_port, args.mcap)
     c = summary["coverage"]
     print(f"{summary['mission']['name']}: multibeam coverage {100 * c['multibeam']:.1f} %, "
           f"camera {100 * c['camera']:.1f} %, minimum clearance "

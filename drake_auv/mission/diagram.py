@@ -85,6 +85,7 @@ class MissionHandles:
     dvl: DvlAltimeter | None = None  # with a fly or an explore step
     explorer: ViewPlanner | None = None  # with an explore step: the view planner
     ocean: Ocean | None = None  # with a sea (`ocean:` not none): the water at the vehicle
+    mcap: object = None  # with an `McapLog`: the `rosio.McapRecorder` writing into it
 
 
 def add_faults(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec):
@@ -282,7 +283,7 @@ def add_coverage_recorders(builder: DiagramBuilder, caster: RayCaster, vehicle: 
 
 
 def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | None = None,
-                          scene=None, caster: RayCaster | None = None):
+                          scene=None, caster: RayCaster | None = None, mcap=None):
     """The whole mission `spec` at `site` as one Diagram; returns (diagram, MissionHandles).
 
     Args:
@@ -291,6 +292,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
             on-line map in while it flies (a `live` scene: also the leg, the section and the
             reference).
         caster: a `RayCaster` of `site.world` to share (default: built here).
+        mcap: a `drake_auv.rosio.McapLog` the dive is written into as ROS 2 messages.
     Exported outputs: `state` (true), `estimated_state`, `map`, `leg`.
     """
     plan = plan if plan is not None else plan_mission(spec, site)
@@ -336,6 +338,16 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
         logs["exploration"] = LogVectorOutput(explorer.step_output, builder, explorer.period)
     for name, log in logs.items():
         log.set_name(f"{name}_log")
+    recorder = None
+    if mcap is not None:
+        from drake_auv.rosio.recorder import add_mcap_recorder
+
+        recorder = add_mcap_recorder(
+            builder, mcap, vehicle, estimated, switch.get_output_port(), supervisor,
+            {"multibeam": multibeam, "profiler": profiler, **({"dvl": dvl} if dvl else {})},
+            {**returns, **({"dvl": dvl.returns_output} if dvl else {})},
+            {"multibeam": multibeam_coverage, "camera": camera}, site, plan.nominal, mapper,
+            replanner)
     builder.ExportOutput(vehicle.dynamics.state_output, "state")
     builder.ExportOutput(estimated, "estimated_state")
     builder.ExportOutput(mapper.map_output, "map")
@@ -358,5 +370,5 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,
                              controller, replanner, supervisor, camera, multibeam_coverage, logs,
-                             faults, pilot, dvl, explorer, ocean)
+                             faults, pilot, dvl, explorer, ocean, recorder)
     return diagram, handles

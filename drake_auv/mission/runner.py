@@ -137,15 +137,16 @@ def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndar
 
 def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
                 progress: bool = True, plan: MissionPlan | None = None,
-                realtime_rate: float = 0.0, probe=None) -> MissionResult:
+                realtime_rate: float = 0.0, probe=None, mcap=None) -> MissionResult:
     """Flies `spec` in one dive, at `site` (default `load_site(spec.site, spec.seed)`) with
     `plan` (default `plan_mission(spec, site)`), paced at `realtime_rate` times real time
     (0: as fast as possible; pacing changes no result); `probe(root_context)`, when given, is
-    called at every simulator step (a benchmark's sampling of memory and wall time)."""
+    called at every simulator step (a benchmark's sampling of memory and wall time); `mcap`:
+    an `rosio.McapLog` the dive is written into (closed, into place, when the dive ends)."""
     site = site if site is not None else load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
     plan = plan if plan is not None else plan_mission(spec, site)
-    diagram, handles = build_mission_diagram(site, spec, plan, scene=scene)
+    diagram, handles = build_mission_diagram(site, spec, plan, scene=scene, mcap=mcap)
     simulator = Simulator(diagram)
     simulator.set_target_realtime_rate(realtime_rate)
     context = simulator.get_context()
@@ -175,6 +176,8 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
         logs = {name: spool.read(name, context) for name in handles.logs}
     finally:
         spool.close()
+        if mcap is not None:
+            mcap.close()
     return _collect(spec, site, plan, diagram, handles, context, completed, wall, logs)
 
 

@@ -207,6 +207,17 @@ class LimitsSpec:
 
 
 @dataclass(frozen=True)
+class OutputsSpec:
+    """Attributes: mcap: `drake-auv run` and `demo` write `dive.mcap`, the dive as ROS 2
+    messages (`drake_auv.rosio`), as it flies (a campaign's runs write none)."""
+
+    mcap: bool = param(False, kind="bool")
+
+    def __post_init__(self):
+        validate(self)
+
+
+@dataclass(frozen=True)
 class PlanStep:
     """Off-line plan on the prior map; a later `survey` flies it.
 
@@ -450,6 +461,7 @@ class MissionSpec:
     replanner: ReplannerSpec = ReplannerSpec()
     payload: PayloadSpec = PayloadSpec()
     limits: LimitsSpec = LimitsSpec()
+    outputs: OutputsSpec = OutputsSpec()
     faults: FaultsSpec = FaultsSpec()
     ocean: OceanSpec | None = None  # None: still water (`ocean: none`)
     source: Path | None = field(default=None, compare=False)
@@ -461,6 +473,6 @@ class MissionSpec:
 # The sections of a mission file besides `sonar_noise`, `faults` and `steps`, read by
 # `mission_keys` of their class.
 SECTIONS = dict(site=SiteSpec, navigation=NavigationParams, replanner=ReplannerSpec,
-                payload=PayloadSpec, limits=LimitsSpec)
+                payload=PayloadSpec, limits=LimitsSpec, outputs=OutputsSpec)
 TOP_KEYS = ("name", "description", "seed", "site", "navigation", "sonar_noise", "replanner",
-            "payload", "limits", "faults", "ocean", "steps")
+            "payload", "limits", "outputs", "faults", "ocean", "steps")
