@@ -80,6 +80,7 @@ def test_dive_mcap_reads_with_mcap_and_rosbags(boulder):
                 ("/plan", "nav_msgs/msg/Path"), ("/mission/leg", "std_msgs/msg/Int32"),
                 ("/mission/response", "std_msgs/msg/Int32"),
                 ("/thrust", "std_msgs/msg/Float64MultiArray"),
+                ("/ocean/current", "std_msgs/msg/Float64MultiArray"),
                 ("/coverage/multibeam", "std_msgs/msg/Float64"),
                 ("/world", "visualization_msgs/msg/MarkerArray"),
                 ("/octomap/occupied", "visualization_msgs/msg/MarkerArray")}
@@ -97,6 +98,14 @@ def test_dive_mcap_reads_with_mcap_and_rosbags(boulder):
         table = np.array([[float(v) for v in row[1:4]] for row in list(csv.reader(f))[1:]])
     assert np.abs(truth - result.site.to_local(table[:len(truth)])).max() <= 6e-4
     assert {d.header.frame_id for t, _, _, d in decoded if t == "/odometry/truth"} == {"map"}
+    # the boulder's sea: the current the log carries is trajectory.csv's (4 decimals there)
+    current = np.array([d.data for t, _, _, d in decoded if t == "/ocean/current"])
+    with open(folder / "trajectory.csv") as f:
+        columns = np.array([[float(r[k]) for k in ("current_x", "current_y", "current_z")]
+                            for r in csv.DictReader(f)])
+    n = min(len(current), len(columns))
+    assert n >= 0.99 * len(columns) and np.abs(current).max() > 0.05
+    assert np.abs(current[:n] - columns[:n]).max() <= 6e-5
     from mcap.reader import make_reader
 
     with open(filename, "rb") as f:

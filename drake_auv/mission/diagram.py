@@ -347,7 +347,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
             {"multibeam": multibeam, "profiler": profiler, **({"dvl": dvl} if dvl else {})},
             {**returns, **({"dvl": dvl.returns_output} if dvl else {})},
             {"multibeam": multibeam_coverage, "camera": camera}, site, plan.nominal, mapper,
-            replanner)
+            replanner, ocean)
     builder.ExportOutput(vehicle.dynamics.state_output, "state")
     builder.ExportOutput(estimated, "estimated_state")
     builder.ExportOutput(mapper.map_output, "map")

@@ -32,7 +32,7 @@ from pydrake.systems.framework import LeafSystem
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.rosio import messages as m
 from drake_auv.rosio.writer import McapLog
-from drake_auv.signals import LegSignal, Reference, Response, VehicleState
+from drake_auv.signals import LegSignal, Reference, Response, VehicleState, Water
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.vehicle.model import THRUSTER_NAMES
@@ -41,7 +41,7 @@ TOPICS = dict(
     tf="/tf", tf_static="/tf_static", odometry="/odometry/navigation",
     odometry_truth="/odometry/truth", reference="/reference", plan="/plan",
     section="/plan/section", leg="/mission/leg", response="/mission/response",
-    thrust="/thrust", world="/world", map="/octomap/occupied")
+    thrust="/thrust", current="/ocean/current", world="/world", map="/octomap/occupied")
 
 
 def points_topic(sensor: str) -> str:
@@ -74,6 +74,8 @@ class McapRecorder(LeafSystem):
         section_input: declare `section` ((k, 3) the replanner's current section).
         map_input: declare `map` (an `OnlineMap`), its occupied voxels written every
             `map_period` s.
+        water_input: declare `water` (6, `signals.Water`): the current at the vehicle, written
+            every tick as [east, north, up] m/s (`std_msgs/Float64MultiArray`).
         mission_period: s between the leg and response messages (the supervisor's).
     Inputs: `state`, `estimated_state` (12, `signals.VehicleState`), `reference` (8), `leg`
     (2), `response` (10), `thrust` (5, N), and the optional ones above.
@@ -81,7 +83,7 @@ class McapRecorder(LeafSystem):
 
     def __init__(self, log: McapLog, sonars: dict, laser_scans=("multibeam",), coverage=(),
                  world=None, target=None, plan=None, section_input: bool = False,
-                 map_input: bool = False, tick: float = 0.1, coverage_period: float = 1.0,
+                 map_input: bool = False, water_input: bool = False, tick: float = 0.1, coverage_period: float = 1.0,
                  map_period: float = 10.0, mission_period: float = 0.5):
         super().__init__()
         self.log, self.tick = log, float(tick)
@@ -98,7 +100,8 @@ class McapRecorder(LeafSystem):
         self._templates = dict(
             tf=m.tf_template(m.MAP, (m.BASE, m.TRUTH)), odometry=m.odometry_template(m.BASE),
             odometry_truth=m.odometry_template(m.TRUTH), reference=m.pose_template(m.MAP),
-            thrust=m.array_template(THRUSTER_NAMES))
+            thrust=m.array_template(THRUSTER_NAMES),
+            current=m.array_template(("east_mps", "north_mps", "up_mps")))
         self._clouds = {name: m.CloudWriter(name) for name in self.sonars}
         log.add_metadata("sensors", {f"{name}_max_range_m": repr(float(r))
                                      for name, (_, _, r) in self.sonars.items()})
@@ -119,6 +122,8 @@ class McapRecorder(LeafSystem):
             "section", AbstractValue.Make(np.zeros((0, 3)))) if section_input else None)
         self.map_input = (self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(
             0.5))) if map_input else None)
+        self.water_input = (self.DeclareVectorInputPort("water", Water.size()) if water_input
+                            else None)
         # The estimated state at the last `depth` ticks: rows [time, 12 state], NaN: none yet.
         self._poses = self.DeclareDiscreteState(np.full(depth * 13, np.nan))
         self._sequences = self.DeclareDiscreteState(np.zeros(max(len(self.sonars), 1)))
@@ -203,6 +208,8 @@ class McapRecorder(LeafSystem):
         self._write_fixed("reference", (*reference.position,
                                         *m.quaternion_rpy(0.0, 0.0, reference.yaw)), ns, t)
         self._write_fixed("thrust", self.thrust_input.Eval(context), (), t)
+        if self.water_input is not None:
+            self._write_fixed("current", Water(self.water_input.Eval(context)).velocity, (), t)
         if tick % self._every["mission"] == 0:
             self.log.write(TOPICS["leg"], "std_msgs/msg/Int32", m.scalar(
                 "std_msgs/msg/Int32", int(LegSignal(self.leg_input.Eval(context)).index)), t)
@@ -246,17 +253,17 @@ class McapRecorder(LeafSystem):
 
 def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supervisor,
                       sonars: dict, returns: dict, coverage: dict, site, plan=None,
-                      mapper=None, replanner=None) -> McapRecorder:
+                      mapper=None, replanner=None, ocean=None) -> McapRecorder:
     """Adds an `McapRecorder` writing into `log` and wires it: `vehicle` (`VehicleSystems`),
     the `estimated` state and `reference` ports, the `supervisor`, `sonars` ({name: a
     `RangeSonar` or the DVL, for its mount and period}) with their `returns` ports,
     `coverage` ({name: a `CoverageRecorder`}), the `site`'s world and target, the nominal
-    `plan` (a `Path`), the `mapper` and the `replanner` when there are."""
+    `plan` (a `Path`), the `mapper`, the `replanner` and the `ocean` when there are."""
     recorder = builder.AddNamedSystem("mcap_recorder", McapRecorder(
         log, {name: _mount_and_period(sonar) for name, sonar in sonars.items()},
         coverage=tuple(coverage), world=site.world, target=site.target_mesh,
         plan=None if plan is None else plan.points, section_input=replanner is not None,
-        map_input=mapper is not None))
+        map_input=mapper is not None, water_input=ocean is not None))
     builder.Connect(vehicle.dynamics.state_output, recorder.state_input)
     builder.Connect(estimated, recorder.estimated_state_input)
     builder.Connect(reference, recorder.reference_input)
@@ -271,6 +278,8 @@ def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supe
         builder.Connect(mapper.map_output, recorder.map_input)
     if replanner is not None:
         builder.Connect(replanner.section_output, recorder.section_input)
+    if ocean is not None:
+        builder.Connect(ocean.water_output, recorder.water_input)
     return recorder
 
 
