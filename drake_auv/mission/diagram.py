@@ -199,18 +199,15 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
         for name, port in (("map", mapper.map_output), ("nominal", source.get_output_port())):
             if replanner.HasInputPort(name):
                 builder.Connect(port, replanner.GetInputPort(name))
-        builder.Connect(replanner.GetOutputPort("status"), supervisor.replanner_status_input)
         behaviours["replan"] = replanner
     else:
         replanner = None
     if pilot is not None:
-        builder.Connect(pilot.status_output, supervisor.autopilot_status_input)
         behaviours["autopilot"] = pilot
     if plan.explore_legs:
         explorer = builder.AddNamedSystem("view_planner", ViewPlanner(
             plan.explore_legs, period=EXPLORE_PERIOD, seed=spec.seed))
         builder.Connect(mapper.map_output, explorer.map_input)
-        builder.Connect(explorer.status_output, supervisor.explorer_status_input)
         if dvl is not None:
             builder.Connect(dvl.seabed_output, explorer.seabed_input)
         behaviours["explore"] = explorer
@@ -218,6 +215,7 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
         builder.Connect(estimated, system.GetInputPort("estimated_state"))
         builder.Connect(supervisor.leg_output, system.GetInputPort("leg"))
         builder.Connect(system.GetOutputPort("reference"), switch.GetInputPort(name))
+        builder.Connect(system.GetOutputPort("status"), supervisor.status_inputs[name])
     if plan.profiler_planes:
         builder.Connect(supervisor.leg_output, profiler.leg_input)
     builder.Connect(supervisor.response_reference_output, switch.GetInputPort("response"))
@@ -225,7 +223,6 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
         builder.Connect(port, supervisor.returns_inputs[name])
     builder.Connect(switch.get_output_port(), supervisor.reference_input)
     builder.Connect(mapper.map_output, supervisor.map_input)
-    builder.Connect(path_reference.status_output, supervisor.path_status_input)
     builder.Connect(estimated, supervisor.state_input)
     builder.Connect(supervisor.behaviour_output, switch.get_port_selector_input_port())
     builder.Connect(switch.get_output_port(), vehicle.tracker.reference_input)

@@ -262,24 +262,24 @@ def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:
             duration = step.max_time_s or (margin * nominal.times(survey_speed)[-1]
                                            + TIME_SLACK)
             if step.replanning:
-                index = add(Leg("survey", k, "replan", "replanner", duration))
+                index = add(Leg("survey", k, "replan", "finished", duration))
                 replan_legs.append(index)
             else:
-                index = add(Leg("survey", k, "path", "path_end", duration))
+                index = add(Leg("survey", k, "path", "finished", duration))
                 path_legs[index] = PathLeg("nominal", speed=survey_speed)
             position = nominal.points[-1]
         elif isinstance(step, FlyStep):
             mission = flown[k]
             duration = step.max_time_s or (margin * mission_duration(
                 mission.legs, position, step.speed) + TIME_SLACK)
-            index = add(Leg("survey", k, "autopilot", "autopilot", duration))
+            index = add(Leg("survey", k, "autopilot", "finished", duration))
             autopilot_legs[index] = mission
             last = mission.legs[-1]
             position = np.array([*last.end, -last.z if last.z_mode == "depth" else
                                  float(site.prior.elevation_at(*last.end)) + last.z])
         elif isinstance(step, ExploreStep):
             params = explore_parameters(step, site, spec, label, f"steps[{k}].explore")
-            index = add(Leg("explore", k, "explore", "explorer", step.max_time_s))
+            index = add(Leg("explore", k, "explore", "finished", step.max_time_s))
             explore_legs[index] = params
             position = 0.5 * (np.asarray(params.region[:3]) + params.region[3:])
     if not legs:
