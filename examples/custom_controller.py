@@ -37,7 +37,8 @@ from drake_auv.mapping.mapper import OctreeMapper
 from drake_auv.mission.config import FollowStep, load_mission
 from drake_auv.mission.diagram import (SUPERVISOR_PERIOD, add_behaviours,
                                        add_coverage_recorders, add_sonars)
-from drake_auv.mission.plan import plan_mission, terrain_elevation
+from drake_auv.mission.plan import plan_mission
+from drake_auv.mission.steps.step import Wiring, terrain_elevation
 from drake_auv.mission.site import load_site
 from drake_auv.signals import BehaviourStatus, LegSignal, Reference, VehicleState
 from drake_auv.vehicle.diagram import add_girona500
@@ -117,8 +118,10 @@ def build(site, spec, plan, caster, follower=None):
                                     OctreeMapper(resolution=spec.replanner.voxel_m))
     builder.Connect(returns["multibeam"], mapper.multibeam_input)
     builder.Connect(returns["profiler"], mapper.profiler_input)
-    *_, supervisor, _ = add_behaviours(builder, vehicle, profiler, mapper, spec, plan, site,
-                                       estimated, returns, replanner=follower)
+    wiring = Wiring(builder, spec, plan, site, caster, vehicle, estimated, mapper, returns,
+                    profiler)
+    supervisor, *_ = add_behaviours(builder, wiring,
+                                    own=None if follower is None else {"replan": follower})
     camera, multibeam_coverage = add_coverage_recorders(
         builder, caster, vehicle, spec, site, site.max_range, multibeam)
     logs = (LogVectorOutput(vehicle.dynamics.state_output, builder, 0.1),
@@ -136,7 +139,7 @@ def fly(site, spec, plan, caster, follower=None, max_time: float | None = None) 
     simulator.AdvanceTo(max_time if max_time is not None else plan.budget)
     context = simulator.get_context()
     state_log, leg_log = (log.FindLog(context) for log in logs)
-    survey = plan.replan_legs[0]
+    survey = next(iter(plan.legs_of("replan")))
     legs = LegSignal(leg_log.data().T)
     started = legs.start_s[legs.index == survey]
     outcome = supervisor.outcomes(supervisor.GetMyContextFromRoot(context))[survey]
@@ -189,7 +192,7 @@ def main(argv=None) -> int:
     plan = plan_mission(spec, site)
     caster = RayCaster(site.world)
     follower = ConstantAltitudeFollower(plan.nominal, terrain_elevation(site), args.altitude,
-                                        plan.survey_speed, plan.replan_legs)
+                                        plan.survey_speed, tuple(plan.legs_of("replan")))
     follower.set_name("constant_altitude")
     rows = {"built-in: STOMP replanner": fly(site, spec, plan, caster, None, args.max_time),
             f"yours: constant altitude {args.altitude:g} m":

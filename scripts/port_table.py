@@ -105,7 +105,7 @@ def builder_rows() -> list[str]:
 
     rows = []
     for function in (add_girona500, diagram.add_faults, diagram.add_sonars,
-                     diagram.add_autopilot, diagram.add_behaviours,
+                     diagram.add_behaviours,
                      diagram.add_coverage_recorders, add_mission_view,
                      diagram.build_mission_diagram):
         parameters = ", ".join(inspect.signature(function).parameters)

@@ -16,7 +16,7 @@ from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mapping.scan_log import SOURCES, ScanLog
 from drake_auv.mission.config import MissionFileError, load_mission, mission_from_dict
 from drake_auv.mission.plan import plan_mission
-from drake_auv.mission.spec import NO_RETURN_CLEAR_M
+from drake_auv.mission.steps.explore import NO_RETURN_CLEAR_M
 from drake_auv.mission.site import load_site
 
 from test_exploration import scanned_wall  # noqa: E402  (tests/ is on sys.path)
