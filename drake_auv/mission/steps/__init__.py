@@ -14,7 +14,7 @@ from importlib import import_module
 
 from drake_auv.mission.steps.step import MissionStep
 
-BUILT_IN = ("plan", "follow", "survey", "fly", "explore")  # modules of this package
+BUILT_IN = ("plan", "follow", "survey", "fly", "explore", "hover")  # modules of this package
 
 STEPS: dict[str, type[MissionStep]] = {}  # step kind (its file key) -> MissionStep
 
