@@ -167,7 +167,7 @@ def test_a_mission_on_the_users_own_files_in_utm(tmp_path):
     assert "mission_supervisor" in dot
     # every vector port labelled with its signal's fields, the logs' inputs too
     assert dot.count(">reference [x y z yaw vx vy vz yaw_rate]<") >= 2
-    assert ">leg [index start_s]<" in dot and ">status [leg end_s]<" in dot
+    assert ">leg [index start_s]<" in dot and ">status [leg finished progress]<" in dot
     assert ">data [mode cause start_s x0 y0 z0 yaw0 x1 y1 z1]<" in dot  # the response log
 
 
