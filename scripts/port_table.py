@@ -2,8 +2,8 @@
 
 `port_rows()` builds the boulder mission's Diagram with every fault spliced in and a live
 scene (so the fault gates and the viewers are there too), adds the systems only a fly step
-brings (the DVL and the autopilot pilot) and the one an explore step brings (the view
-planner), and walks every drake_auv system's ports: its name,
+brings (the DVL and the autopilot pilot), the one an explore step brings (the view
+planner) and a hover step's (the station keeper), and walks every drake_auv system's ports: its name,
 direction and type (a vector's size, an abstract port's value class). The meaning of each port
 is the doc's own column, kept by (system, direction, port); a port without a row gets an empty
 meaning, so the table the code gives differs from the committed one until its row is written.
@@ -58,6 +58,7 @@ def _systems():
     from drake_auv.mission.diagram import build_mission_diagram
     from drake_auv.mission.plan import plan_mission
     from drake_auv.mission.site import load_site
+    from drake_auv.mission.steps.hover import station_keeper
     from drake_auv.sonar.altimeter import DvlAltimeter
     from drake_auv.visualization import Scene
 
@@ -70,7 +71,8 @@ def _systems():
                          ("dvl (fly, explore steps)", DvlAltimeter(handles.caster)),
                          ("autopilot (fly steps)", AutopilotPilot({})),
                          ("view_planner (explore steps)", ViewPlanner(
-                             {0: ExploreParameters(region=(0.0, 0.0, -2.0, 1.0, 1.0, -1.0))}))]:
+                             {0: ExploreParameters(region=(0.0, 0.0, -2.0, 1.0, 1.0, -1.0))})),
+                         ("station_keeper (hover steps)", station_keeper()({}))]:
         if type(system).__module__.startswith("drake_auv"):
             found.setdefault(type(system).__name__, ([], system))[0].append(name)
     return [(cls, names, system) for cls, (names, system) in found.items()], len(site.target_faces)

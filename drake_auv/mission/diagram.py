@@ -299,5 +299,6 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     diagram = builder.Build()
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, supervisor,
-                             camera, multibeam_coverage, logs, faults, behaviours, wiring._dvl)
+                             camera, multibeam_coverage, logs, faults, behaviours,
+                             wiring.added.get("dvl"))
     return diagram, handles

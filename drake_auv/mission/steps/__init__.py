@@ -38,8 +38,12 @@ def step_specs() -> dict[str, type]:
 
 
 def behaviour_step(name: str) -> type[MissionStep]:
-    """The step kind whose behaviour is called `name`."""
-    return next(step for step in STEPS.values() if step.behaviour == name)
+    """The step kind whose behaviour is called `name`; ValueError when none is."""
+    for step in STEPS.values():
+        if step.behaviour == name:
+            return step
+    raise ValueError(f"no registered step kind flies the behaviour {name!r} (behaviours: "
+                     f"{', '.join(s.behaviour for s in STEPS.values() if s.behaviour)})")
 
 
 for _module in BUILT_IN:

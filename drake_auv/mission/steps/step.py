@@ -119,6 +119,7 @@ class Wiring:
             pencil-beam profiler.
         nominal: the off-line plan's source port (None without a plan step).
         logs: {name: VectorLogSink} the runner spools (a step adds its behaviour's).
+        added: {name: system} of the sensors added on demand (`dvl()`).
     """
 
     builder: object
@@ -133,21 +134,21 @@ class Wiring:
     profiler: object
     nominal: object = None
     logs: dict = field(default_factory=dict)
-    _dvl: object = None
+    added: dict = field(default_factory=dict)
 
     def dvl(self):
         """The DVL (added on first call: ray casting on the true world, realistic unless the
         sonars are clean; its beams feed the mapper's `dvl_returns`)."""
-        if self._dvl is None:
+        if "dvl" not in self.added:
             from drake_auv.sonar.altimeter import DvlAltimeter
 
-            dvl = self._dvl = self.builder.AddNamedSystem("dvl", DvlAltimeter(
+            dvl = self.added["dvl"] = self.builder.AddNamedSystem("dvl", DvlAltimeter(
                 self.caster, noise=self.spec.sonar_noise.to_noise() is not None,
                 seed=self.spec.seed + 2))
             self.builder.Connect(self.vehicle.dynamics.state_output, dvl.true_state_input)
             self.builder.Connect(self.estimated, dvl.estimated_state_input)
             self.builder.Connect(dvl.returns_output, self.mapper.dvl_input)
-        return self._dvl
+        return self.added["dvl"]
 
     def log(self, name: str, port, period: float) -> None:
         """Logs `port` every `period` s as `logs[name]`."""
