@@ -8,6 +8,8 @@ import importlib
 import sys
 import warnings
 
+from drake_auv import __version__
+
 COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "reconstruct",
             "campaign")
 
@@ -16,6 +18,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="drake-auv",
         description="3D coverage planning and simulated inspection for a hovering AUV.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     subparsers = parser.add_subparsers(dest="command", required=True)
     for name in COMMANDS:
         importlib.import_module(f"drake_auv.commands.{name}").add_parser(subparsers)

@@ -28,7 +28,7 @@ from drake_auv.geometry.raycast import RayCaster
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 
-DATA_DIR = FilePath(__file__).resolve().parents[1].parent / "shared" / "data"
+DATA_DIR = FilePath(__file__).resolve().parent / "data"
 MONTEREY_TILE = "MontereyBay.R_-121.825_-121.815_36.790_36.800.epsg3857.tif"
 
 
@@ -271,8 +271,8 @@ def _monterey_geometry():
     from drake_auv.terrain.readers import read_bathymetry
     path = DATA_DIR / "monterey" / MONTEREY_TILE
     if not path.exists():
-        raise FileNotFoundError(f"monterey scenario: tile {path} not found (expected the "
-                                "shared data directory beside the repository)")
+        raise FileNotFoundError(f"monterey scenario: tile {path} not found (the package's "
+                                "data folder is incomplete: reinstall drake_auv)")
     mesh = bathymetry_to_mesh(read_bathymetry(path))
     return _frozen(mesh.vertices, mesh.faces, np.ones(len(mesh.faces), bool))
 

@@ -2,7 +2,7 @@
 
     python examples/export_and_fly.py [--size 300] [--omega 10] [--seed 0] [-o out/export_and_fly]
 
-The site is a `--size` m square of a canyon wall of a shared Monterey tile
+The site is a `--size` m square of a canyon wall of a shipped Monterey tile
 (`drake_auv.terrain.site_files`: a 1 m bicubic world, its target, the 10 m survey as the
 prior, in UTM zone 10N), flown with a 2 m prior-map error, navigation drift and realistic
 sonars. Three missions on the same site and seed:
@@ -33,12 +33,12 @@ from drake_auv.mission.report import summarise, write_outputs as write_report  #
 from drake_auv.mission.runner import run_mission  # noqa: E402
 from drake_auv.mission.site import load_site  # noqa: E402
 from drake_auv.planning.export import write_outputs  # noqa: E402
+from drake_auv.scenarios import DATA_DIR  # noqa: E402
 from drake_auv.signals import VehicleState  # noqa: E402
 from drake_auv.terrain.readers import read_bathymetry  # noqa: E402
 from drake_auv.terrain.site_files import write_site_files  # noqa: E402
 
-TILE = (Path(__file__).resolve().parents[1].parent / "shared" / "data" / "monterey"
-        / "MontereyBay.R_-121.815_-121.805_36.790_36.800.epsg3857.tif")
+TILE = DATA_DIR / "monterey" / "MontereyBay.R_-121.815_-121.805_36.790_36.800.epsg3857.tif"
 CORNER = (150.0, 840.0)  # south-west corner of the region, the tile's world frame (m): the wall
 
 

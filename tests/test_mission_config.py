@@ -172,7 +172,7 @@ def test_paths_resolve_against_the_file(tmp_path):
     (_with(steps__0__plan__slice_count=2.5), "steps[0].plan.slice_count: 2.5 is not an integer"),
     (_with(replanner__K="ten"), "replanner.K: 'ten' is not a number; allowed: an integer in"),
     (_with(steps__2__survey__replanning="yes please"), "replanning: 'yes please' is not a boolean"),
-    (_with(seed=-1), "seed: -1 is out of range; allowed: an integer >= 0"),
+    (_with(seed=-1), "seed: -1 is out of range; allowed: an integer in [0, 2^63 - 1]"),
     (_with(site=dict(scenario="boulder", world="w.ply")),
      "site: needs exactly one of scenario, world or tile"),
     (_with(site=dict(world="w.ply", prior_error_m=6)),

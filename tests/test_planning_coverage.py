@@ -3,7 +3,6 @@ terrain, random seabeds (hypothesis), clearance checked against the exact triang
 bad input."""
 
 import json
-from pathlib import Path as FilePath
 
 import numpy as np
 import pytest
@@ -16,12 +15,12 @@ from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.export import path_to_geojson
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.path import Path
+from drake_auv.scenarios import DATA_DIR as DATA
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.synthetic import caldera_site, random_seabed
 
-DATA = FilePath(__file__).resolve().parents[1].parent / "shared" / "data"
 MONTEREY = sorted((DATA / "monterey").glob("*.tif"))
 
 
@@ -201,7 +200,7 @@ def test_random_seabeds_are_covered_safely(seed, relief, smoothness, omega, hole
     assert np.all(np.isfinite(plan.path.points))
 
 
-@pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
+@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
 def test_monterey_tiles(tile):
     bathy = read_bathymetry(tile)

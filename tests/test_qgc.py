@@ -14,17 +14,17 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from drake_auv.autopilot.ardusub import replay_ardusub
-from drake_auv.autopilot.replay import clearance_report
 from drake_auv.autopilot.items import LocalLeg, localise
+from drake_auv.autopilot.replay import clearance_report
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.qgc import admitted_cross_track, read_qgc_plan, write_qgc
 from drake_auv.planning.surface import TerrainSurface
+from drake_auv.scenarios import DATA_DIR as DATA
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.synthetic import caldera_site, random_seabed
 
-DATA = FilePath(__file__).resolve().parents[1] / ".." / "shared" / "data"
 MONTEREY = sorted((DATA / "monterey").glob("*.tif"))
 
 
@@ -182,7 +182,7 @@ def monterey_plans():
             for t in MONTEREY for omega in (10.0, 20.0)}
 
 
-@pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
+@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("frames", ["terrain", "depth"])
 def test_monterey_missions_fit_and_fly_safe(tmp_path, monterey_plans, frames, mavsdk_importer):
     for (tile, omega), plan in monterey_plans.items():

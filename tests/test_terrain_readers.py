@@ -1,7 +1,6 @@
 """Bathymetry readers: every supported format, the Monterey tiles' quirks, bad files."""
 
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -9,10 +8,10 @@ import rasterio
 from rasterio.transform import Affine
 from scipy.io import netcdf_file
 
+from drake_auv.scenarios import DATA_DIR as DATA
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.readers import read_bathymetry
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 MONTEREY = sorted((DATA / "monterey").glob("*.tif"))
 EARTH_RADIUS = 6378137.0
 
@@ -132,7 +131,7 @@ def test_missing_and_unreadable_files(tmp_path):
         read_bathymetry(nodata)
 
 
-@pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
+@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
 def test_monterey_tile_quirks(tile):
     bathy = read_bathymetry(tile)

@@ -1,15 +1,14 @@
 """Region of interest: rectangles and polygons in map coordinates."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from drake_auv.scenarios import DATA_DIR as DATA
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.roi import crop_to_roi, parse_roi
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 MONTEREY = sorted((DATA / "monterey").glob("*.tif"))
 
 
@@ -56,7 +55,7 @@ def test_roi_all_no_data():
         crop_to_roi(Bathymetry(z, (1.0, 1.0), (100.0, 50.0)), (100.0, 50.0, 105.0, 55.0))
 
 
-@pytest.mark.skipif(not MONTEREY, reason="shared Monterey tiles not present")
+@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 def test_monterey_roi_in_pseudo_mercator():
     bathy = read_bathymetry(MONTEREY[0])
     corner = bathy.world_to_crs([[0.0, 0.0]])[0]

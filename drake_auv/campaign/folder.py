@@ -52,7 +52,8 @@ def locked(out):
     out = Path(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
-        handle = open(out / LOCK_FILE, "a")
+        handle = open(os.open(out / LOCK_FILE, os.O_WRONLY | os.O_APPEND | os.O_CREAT
+                              | os.O_NOFOLLOW, 0o666), "a")
     except OSError as err:
         raise CampaignError(f"-o {out}: cannot write there ({one_line(err)}); allowed: a "
                             "writable folder") from None

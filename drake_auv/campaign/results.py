@@ -18,6 +18,7 @@ import os
 from pathlib import Path
 
 from drake_auv.campaign.task import METRICS, TIMING
+from drake_auv.output_files import open_replacing
 
 
 def columns(vary_keys) -> list[str]:
@@ -42,6 +43,9 @@ class ResultsFile:
         self.vary_keys = list(vary_keys)
         self.columns = columns(self.vary_keys)
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        if self.path.is_symlink():
+            raise ValueError(f"{self.path} is a symbolic link; allowed: a regular file or none "
+                             "(nothing is read or written through a link)")
         if not self.path.exists() or self.path.stat().st_size == 0:
             self._append(",".join(self.columns) + "\n")
             return
@@ -105,21 +109,13 @@ class ResultsFile:
     def _rewrite(self, rows) -> None:
         """Replaces the file by its header and `rows` (text): a synced temporary file renamed
         over it, so a crash leaves the old file or the new one, never a mix."""
-        temporary = self.path.with_name(self.path.name + ".tmp")
-        with open(temporary, "w", newline="") as f:
+        with open_replacing(self.path, "w", sync=True, newline="") as f:
             f.write(",".join(self.columns) + "\n")
             f.writelines(self._line(r) for r in rows)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(temporary, self.path)
-        directory = os.open(self.path.parent, os.O_RDONLY)
-        try:
-            os.fsync(directory)
-        finally:
-            os.close(directory)
 
     def _append(self, text: str) -> None:
-        with open(self.path, "a", newline="") as f:
+        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+        with open(fd, "a", newline="") as f:
             f.write(text)
             f.flush()
             os.fsync(f.fileno())

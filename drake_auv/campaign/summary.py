@@ -7,12 +7,13 @@ and the real-time factors. Failed runs count in `runs` and `failed` only.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+
+from drake_auv.output_files import replacing, write_json, write_text
 
 QUANTILES = (0.0, 0.05, 0.5, 0.95, 1.0)
 Z95 = 1.959964  # standard normal quantile of 0.975
@@ -190,8 +191,9 @@ def write_summary(rows: list[dict], vary_keys, out, meta: dict, dpi: int = 110) 
     """Writes summary.json, summary.md and the plots into `out`; returns the summary."""
     out = Path(out)
     summary = summarise_campaign(rows, vary_keys, meta)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (out / "summary.md").write_text(summary_markdown(summary))
+    write_json(out / "summary.json", summary)
+    write_text(out / "summary.md", summary_markdown(summary))
     for name, fig in figures(rows, vary_keys).items():
-        fig.savefig(out / name, dpi=dpi, bbox_inches="tight")
+        with replacing(out / name) as temporary:
+            fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
     return summary

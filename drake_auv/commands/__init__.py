@@ -9,8 +9,10 @@ def add_recording_options(parser, playback_speed: float, realtime: bool = True) 
                         help="the HTML animation plays this many times faster than real time "
                              f"(default {playback_speed:g})")
     if realtime:
-        parser.add_argument("--realtime-rate", type=float, default=0.0,
-                            help="pace the simulation to watch it live (1 = real time; "
-                                 "default 0 = as fast as possible)")
+        parser.add_argument("--realtime", "--realtime-rate", dest="realtime_rate", type=float,
+                            default=0.0, metavar="R",
+                            help="pace the simulation to watch it live at R times real time "
+                                 "(default 0 = as fast as possible; --realtime-rate is its "
+                                 "older spelling)")
     parser.add_argument("--no-html", action="store_true", help="skip the Meshcat recording")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")

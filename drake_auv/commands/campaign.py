@@ -16,6 +16,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from drake_auv.output_files import write_json
+
 CAMPAIGN_FILE = "campaign.json"
 
 
@@ -66,7 +68,7 @@ def _check_same_campaign(out: Path, meta: dict, write: bool = True) -> None:
                                  f"command's); allowed: the same mission, --set and --vary "
                                  "keys, or another -o folder")
     if write:
-        path.write_text(json.dumps(meta, indent=2) + "\n")
+        write_json(path, meta)
 
 
 def run(args) -> int:

@@ -70,7 +70,8 @@ def add_parser(subparsers) -> None:
         description="The GIRONA 500 tracks a constant-altitude lawnmower (the planner's "
                     "plan_lawnmower) over a random smooth seabed; writes mission.html (Meshcat "
                     "recording) and tracking_error.png.")
-    parser.add_argument("--out", default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
+    parser.add_argument("-o", "--out", default=DEFAULT_OUT,
+                        help=f"output folder (default {DEFAULT_OUT})")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic seabed")
     parser.add_argument("--speed", type=float, default=0.5, help="survey speed, m/s (default 0.5)")
     parser.add_argument("--extent", type=float, nargs=2, default=(50.0, 30.0),

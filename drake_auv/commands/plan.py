@@ -87,14 +87,15 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--no-3d-metrics", action="store_true",
                         help="skip the occluded 3D metrics on the grid's mesh (seconds on large "
                              "grids)")
-    parser.add_argument("-o", "--outdir", required=True, help="output directory")
+    parser.add_argument("-o", "--out", "--outdir", dest="out", required=True,
+                        help="output folder (--outdir is its older spelling)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     from drake_auv.commands.outputs import MiB, output_folder
 
-    output_folder(args.outdir, "-o", 20 * MiB)  # path.csv, reports, figures, exports
+    output_folder(args.out, "-o", 20 * MiB)  # path.csv, reports, figures, exports
     from drake_auv.planning.coverage_plan import plan_coverage
     from drake_auv.planning.export import parse_exports, table3_markdown, write_outputs
     from drake_auv.terrain.roi import parse_roi
@@ -134,10 +135,10 @@ def run(args) -> int:
                          min_area=args.min_area, min_depth=args.min_depth, no_go=no_go,
                          order=args.order,
                          progress=True)
-    files = write_outputs(plan, args.outdir, figures=not args.no_figures, progress=True,
+    files = write_outputs(plan, args.out, figures=not args.no_figures, progress=True,
                           exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
                           metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
                           ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d)
     print(table3_markdown(plan.metrics))
-    print(f"wrote {len(files)} files to {args.outdir}")
+    print(f"wrote {len(files)} files to {args.out}")
     return 0

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path as FilePath
 
+from drake_auv.output_files import replacing
 from drake_auv.reconstruction.surface import (DEPTH_RANGE, K_RANGE, OUTLIERS, OUTLIERS_RANGE,
                                               SUPPORT, SUPPORT_RANGE, TRIM_RANGE)
 
@@ -117,8 +118,10 @@ def run(args) -> int:
     if args.figure:
         from drake_auv.reconstruction.figures import fig_reconstruction
 
-        fig_reconstruction(panels, vmax=ERROR_VMAX).savefig(args.figure, dpi=110,
-                                                            bbox_inches="tight")
-    mesh.export(args.out)
+        with replacing(args.figure) as temporary:
+            fig_reconstruction(panels, vmax=ERROR_VMAX).savefig(temporary, dpi=110,
+                                                                bbox_inches="tight")
+    with replacing(args.out) as temporary:
+        mesh.export(temporary)
     print(line)
     return 0

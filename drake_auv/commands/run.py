@@ -47,14 +47,39 @@ def add_mission_options(parser) -> None:
                         help="serve the scene on localhost while the mission flies (the URL is "
                              "printed first): the vehicle, the map, the leg and the replanner's "
                              "section as they change")
-    parser.add_argument("--realtime", type=float, default=1.0, metavar="R",
+    parser.add_argument("--realtime", type=float, default=None, metavar="R",
                         help="with --meshcat, fly at R times real time (default 1; 0 = as fast "
                              "as possible)")
+    parser.add_argument("--meshcat-port", type=int, default=None, metavar="PORT",
+                        help="with --meshcat, serve the live view on this port of localhost "
+                             f"({MESHCAT_PORTS[0]}-{MESHCAT_PORTS[1]}; default: the first free "
+                             "one from 7000)")
+
+
+MESHCAT_PORTS = (1024, 65535)
+
+
+def check_live_options(meshcat: bool, realtime, port) -> float:
+    """The live view's options, checked before any work; returns the pacing rate (1 by
+    default with --meshcat, 0 without)."""
+    if not meshcat:
+        for flag, value in (("--realtime", realtime), ("--meshcat-port", port)):
+            if value is not None:
+                raise ValueError(f"{flag} paces or serves the live view; allowed: with "
+                                 "--meshcat only")
+        return 0.0
+    if port is not None and not MESHCAT_PORTS[0] <= port <= MESHCAT_PORTS[1]:
+        raise ValueError(f"--meshcat-port must be in [{MESHCAT_PORTS[0]}, {MESHCAT_PORTS[1]}], "
+                         f"got {port}")
+    realtime = 1.0 if realtime is None else realtime
+    if not (math.isfinite(realtime) and realtime >= 0):
+        raise ValueError(f"--realtime must be >= 0 (0 = as fast as possible), got {realtime}")
+    return realtime
 
 
 def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         playback_speed: float = 20.0, progress: bool = True, meshcat: bool = False,
-        realtime: float = 1.0) -> dict:
+        realtime: float | None = None, meshcat_port: int | None = None) -> dict:
     """Loads, flies and reports `mission` into `out`; returns the report's summary. The
     mission and its site are checked before the simulation's modules (Drake, matplotlib) are
     imported, so a bad file is reported at once. With `meshcat` the scene is served on
@@ -62,8 +87,7 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     The report's `timing` has the end-to-end figures: `setup_s` is everything of this call
     before the outputs but the simulation."""
     start = time.perf_counter()
-    if meshcat and not (math.isfinite(realtime) and realtime >= 0):
-        raise ValueError(f"--realtime must be >= 0 (0 = as fast as possible), got {realtime}")
+    realtime = check_live_options(meshcat, realtime, meshcat_port)
     from drake_auv.mission.config import load_mission
     from drake_auv.mission.site import check_against_site, load_site
 
@@ -81,14 +105,14 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     if html or meshcat:
         from drake_auv.visualization import Scene
 
-        scene = Scene(live=meshcat)
+        scene = Scene(live=meshcat, port=meshcat_port)
         if meshcat:
             print(f"live view: {scene.meshcat.web_url()}", flush=True)
         prepare_scene(scene, site, plan)
         if html:
             scene.start_recording(playback_speed=playback_speed, live=meshcat)
     result = run_mission(spec, site, scene=scene, progress=progress, plan=plan,
-                         realtime_rate=realtime if meshcat else 0.0)
+                         realtime_rate=realtime)
     setup_s = time.perf_counter() - start - result.wall_s
 
     def finish(out):
@@ -104,7 +128,8 @@ RUN_NEEDS_BYTES = 300 * MiB  # a dive's outputs: the boulder demo writes 135 MB 
 def run(args) -> int:
     output_folder(args.out, "-o", RUN_NEEDS_BYTES)
     summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
-                  args.playback_speed, not args.quiet, args.meshcat, args.realtime)
+                  args.playback_speed, not args.quiet, args.meshcat, args.realtime,
+                  args.meshcat_port)
     c = summary["coverage"]
     print(f"{summary['mission']['name']}: multibeam coverage {100 * c['multibeam']:.1f} %, "
           f"camera {100 * c['camera']:.1f} %, minimum clearance "
@@ -115,6 +140,9 @@ def run(args) -> int:
     print(f"end to end {t['total_s']:.1f} s: setup {t['setup_s']:.1f} s, simulation "
           f"{t['simulation_s']:.1f} s ({t['real_time_factor']:.0f}x real time), outputs "
           f"{t['outputs_s']:.1f} s; peak memory {t['peak_rss_mb']:.0f} MiB")
+    if args.meshcat and not args.no_html:
+        print(f"the live view ends with this process; replay the dive any time from "
+              f"{FilePath(args.out) / 'mission.html'}")
     return 0
 
 

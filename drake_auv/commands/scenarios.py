@@ -12,6 +12,8 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.output_files import open_replacing, replacing
+
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser("scenarios", help="list the named sites, or show/export one",
@@ -62,7 +64,8 @@ def run(args) -> int:
     if args.world:
         out = FilePath(args.world)
         out.parent.mkdir(parents=True, exist_ok=True)
-        sc.world.export(out)
+        with replacing(out) as temporary:
+            sc.world.export(temporary)
         print(f"  wrote world mesh to {out}")
     return 0
 
@@ -70,7 +73,9 @@ def run(args) -> int:
 def _write_prior(bathy, out: FilePath) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     if out.suffix.lower() == ".npz":
-        np.savez(out, z=bathy.z, spacing=np.array(bathy.spacing), origin=np.array(bathy.origin))
+        with open_replacing(out, "wb") as f:
+            np.savez(f, z=bathy.z, spacing=np.array(bathy.spacing),
+                     origin=np.array(bathy.origin))
     else:
         from drake_auv.terrain.readers import write_geotiff
         write_geotiff(bathy, out)

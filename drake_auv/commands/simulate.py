@@ -14,6 +14,7 @@ from pathlib import Path as FilePath
 import numpy as np
 
 from drake_auv.commands import add_recording_options
+from drake_auv.output_files import replacing
 from drake_auv.signals import Reference, VehicleState
 
 DEFAULT_OUT = "out/simulate"
@@ -102,8 +103,9 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     if scene is not None:
         scene.write_html(out_dir / "mission.html")
     plot_tracking_error(result, out_dir / "tracking_error.png")
-    np.savetxt(out_dir / "state.csv", np.column_stack([times, state.T]), delimiter=",",
-               fmt="%.5f", header=",".join(("t", *VehicleState.get_fields())), comments="")
+    with replacing(out_dir / "state.csv") as temporary:
+        np.savetxt(temporary, np.column_stack([times, state.T]), delimiter=",", fmt="%.5f",
+                   header=",".join(("t", *VehicleState.get_fields())), comments="")
     return result
 
 
@@ -155,7 +157,8 @@ def plot_tracking_error(result: FlightResult, filename) -> None:
                  f"after the first segment")
     ax.grid(alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
-    fig.savefig(filename, dpi=120)
+    with replacing(filename) as temporary:
+        fig.savefig(temporary, dpi=120)
     plt.close(fig)
 
 
@@ -188,7 +191,8 @@ def add_parser(subparsers) -> None:
         description="Flies a path (CSV from `drake-auv plan` or Path.to_csv) with the simulated "
                     "GIRONA 500 and writes a Meshcat HTML recording and a tracking-error plot.")
     parser.add_argument("path_csv", help="path CSV: x,y,z,heading,sensor_x,sensor_y,sensor_z,label")
-    parser.add_argument("--out", default=DEFAULT_OUT, help=f"output folder (default {DEFAULT_OUT})")
+    parser.add_argument("-o", "--out", default=DEFAULT_OUT,
+                        help=f"output folder (default {DEFAULT_OUT})")
     parser.add_argument("--speed", type=float, default=0.5, help="survey speed, m/s (default 0.5)")
     parser.add_argument("--heading-bias-deg", type=float, default=0.0,
                         help="compass bias of the dead-reckoning navigation, degrees (default 0)")

@@ -81,7 +81,7 @@ def view_gains(grid: LabelGrid, positions, rays, max_range: float,
 
 
 def scores(strategy: str, gains: np.ndarray, distance: np.ndarray, speed: float,
-           travel_weight: float, seed: int) -> np.ndarray:
+           travel_weight: float, seed: int | np.random.SeedSequence) -> np.ndarray:
     """(c,) ranking score of each candidate from its gain (m^2) and travel length (m),
     larger is better (see the module)."""
     if strategy not in STRATEGIES:

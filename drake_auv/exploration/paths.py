@@ -188,7 +188,7 @@ def _matrices(num_points: int) -> StompMatrices:
 def plan_path(travel: TravelField, goal, spacing: float = 1.0,
               params: StompParameters = StompParameters(num_rollouts=10, max_iterations=30,
                                                         noise_std=0.5),
-              seed: int = 0) -> np.ndarray | None:
+              seed: int | np.random.SeedSequence = 0) -> np.ndarray | None:
     """(N, 3) path from the vehicle to `goal` (m): the grid search's, smoothed by STOMP
     against its cost; None when the goal is unreachable or the path (smoothed or not) comes
     within `KEEP` clearances of an occupied cell centre or half a clearance of the floor, or

@@ -30,6 +30,7 @@ from drake_auv.exploration.frontiers import (FREE, MAX_Z, OCCUPIED, UNKNOWN, Lab
 from drake_auv.exploration.gains import STRATEGIES, fan_rays, scores, view_gains, view_yaw
 from drake_auv.exploration.paths import PathCost, TravelField, path_clear, plan_path
 from drake_auv.params import param, validate
+from drake_auv.random_streams import child
 
 _FACE = ndimage.generate_binary_structure(3, 1)
 VISITED_RADIUS = 3.0  # m, around a reached target where no candidate is chosen again
@@ -161,12 +162,13 @@ def approach_point(params: ExploreParameters, position) -> np.ndarray:
 
 
 def plan_view(octree_map, position, params: ExploreParameters, current: Target | None,
-              seed: int = 0, previous: LabelGrid | None = None, rays=None,
-              visited=None, yaw: float = 0.0, current_path=None, returns=None) -> ViewStep:
+              seed: int | np.random.SeedSequence = 0, previous: LabelGrid | None = None,
+              rays=None, visited=None, yaw: float = 0.0, current_path=None,
+              returns=None) -> ViewStep:
     """One planning step from the vehicle at `position` (3,) towards `current` (see the
-    module); `seed` draws the random strategy and STOMP's rollouts; `previous`: the last
-    step's grid (`ViewStep.grid`) and `rays` the beams inserted since (`scan_rays`), so
-    only the cells they touched are read again, and `returns` the multibeam's return points
+    module); `seed` (an int or a `SeedSequence`): its child 0 draws the random strategy,
+    child 1 STOMP's rollouts; `previous`: the last step's grid (`ViewStep.grid`) and `rays`
+    the beams inserted since (`scan_rays`), so only the cells they touched are read again, and `returns` the multibeam's return points
     and beam directions since (`frontiers.multibeam_returns`: the faces it has seen);
     `visited` (v, 3): the targets reached before, m (a candidate within `VISITED_RADIUS` of one is not chosen again: what its view
     promised and did not give, behind rock or below the floor, it will not give later);
@@ -218,7 +220,7 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
     gains = view_gains(grid, positions, rays, params.max_range, surface_mask)
     lengths = travel.lengths(positions)
     score = scores(params.strategy, gains, np.where(np.isfinite(lengths), lengths, 1e6),
-                   params.speed, params.travel_weight, seed)
+                   params.speed, params.travel_weight, child(seed, 0))
     useful = gains >= max(params.min_gain_m2, 1e-9)
     n = len(keep)
     if current is not None:
@@ -234,7 +236,7 @@ def plan_view(octree_map, position, params: ExploreParameters, current: Target |
                             coverage, False, grid, visited)
     order = [k for k in np.argsort(-score[:n], kind="stable") if useful[k]]
     for k in order[:5]:  # the best few whose path is clear
-        path = plan_path(travel, positions[k], seed=seed)
+        path = plan_path(travel, positions[k], seed=child(seed, 1))
         if path is not None:
             target = Target(positions[k], float(yaws[k]), looks_at[k])
             return ViewStep(target, path, float(gains[k]), n, len(frontiers.kinds),

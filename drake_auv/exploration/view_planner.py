@@ -38,6 +38,7 @@ from pydrake.trajectories import PiecewisePolynomial
 from drake_auv.exploration.frontiers import LabelGrid, multibeam_returns, scan_rays
 from drake_auv.exploration.planner import ExploreParameters, Target, plan_view
 from drake_auv.behaviour import Behaviour, trajectory_reference
+from drake_auv.random_streams import stream
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import Path
 from drake_auv.signals import (BehaviourStatus, ExplorerProgress, ExplorerStep, Reference,
@@ -69,7 +70,8 @@ class ViewPlanner(Behaviour):
     Args:
         legs: the legs it flies and their parameters (default: leg 0 with `params`).
         period: planning period, s, in [0.5, 60].
-        seed: seed of the random strategy and STOMP (step k of a leg uses seed + k).
+        seed: the run's seed; step i of leg k draws from its `exploration` stream, child
+            (k, i) (`drake_auv.random_streams`).
     """
 
     def __init__(self, legs: dict[int, ExploreParameters], period: float = 5.0, seed: int = 0):
@@ -130,7 +132,8 @@ class ViewPlanner(Behaviour):
         rays = scan_rays(batches, params.cell_m) if batches is not None else None
         returns = multibeam_returns(batches) if batches is not None else None
         step = plan_view(online.map, x.position, params, view.target,
-                         seed=self.seed + int(progress.steps), previous=view.grid, rays=rays,
+                         seed=stream(self.seed, "exploration", int(leg), int(progress.steps)),
+                         previous=view.grid, rays=rays,
                          visited=view.visited, yaw=float(x.yaw),
                          current_path=self._remaining(view.trajectory, t), returns=returns)
         trajectory = view.trajectory

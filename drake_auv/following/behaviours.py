@@ -121,7 +121,7 @@ class FollowConfig:
     def __post_init__(self):
         validate(self)
 
-    def follower(self, seed: int):
+    def follower(self, seed: int | np.random.SeedSequence):
         if self.mode == "horizontal":
             return HorizontalFollower(self.params, depth_z=self.depth_z, seed=seed)
         return VerticalFollower(self.params, plane_yaw=self.plane_yaw, seed=seed)
@@ -191,12 +191,13 @@ class _Follower:
 
     DEFAULT_MAX_AGE = 20.0  # s
 
-    def __init__(self, params: FollowingParams, anchor, seed: int, name: str):
+    def __init__(self, params: FollowingParams, anchor, seed: int | np.random.SeedSequence,
+                 name: str):
         if anchor is not None and not np.isfinite(anchor):
             raise ValueError(f"{type(self).__name__} {name} must be finite, got {anchor}")
         self.params = params
         self.anchor = None if anchor is None else float(anchor)
-        self.seed = int(seed)
+        self.seed = seed if isinstance(seed, np.random.SeedSequence) else int(seed)
 
     def initial_state(self) -> FollowerState:
         """The state before the first update: an empty map, the generator seeded."""
@@ -257,12 +258,13 @@ class HorizontalFollower(_Follower):
         params: `FollowingParams`.
         depth_z: z of the horizontal plane to follow, m (world, z up); None holds the z of the
             first update.
-        seed: seed of the RANSAC generator.
+        seed: seed of the RANSAC generator (an int or a `numpy.random.SeedSequence`).
     """
 
     DEFAULT_MAX_AGE = 10.0  # s
 
-    def __init__(self, params: FollowingParams = FollowingParams(), depth_z=None, seed: int = 0):
+    def __init__(self, params: FollowingParams = FollowingParams(), depth_z=None,
+                 seed: int | np.random.SeedSequence = 0):
         super().__init__(params, depth_z, seed, "depth_z")
 
     def update(self, state: FollowerState, time: float, x,
@@ -310,10 +312,11 @@ class VerticalFollower(_Follower):
         params: `FollowingParams` (`side` = +1: the profile on the right of the motion with s
             to the right and h up, e.g. bottom below while moving along +s).
         plane_yaw: direction of the plane, rad; None takes the yaw of the first update.
-        seed: seed of the RANSAC generator.
+        seed: seed of the RANSAC generator (an int or a `numpy.random.SeedSequence`).
     """
 
-    def __init__(self, params: FollowingParams = FollowingParams(), plane_yaw=None, seed: int = 0):
+    def __init__(self, params: FollowingParams = FollowingParams(), plane_yaw=None,
+                 seed: int | np.random.SeedSequence = 0):
         super().__init__(params, plane_yaw, seed, "plane_yaw")
 
     def update(self, state: FollowerState, time: float, x,

@@ -28,6 +28,7 @@ from pydrake.common.value import AbstractValue
 
 from drake_auv.behaviour import Behaviour, trajectory_reference
 from drake_auv.following.behaviours import FollowConfig, FollowerState
+from drake_auv.random_streams import stream
 from drake_auv.signals import BehaviourStatus, Consumed, Profile, Reference
 from drake_auv.sonar.returns import SonarReturns
 
@@ -49,7 +50,8 @@ class ProfileFollowingController(Behaviour):
             for leg 0 (the controller alone, its `leg` input unconnected).
         period: update period, s; use the profiler's (its returns hold the pings since its
             last update).
-        seed: seed of the estimator's RANSAC (leg k uses seed + k).
+        seed: the run's seed; leg k's RANSAC draws from its `following` stream, child k
+            (`drake_auv.random_streams`).
     """
 
     def __init__(self, legs: FollowConfig | dict[int, FollowConfig] = FollowConfig(),
@@ -64,7 +66,7 @@ class ProfileFollowingController(Behaviour):
         self.seed = int(seed)
         self.returns_input = self.DeclareAbstractInputPort(
             "returns", AbstractValue.Make(SonarReturns.empty(20.0)))
-        self._followers = {leg: config.follower(self.seed + leg)
+        self._followers = {leg: config.follower(stream(self.seed, "following", leg))
                            for leg, config in self.legs.items()}  # immutable
         self._follower_index = self.DeclareAbstractState(
             AbstractValue.Make(self._followers[min(self.legs)].initial_state()))

@@ -23,6 +23,7 @@ from pathlib import Path
 import yaml
 
 from drake_auv.mission.overrides import apply_overrides, one_line
+from drake_auv.ocean.spec import OceanSpecError, ocean_from_raw, ocean_to_raw
 from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, TOP_KEYS,
                                     FaultsSpec, LimitsSpec, MissionFileError, MissionSpec,
                                     NavigationJumpFault, PayloadSpec, ReplannerSpec, SiteSpec,
@@ -34,6 +35,7 @@ from drake_auv.mission.steps.fly import FLY_FORMATS, FlyStep
 from drake_auv.mission.steps.follow import FollowStep
 from drake_auv.mission.steps.plan import PlanStep
 from drake_auv.mission.steps.survey import SurveyStep
+from drake_auv.mission.yaml_text import MAX_BYTES, MAX_VALUES, YamlLimitError, load_yaml_file
 from drake_auv.params import NESTED, ParameterError, is_number, checks
 from drake_auv.sonar.noise import SonarNoise
 
@@ -140,6 +142,13 @@ class _Reader:
         return FaultsSpec(**{name: self.section(cls, raw.get(name), f"faults.{name}")
                              for name, cls in FAULT_CLASSES.items()})
 
+    def ocean(self, raw):
+        """The `ocean:` section (`drake_auv.ocean.spec`): None for still water."""
+        try:
+            return ocean_from_raw(raw, self.base_dir)
+        except OceanSpecError as err:
+            self.fail(err.where, err.what, err.allowed)
+
     def steps(self, raw) -> tuple:
         if not isinstance(raw, list) or not raw:
             self.fail("steps", f"{raw!r} is not a non-empty list", _steps_allowed())
@@ -192,7 +201,8 @@ class _Reader:
         self.prior_needed(sections["site"], steps)
         return MissionSpec(**top, **sections,
                            sonar_noise=self.sonar_noise(raw.get("sonar_noise")),
-                           faults=self.faults(raw.get("faults")), steps=steps, source=source)
+                           faults=self.faults(raw.get("faults")),
+                           ocean=self.ocean(raw.get("ocean")), steps=steps, source=source)
 
 
 def _has_default(cls, path) -> bool:
@@ -255,13 +265,14 @@ def _plain(obj) -> dict:
 
 def mission_to_dict(spec: MissionSpec) -> dict:
     """The validated mission as a plain YAML-able mapping, defaults filled in, paths absolute
-    (`mission_from_dict` reads it back to an equal spec)."""
+    (`mission_from_dict` reads it back to an equal spec); still water leaves `ocean` out."""
     noise = spec.sonar_noise
+    sea = {} if spec.ocean is None else dict(ocean=ocean_to_raw(spec.ocean))
     return dict(name=spec.name, description=spec.description, seed=spec.seed,
                 **{key: _plain(getattr(spec, key)) for key in SECTIONS},
                 sonar_noise=dict(noise.params) if noise.preset == "custom" else noise.preset,
                 faults={name: _plain(getattr(spec.faults, name)) for name in FAULT_CLASSES},
-                steps=[{s.KIND: _plain(s)} for s in spec.steps])
+                **sea, steps=[{s.KIND: _plain(s)} for s in spec.steps])
 
 
 def _resolve(source) -> Path:
@@ -281,10 +292,14 @@ def load_mission(source, seed: int | None = None, overrides=()) -> MissionSpec:
     path = _resolve(source)
     label = path.name
     try:
-        raw = yaml.safe_load(path.read_text())
+        raw = load_yaml_file(path)
     except (OSError, UnicodeDecodeError) as err:
         raise MissionFileError(label, "", f"cannot be read ({one_line(err)})",
                                "a readable YAML text file") from None
+    except YamlLimitError as err:
+        raise MissionFileError(label, "", one_line(err),
+                               f"at most {MAX_BYTES} bytes and {MAX_VALUES} values with its "
+                               "aliases expanded") from None
     except yaml.YAMLError as err:
         raise MissionFileError(label, "", f"is not valid YAML ({one_line(err)})",
                                "a YAML mapping of " + ", ".join(TOP_KEYS)) from None

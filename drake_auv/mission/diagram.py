@@ -47,6 +47,8 @@ from drake_auv.mission.steps.step import LOG_PERIOD, Wiring, terrain_elevation
 from drake_auv.mission.steps.survey import connect_replanner
 from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
+from drake_auv.ocean.system import Ocean
+from drake_auv.random_streams import generator
 from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.sonar.profiler import FOLLOWING_SETUP, PencilBeamProfiler
@@ -102,6 +104,7 @@ class MissionHandles:
     def explorer(self):
         """The view planner (None without an explore step)."""
         return self.behaviours.get("explore")
+    ocean: Ocean | None = None  # with a sea (`ocean:` not none): the water at the vehicle
 
 
 def add_faults(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec):
@@ -139,7 +142,7 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
         seed=spec.seed, axis_hits_output=True))
     options = {**FOLLOWING_SETUP, "max_range": max_range}
     profiler = builder.AddNamedSystem("profiler", PencilBeamProfiler(
-        caster, scan_plane="horizontal", noise=noise, seed=spec.seed + 1,
+        caster, scan_plane="horizontal", noise=noise, seed=spec.seed,
         planes=plan.profiler_planes or None, **options))
     silent = spec.faults.sonar_silent
     returns = {}
@@ -153,6 +156,30 @@ def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSyste
             builder.Connect(sonar.returns_output, gate.returns_input)
             returns[name] = gate.returns_output
     return multibeam, profiler, returns
+
+
+def add_ocean(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec,
+              site: Site, plan: MissionPlan, dvl: DvlAltimeter | None):
+    """The sea of `spec.ocean` (None: still water, nothing added): the `Ocean` system at the
+    vehicle's true position, feeding the dynamics' relative-velocity hydrodynamics and the
+    navigation (which dead-reckons through the water when `dvl` loses the bottom). The sea's
+    files are checked against the site, the dive's span and the nominal route first (one
+    line). Returns the Ocean or None."""
+    if spec.ocean is None:
+        return None
+    model = spec.ocean.model(generator(spec.seed, "ocean.waves"), site.crs, site.origin)
+    bounds = site.world.bounds
+    cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
+    model.check((bounds[0, 0], bounds[0, 1], bounds[1, 0], bounds[1, 1]), -bounds[0, 2],
+                cap if np.isfinite(cap) else 0.0,
+                plan.nominal.points if plan.nominal is not None else None)
+    ocean = builder.AddNamedSystem("ocean", Ocean(model, seed=spec.seed))
+    builder.Connect(vehicle.dynamics.state_output, ocean.state_input)
+    builder.Connect(ocean.water_output, vehicle.dynamics.water_input)
+    builder.Connect(ocean.water_output, vehicle.navigation.water_input)
+    if dvl is not None:
+        builder.Connect(dvl.bottom_lock_output, vehicle.navigation.bottom_lock_input)
+    return ocean
 
 
 def add_behaviours(builder: DiagramBuilder, wiring: Wiring, own: dict | None = None):
@@ -264,6 +291,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     wiring = Wiring(builder, spec, plan, site, caster, vehicle, estimated, mapper, returns,
                     profiler)
     supervisor, switch, behaviours = add_behaviours(builder, wiring)
+    ocean = add_ocean(builder, vehicle, spec, site, plan, wiring.added.get("dvl"))
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
                                                         max_range, multibeam)
     logs = {
@@ -272,8 +300,10 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
         "reference": LogVectorOutput(switch.get_output_port(), builder, LOG_PERIOD),
         "leg": LogVectorOutput(supervisor.leg_output, builder, SUPERVISOR_PERIOD),
         "response": LogVectorOutput(supervisor.response_output, builder, SUPERVISOR_PERIOD),
-        **wiring.logs,
     }
+    if ocean is not None:
+        logs["water"] = LogVectorOutput(ocean.water_output, builder, LOG_PERIOD)
+    logs.update(wiring.logs)
     for name, log in logs.items():
         log.set_name(f"{name}_log")
     builder.ExportOutput(vehicle.dynamics.state_output, "state")
@@ -300,5 +330,5 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, supervisor,
                              camera, multibeam_coverage, logs, faults, behaviours,
-                             wiring.added.get("dvl"))
+                             wiring.added.get("dvl"), ocean)
     return diagram, handles

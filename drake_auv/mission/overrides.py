@@ -15,6 +15,10 @@ import yaml
 from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, TOP_KEYS,
                                     MissionFileError, mission_keys)
 from drake_auv.mission.steps import step_specs
+from drake_auv.mission.yaml_text import load_yaml
+from drake_auv.ocean.spec import OCEAN_KEYS, PARTS
+from drake_auv.ocean.tides import TidalConstituent
+from drake_auv.params import checks
 from drake_auv.sonar.noise import SonarNoise
 
 
@@ -30,7 +34,7 @@ def apply_overrides(raw: dict, overrides, label: str = "--set") -> dict:
         key, text = item.split("=", 1)
         key = re.sub(r"\[(\d+)\]", r".\1", key.strip())
         try:
-            value = yaml.safe_load(text)
+            value = load_yaml(text)
         except yaml.YAMLError as err:
             raise MissionFileError(label, key, f"value {text!r} is not YAML ({one_line(err)})",
                                    "a YAML value: number, string, true/false, null, [..], {..}")
@@ -91,6 +95,34 @@ def _set(raw: dict, parts: list[str], value, label: str):
         if not isinstance(raw[head].get(rest[0]), dict):
             raw[head][rest[0]] = {}
         node, keys, offset = raw[head][rest[0]], tuple(mission_keys(FAULT_CLASSES[rest[0]])), 2
+    elif head == "ocean":  # ocean.<part>.<key>, ocean.tides.<i>.<key>, ocean.<value>
+        if not isinstance(raw.get(head), dict):  # still water ("none") becomes a sea
+            raw[head] = {}
+        sea, part = raw[head], rest[0]
+        if part not in OCEAN_KEYS:
+            fail(1, "unknown key", OCEAN_KEYS)
+        if len(rest) == 1:
+            sea[part] = value
+            return
+        if part == "tides":
+            tides = sea.get("tides")
+            count = len(tides) if isinstance(tides, list) else 0
+            if not (rest[1].isdigit() and int(rest[1]) < count):
+                fail(2, "no such constituent",
+                     [str(i) for i in range(count)] or ["(the file has none)"])
+            index = int(rest[1])
+            if len(rest) == 2:
+                tides[index] = value
+                return
+            if not isinstance(tides[index], dict):
+                tides[index] = {}
+            node, keys, offset = tides[index], tuple(checks(TidalConstituent)), 3
+        elif part in PARTS:
+            if not isinstance(sea.get(part), dict):
+                sea[part] = {}
+            node, keys, offset = sea[part], tuple(checks(PARTS[part])), 2
+        else:
+            fail(1, f"{part} is a value, not a section", [f"ocean.{part}"])
     elif head in SECTIONS:
         if not isinstance(raw.get(head), dict):
             raw[head] = {}

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 import resource
 import time
 from pathlib import Path as FilePath
@@ -36,9 +35,11 @@ from drake_auv.geometry.visibility import coverage_share
 from drake_auv.exploration.view_planner import exploration_summary
 from drake_auv.mapping.mapper import map_memory
 from drake_auv.mission.config import mission_to_dict
+from drake_auv.mission.ocean_summary import ocean_markdown, ocean_summary
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
+from drake_auv.output_files import open_replacing, replacing, write_json, write_text
 from drake_auv.reconstruction.products import products_markdown, write_products
-from drake_auv.signals import ReplanningStep, VehicleState
+from drake_auv.signals import ReplanningStep, VehicleState, Water
 
 PHASE_COLOURS = {"transit": "0.45", "follow": "tab:green", "survey": "tab:blue"}
 COVERAGE_PERIOD_S = 10.0  # s, the sampling of the coverage-against-time curve
@@ -225,6 +226,9 @@ def summarise(result: MissionResult) -> dict:
                       replan_p95_ms=float(np.percentile(wall, 95) * 1e3))
     summary["timing"] = timing
     summary["map"] = map_memory(result.online_map, result.scan_log)
+    ocean = ocean_summary(result)
+    if ocean is not None:
+        summary["ocean"] = ocean
     if result.handles is not None and result.handles.explorer is not None:
         summary["exploration"] = exploration_summary(result.handles, result.context,
                                                      result.outcomes)
@@ -300,6 +304,7 @@ def report_markdown(summary: dict) -> str:
               f"- Minimum clearance to anything: {summary['min_clearance_m']:.2f} m: "
               + ("**contact**." if summary["contact"] else "no contact.")
               + f" Largest navigation error: {summary['navigation_error_max_m']:.2f} m.",
+              *ocean_markdown(summary.get("ocean")),
               "", "## Timing (wall clock: varies with the machine and its load)", ""]
     t = summary["timing"]
     lines.append(f"- {t['sim_s']:.0f} s simulated in {t['wall_s']:.1f} s wall: "
@@ -414,17 +419,22 @@ def fig_distance(result: MissionResult) -> Figure:
 
 def write_trajectory(result: MissionResult, filename) -> None:
     """`t`, the true pose (`signals.VehicleState`'s `x y z roll pitch yaw`) and the navigation's
-    position (`est_x est_y est_z`), in the site's own horizontal coordinates."""
+    position (`est_x est_y est_z`), in the site's own horizontal coordinates, and the water's
+    velocity at the true position (`current_x current_y current_z`, world frame: x east,
+    y north, z up, m/s; zeros in still water)."""
     state, estimated = VehicleState(result.state), VehicleState(result.estimated)
     true_xyz = result.site.to_site(state.position)
     est_xyz = result.site.to_site(estimated.position)
     pose = VehicleState.get_fields()[:6]  # position and attitude
-    with open(filename, "w", newline="") as f:
+    current = (np.zeros((len(result.times), 3)) if result.water is None
+               else Water(result.water).velocity)
+    with open_replacing(filename, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["t", *pose, *(f"est_{name}" for name in pose[:3])])
-        for t, p, a, e in zip(result.times, true_xyz, state.attitude, est_xyz):
+        writer.writerow(["t", *pose, *(f"est_{name}" for name in pose[:3]),
+                         "current_x", "current_y", "current_z"])
+        for t, p, a, e, c in zip(result.times, true_xyz, state.attitude, est_xyz, current):
             writer.writerow([f"{t:.2f}", *(f"{v:.3f}" for v in p), *(f"{v:.5f}" for v in a),
-                             *(f"{v:.3f}" for v in e)])
+                             *(f"{v:.3f}" for v in e), *(f"{v:.4f}" for v in c)])
 
 
 def peak_rss_mb() -> float:
@@ -456,16 +466,17 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
 
         figures["plan.png"] = fig_path3d(result.plan.coverage)
     for name, fig in figures.items():
-        fig.savefig(out / name, dpi=dpi, bbox_inches="tight")
+        with replacing(out / name) as temporary:
+            fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
     write_trajectory(result, out / "trajectory.csv")
-    (out / "diagram.dot").write_text(result.diagram_dot)
+    write_text(out / "diagram.dot", result.diagram_dot)
     if finish is not None:
         finish(out)
     outputs_s = time.perf_counter() - start
     summary["timing"].update(_rounded(dict(
         setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
         total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
-    (out / "report.json").write_text(json.dumps(summary, indent=2) + "\n")
-    (out / "report.md").write_text(report_markdown(summary)
-                                   + products_markdown(summary["reconstruction"]))
+    write_json(out / "report.json", summary)
+    write_text(out / "report.md",
+               report_markdown(summary) + products_markdown(summary["reconstruction"]))
     return summary

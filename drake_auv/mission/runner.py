@@ -26,7 +26,7 @@ from drake_auv.mission.log_spool import LogSpool
 from drake_auv.mission.plan import MissionPlan, plan_mission
 from drake_auv.mission.site import Site, load_site, check_against_site
 from drake_auv.mission.supervisor import responses_from_log
-from drake_auv.signals import (LegSignal, Profile, ReplanningStep, VehicleState,
+from drake_auv.signals import (LegSignal, Profile, ReplanningStep, VehicleState, Water,
                                annotate_graphviz)
 
 VEHICLE_RADIUS = 1.0  # m, a sphere around the GIRONA 500's hulls for the contact check
@@ -68,6 +68,11 @@ class MissionResult:
         diagram, handles, context: the simulated Diagram, its `MissionHandles` and the root
             Context at the end, for inspection.
         responses: the supervisor's answers to faults ({response, cause, start_s, end_s}).
+        water: (n, 6) the water at the vehicle (columns `signals.Water`, world frame; zeros in
+            still water), sampled with the state.
+        thrust_saturation: (5,) share of the dive each thruster's command was at its limit.
+        current_drift: (2,) m, the navigation drift the current caused while the DVL tracked
+            the water (world x, y).
     """
 
     spec: MissionSpec
@@ -95,6 +100,9 @@ class MissionResult:
     handles: MissionHandles | None = None
     context: object = None
     responses: list = field(default_factory=list)
+    water: np.ndarray | None = None
+    thrust_saturation: np.ndarray | None = None
+    current_drift: np.ndarray | None = None
 
     @property
     def areas(self) -> np.ndarray:
@@ -189,6 +197,14 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
     profile = np.full((len(times), Profile.size()), np.nan)
     if "profile" in logs:
         profile = logs["profile"].data().T[:len(times)]
+    water = np.zeros((len(times), Water.size()))
+    if "water" in logs:
+        water = logs["water"].data().T[:len(times)].copy()
+    vehicle = handles.vehicle
+    saturation = vehicle.dynamics.thrust_saturation_output.Eval(
+        vehicle.dynamics.GetMyContextFromRoot(context)).copy()
+    current_drift = vehicle.navigation.current_drift_output.Eval(
+        vehicle.navigation.GetMyContextFromRoot(context)).copy()
     return MissionResult(
         spec, site, plan, times, state, estimated, distance, clearance, leg_at, phases,
         handles.supervisor.outcomes(handles.supervisor.GetMyContextFromRoot(context)),
@@ -199,4 +215,5 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
         handles.mapper.map_output.Eval(mapper_context), completed, profile,
         logs["reference"].data().T[:len(times)].copy(), wall,
         annotate_graphviz(diagram, diagram.GetGraphvizString()),
-        diagram, handles, context, responses_from_log(logs["response"]))
+        diagram, handles, context, responses_from_log(logs["response"]), water, saturation,
+        current_drift)

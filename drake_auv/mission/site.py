@@ -35,6 +35,7 @@ import trimesh
 
 from drake_auv.mission.config import MissionFileError, MissionSpec, SiteSpec
 from drake_auv.mission.steps import STEPS
+from drake_auv.random_streams import generator
 from drake_auv.scenarios import get_scenario
 from drake_auv.signals import VehicleState
 from drake_auv.terrain.bathymetry import Bathymetry
@@ -137,8 +138,8 @@ class Site:
 
 def shift_prior(bathy: Bathymetry, error_m: float, seed: int) -> Bathymetry:
     """`bathy` moved horizontally by `error_m` (m, in [0, 5]) in a direction drawn from
-    `seed`: the prior-map error. The grid, CRS and world-to-CRS map are kept (the cells now
-    claim wrong positions)."""
+    the run's `seed`: the prior-map error. The grid, CRS and world-to-CRS map are kept (the
+    cells now claim wrong positions)."""
     if not (np.isfinite(error_m) and 0.0 <= error_m <= MAX_PRIOR_ERROR):
         raise ValueError(f"prior map: error_m must be in [0, {MAX_PRIOR_ERROR}] m, "
                          f"got {error_m}")
@@ -148,8 +149,9 @@ def shift_prior(bathy: Bathymetry, error_m: float, seed: int) -> Bathymetry:
 
 
 def prior_offset(error_m: float, seed: int) -> np.ndarray:
-    """(2,) the horizontal shift of a prior map with error `error_m` (m) drawn from `seed`."""
-    theta = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi)
+    """(2,) the horizontal shift of a prior map with error `error_m` (m), its direction drawn
+    from the run's `prior_map` stream (`drake_auv.random_streams`)."""
+    theta = generator(seed, "prior_map").uniform(0.0, 2.0 * np.pi)
     return error_m * np.array([np.cos(theta), np.sin(theta)])
 
 

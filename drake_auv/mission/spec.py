@@ -23,7 +23,9 @@ import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from drake_auv.ocean.spec import OceanSpec
 from drake_auv.params import CHECK, NESTED, nested, param, validate
+from drake_auv.random_streams import MAX_SEED, SEED_RANGE
 from drake_auv.replanning.section import OPTIMIZERS, ReplanningParameters
 from drake_auv.scenarios import list_scenarios
 from drake_auv.sonar.noise import SonarNoise
@@ -269,7 +271,7 @@ class MissionSpec:
     name: str = param(kind="text")
     site: SiteSpec
     steps: tuple
-    seed: int = param(0, low=0, integer=True)
+    seed: int = param(0, low=0, high=MAX_SEED, integer=True, note=SEED_RANGE)
     description: str | None = param(None, kind="text", nullable=True)
     navigation: NavigationParams = NavigationParams()
     sonar_noise: SonarNoiseSpec = SonarNoiseSpec()
@@ -277,6 +279,7 @@ class MissionSpec:
     payload: PayloadSpec = PayloadSpec()
     limits: LimitsSpec = LimitsSpec()
     faults: FaultsSpec = FaultsSpec()
+    ocean: OceanSpec | None = None  # None: still water (`ocean: none`)
     source: Path | None = field(default=None, compare=False)
 
     def __post_init__(self):
@@ -288,4 +291,4 @@ class MissionSpec:
 SECTIONS = dict(site=SiteSpec, navigation=NavigationParams, replanner=ReplannerSpec,
                 payload=PayloadSpec, limits=LimitsSpec)
 TOP_KEYS = ("name", "description", "seed", "site", "navigation", "sonar_noise", "replanner",
-            "payload", "limits", "faults", "steps")
+            "payload", "limits", "faults", "ocean", "steps")

@@ -32,6 +32,7 @@ import numpy as np
 
 from drake_auv.autopilot.cola2 import DEFAULT_SURGE, HEAVE_SPEED, held_band
 from drake_auv.autopilot.items import MissionItem, VehicleMission
+from drake_auv.output_files import replacing
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.missions import ALTITUDE_LABELS
 from drake_auv.planning.path import Path
@@ -325,8 +326,9 @@ def cola2_mission(sections: Cola2Sections, geo: GeoFrame, surge_velocity: float 
 
 def write_cola2(sections: Cola2Sections, geo: GeoFrame, filename, **kwargs) -> None:
     """Writes `cola2_mission` to `filename` (UTF-8 XML with a declaration)."""
-    cola2_mission(sections, geo, **kwargs).write(filename, encoding="utf-8",
-                                                 xml_declaration=True)
+    with replacing(filename) as temporary:
+        cola2_mission(sections, geo, **kwargs).write(temporary, encoding="utf-8",
+                                                     xml_declaration=True)
 
 
 # -- reading -------------------------------------------------------------------------------------

@@ -8,11 +8,11 @@ CRS (no `crs` member: RFC 7946 is WGS 84), depths and altitudes as properties
 
 from __future__ import annotations
 
-import json
 from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.output_files import write_json, write_text
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.missions import ALTITUDE_LABELS
 from drake_auv.planning.path import Path
@@ -70,8 +70,8 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", surface=None)
 
 
 def write_geojson(path: Path, geo: GeoFrame, filename, name: str = "path", surface=None) -> None:
-    with open(filename, "w") as f:
-        json.dump(path_to_geojson(path, geo, name, surface), f, separators=(",", ":"))
+    write_json(filename, path_to_geojson(path, geo, name, surface), indent=None,
+               separators=(",", ":"))
 
 
 def _ratio(a: float, b: float) -> float | None:
@@ -306,12 +306,11 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
         from drake_auv.planning.metrics3d import evaluate_plan_3d
 
         m3d = evaluate_plan_3d(plan)
-    (outdir / "report.md").write_text(report_markdown(plan, m3d))
+    write_text(outdir / "report.md", report_markdown(plan, m3d))
     rep = report_dict(plan, m3d)
     if extras:
         rep["exports"] = extras
-    with open(outdir / "report.json", "w") as f:
-        json.dump(rep, f, indent=2)
+    write_json(outdir / "report.json", rep)
     written += [outdir / "report.md", outdir / "report.json"]
     if figures:
         from drake_auv.planning.figures import write_figures

@@ -12,6 +12,8 @@ from matplotlib.collections import LineCollection
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
+from drake_auv.output_files import replacing
+
 LABEL_COLOURS = {"planar": "tab:blue", "slice": "tab:red", "transit": "0.6", "lawnmower": "tab:green"}
 
 
@@ -161,6 +163,7 @@ def write_figures(plan, outdir, dpi: int = 110, progress: bool = False) -> list[
     written = []
     for name, make in tqdm(FIGURES.items(), desc="figures", disable=not progress, leave=False):
         fig = make(plan)
-        fig.savefig(outdir / name, dpi=dpi, bbox_inches="tight")
+        with replacing(outdir / name) as temporary:
+            fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
         written.append(outdir / name)
     return written

@@ -13,6 +13,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.output_files import open_replacing
 from drake_auv.planning.polyline import arc_length
 
 _CSV_FIELDS = ("x", "y", "z", "heading", "sensor_x", "sensor_y", "sensor_z", "label")
@@ -206,7 +207,7 @@ class Path:
 
     def to_csv(self, filename) -> None:
         """Writes one row per sample with the columns x, y, z, heading, sensor_x/y/z, label."""
-        with open(filename, "w", newline="") as f:
+        with open_replacing(filename, "w", newline="") as f:
             writer = csv.writer(f)
             writer.writerow(_CSV_FIELDS)
             for p, h, s, lab in zip(self.points, self.heading, self.sensor_dir, self.labels):

@@ -40,6 +40,7 @@ import numpy as np
 from drake_auv.autopilot.ardusub import replay_ardusub
 from drake_auv.autopilot.replay import clearance_report
 from drake_auv.autopilot.items import LocalLeg, MissionItem, VehicleMission
+from drake_auv.output_files import open_replacing
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.metrics import evaluate_path, surface_area_weights
 from drake_auv.planning.missions import ALTITUDE_LABELS, Waypoints, mission_waypoints
@@ -302,8 +303,9 @@ def write_qgc(plan, geo: GeoFrame, outdir, max_items: int = DEFAULT_MAX_ITEMS,
     counts = []
     for k, name in enumerate(files):
         part = mission.part(k)
-        with open(name, "w") as f:
-            json.dump(qgc_plan(part, geo, speed, acceptance_radius, zones), f, indent=1)
+        with open_replacing(name) as f:
+            json.dump(qgc_plan(part, geo, speed, acceptance_radius, zones), f, indent=1,
+                      allow_nan=False)  # a NaN in an autopilot's file is a bug: refused
         counts.append(_items(len(part)))
     p = plan.parameters
     flown = _flown_path(plan.path, mission.waypoints, plan.surface, p["sample_spacing"])

@@ -18,6 +18,7 @@ from pathlib import Path as FilePath
 import numpy as np
 
 from drake_auv.mapping.scan_log import SOURCES, ScanLog
+from drake_auv.output_files import open_replacing, replacing
 
 POSITION = ("x", "y", "z")
 ORIGIN = ("origin_x", "origin_y", "origin_z")
@@ -122,7 +123,7 @@ def write_ply_chunks(clouds, count: int, filename) -> None:
     header += [f"property double {name}" for name in POSITION + ORIGIN + ("time",)]
     header += ["property uchar source", "end_header"]
     written = 0
-    with open(filename, "wb") as f:
+    with open_replacing(filename, "wb") as f:
         f.write(("\n".join(header) + "\n").encode("ascii"))
         for cloud in clouds:
             data = np.empty(len(cloud), dtype)
@@ -132,8 +133,8 @@ def write_ply_chunks(clouds, count: int, filename) -> None:
             data["time"], data["source"] = cloud.times, cloud.sources
             f.write(data.tobytes())
             written += len(cloud)
-    if written != count:
-        raise ValueError(f"{filename}: {written} points written, the header says {count}")
+        if written != count:
+            raise ValueError(f"{filename}: {written} points written, the header says {count}")
 
 
 def _ply_header(f, filename):
@@ -281,7 +282,8 @@ def write_las(cloud: PointCloud, filename, scale: float = 1e-3) -> None:
     las.point_source_id = cloud.sources.astype(np.uint16)
     for k, name in enumerate(ORIGIN):
         las[name] = cloud.origins[:, k]
-    las.write(str(filename))
+    with replacing(filename) as temporary:
+        las.write(str(temporary))
 
 
 def read_las(filename) -> PointCloud:

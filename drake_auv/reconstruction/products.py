@@ -24,6 +24,7 @@ import numpy as np
 import trimesh
 
 from drake_auv.mapping.scan_log import ScanLog
+from drake_auv.output_files import replacing
 from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply_chunks
 from drake_auv.reconstruction.scoring import score
 from drake_auv.reconstruction.surface import (OUTLIERS, SUPPORT, Reconstruction,
@@ -119,8 +120,9 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
                                         f"(+{CROP_MARGIN:g} m)")
     mesh = surface.reconstruction.mesh
     colours = (255 * error_colours(surface.errors)).astype(np.uint8)
-    trimesh.Trimesh(result.site.to_site(mesh.vertices), mesh.faces, vertex_colors=colours,
-                    process=False).export(out / "reconstruction.ply")
+    with replacing(out / "reconstruction.ply") as temporary:
+        trimesh.Trimesh(result.site.to_site(mesh.vertices), mesh.faces, vertex_colors=colours,
+                        process=False).export(temporary)
     s = surface.summary["surface"]
     fig = fig_reconstruction(
         [("to the true world", mesh, surface.errors),
@@ -129,7 +131,8 @@ def write_products(result, outdir, dpi: int = 110) -> dict:
         title=f"Screened Poisson surface of the dive's returns, support-trimmed: accuracy "
               f"median {s['accuracy_median_m']:.2f} m (p95 {s['accuracy_p95_m']:.2f} m) over "
               f"the whole mesh; {100 * s['completeness_seen']:.1f} % of the seen target")
-    fig.savefig(out / "reconstruction.png", dpi=dpi, bbox_inches="tight")
+    with replacing(out / "reconstruction.png") as temporary:
+        fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
     return dict(built=True, **surface.summary)
 
 

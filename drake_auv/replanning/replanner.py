@@ -37,6 +37,7 @@ from drake_auv.behaviour import Behaviour
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import arc_length, motion_heading
+from drake_auv.random_streams import stream
 from drake_auv.replanning.section import (OPTIMIZERS, ReplanningParameters, SectionPlan,
                                           replan_section)
 from drake_auv.signals import BehaviourStatus, ReplannerProgress, ReplanningStep, VehicleState
@@ -70,7 +71,8 @@ class Replanner(Behaviour):
         heading_offset: yaw relative to the direction of motion where no structure is mapped
             within 2 Omega (or always, with `sensor_azimuth` None), rad.
         yaw_rate: largest commanded yaw rate, rad/s, > 0.
-        seed: seed of STOMP's rollouts (step k of a leg uses seed + k).
+        seed: the run's seed; step i of leg k draws STOMP's rollouts from its `replanner`
+            stream, child (k, i) (`drake_auv.random_streams`).
         offset_labels: labels of the nominal samples that follow a wall at Omega (slicing
             contours); the others (lanes, transits) keep only clearance and depth.
         legs: the mission legs this replanner flies (default: leg 0, so it runs unsupervised).
@@ -144,7 +146,9 @@ class Replanner(Behaviour):
         start = time.perf_counter()
         plan = replan_section(position, nominal.points, int(next_index),
                               online.map if online is not None else np.zeros((0, 3)),
-                              self.params, seed=self.seed + int(steps), keep_offset=keep_offset,
+                              self.params,
+                              seed=stream(self.seed, "replanner", int(leg), int(steps)),
+                              keep_offset=keep_offset,
                               optimizer=self.optimizer,
                               previous=None if current.plan is None else current.plan.trajectory,
                               tube=None if current.plan is None else current.plan.tube)

@@ -232,7 +232,8 @@ class SectionPlan:
 
 def replan_section(position, waypoints, next_index: int, occupied,
                    params: ReplanningParameters = ReplanningParameters(),
-                   seed: int = 0, keep_offset=None, optimizer: str = "stomp",
+                   seed: int | np.random.SeedSequence = 0, keep_offset=None,
+                   optimizer: str = "stomp",
                    log_odds=None, previous=None,
                    tube: TubeNodes | None = None) -> SectionPlan | None:
     """One replanning step: section, initial trajectory, STOMP against the on-line map.

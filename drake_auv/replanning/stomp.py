@@ -136,7 +136,8 @@ def smoothness_costs(trajectories: np.ndarray, weight: float) -> np.ndarray:
 
 
 def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
-          params: StompParameters = StompParameters(), seed: int = 0,
+          params: StompParameters = StompParameters(),
+          seed: int | np.random.SeedSequence = 0,
           matrices: StompMatrices | None = None, free_end: bool = False) -> StompResult:
     """Optimises `initial` (N, D) against `state_cost`, keeping its first point (and its last
     unless `free_end`).
@@ -148,7 +149,8 @@ def stomp(initial: np.ndarray, state_cost: Callable[[np.ndarray], np.ndarray],
             called once per iteration on all rollouts together (plus the trajectory the
             previous iteration produced, appended as row K), and once on the initial one.
         params: `StompParameters`.
-        seed: seed of the rollout noise; the same seed gives the same result.
+        seed: seed of the rollout noise (an int or a `numpy.random.SeedSequence`); the same
+            seed gives the same result.
         matrices: `StompMatrices(N, free_end)` to reuse across calls (built here when None).
         free_end: the last point is optimised too (its cost is the state cost's last column).
     """

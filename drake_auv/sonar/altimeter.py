@@ -7,7 +7,8 @@ the mean of the beams' vertical ranges (slant range times the cosine of the beam
 world vertical, so roll and pitch are accounted for) and has bottom lock with at least
 `min_beams` valid beams. Noise: each beam's range gets a Gaussian error of
 `range_sigma_fraction` of the range plus `range_sigma_m`, and is lost with `dropout_prob`.
-Without bottom lock the altitude is NaN. Update n draws from `default_rng([seed, n])`.
+Without bottom lock the altitude is NaN. Measurement n draws from the run's `dvl` stream,
+child n (`drake_auv.random_streams`).
 
 This is what an autopilot holding altitude reads (COLA2 altitude mode, ArduSub's frame 10 via
 its downward rangefinder); the true world reaches the mission only through this ray casting.
@@ -17,10 +18,15 @@ estimated state, as the multibeam's are): the octree mapper inserts them, so the
 structure's flat top under the vehicle is mapped where neither the side-looking multibeam nor
 the horizontal profiler sees it (a beam grazing a flat top returns nothing to them).
 
+Bottom lock is also what the navigation needs: with it the DVL measures the velocity over
+ground; without it (the seabed beyond `max_range`, or too few beams) it tracks the water and
+dead reckoning drifts with the current (`drake_auv.vehicle.navigation`).
+
 Ports: inputs `true_state` (12), `estimated_state` (12); outputs `altitude` (1, m, NaN
-without bottom lock), `seabed_elevation` (1: the measured seabed under the vehicle,
-`z_est - altitude`: the elevation in the navigation frame, NaN without lock) and `returns`
-(`SonarReturns` of the four beams, navigation frame).
+without bottom lock), `bottom_lock` (1: 1 with bottom lock at the last measurement, else 0:
+the `Navigation`'s input of the same name), `seabed_elevation` (1: the measured seabed under
+the vehicle, `z_est - altitude`: the elevation in the navigation frame, NaN without lock) and
+`returns` (`SonarReturns` of the four beams, navigation frame).
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.params import param, validate
+from drake_auv.random_streams import generator, stream as random_stream
 from drake_auv.signals import VehicleState
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.control import rotation_world_body
@@ -46,7 +53,8 @@ class DvlParams:
 
     Attributes:
         beam_deg: angle of each beam from the body's -z axis, deg, in [0, 60].
-        max_range: bottom-track range, m, > 0.
+        max_range: bottom-track range, m, > 0 (the Explorer's 600 kHz: about 80 m; beyond
+            it the DVL tracks the water).
         rate: measurements per second, in (0, 50].
         range_sigma_fraction, range_sigma_m: range noise, a fraction of the range and m, >= 0.
         dropout_prob: probability that a beam is lost, in [0, 1].
@@ -119,14 +127,16 @@ class DvlAltimeter(LeafSystem):
     Args:
         world: the true world's `RayCaster`.
         params: the DVL (default `DvlParams()`); noise: False for a perfect DVL.
-        seed: of the noise draws.
+        seed: the run's seed, drawn through `stream` (`drake_auv.random_streams`).
+        stream: the noise's random stream.
     """
 
     def __init__(self, world: RayCaster, params: DvlParams | None = None, noise: bool = True,
-                 seed: int = 0):
+                 seed: int = 0, stream: str = "dvl"):
         super().__init__()
         self.caster, self.params = world, params if params is not None else DvlParams()
-        self.noise, self.seed = bool(noise), int(seed)
+        self.noise, self.seed, self.stream = bool(noise), int(seed), str(stream)
+        random_stream(self.seed, self.stream)  # checks the seed and the stream's name
         self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
         self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
         self._measurement = self.DeclareDiscreteState(np.array([np.nan, 0.0]))  # altitude, n
@@ -136,6 +146,9 @@ class DvlAltimeter(LeafSystem):
                                                 self._update_measurement)
         self.altitude_output = self.DeclareVectorOutputPort(
             "altitude", 1, self._calc_altitude,
+            prerequisites_of_calc={self.discrete_state_ticket(self._measurement)})
+        self.bottom_lock_output = self.DeclareVectorOutputPort(
+            "bottom_lock", 1, self._calc_bottom_lock,
             prerequisites_of_calc={self.discrete_state_ticket(self._measurement)})
         self.seabed_output = self.DeclareVectorOutputPort(
             "seabed_elevation", 1, self._calc_seabed_elevation,
@@ -152,7 +165,7 @@ class DvlAltimeter(LeafSystem):
 
     def _update_measurement(self, context, discrete_state):
         n = int(context.get_discrete_state(self._measurement)[1])
-        rng = np.random.default_rng([self.seed, n]) if self.noise else None
+        rng = generator(self.seed, self.stream, n) if self.noise else None
         true = self.true_state_input.Eval(context)
         ranges = measure_ranges(self.caster, self.params, true, rng)
         discrete_state.set_value(self._measurement, [altitude_of(self.params, true, ranges),
@@ -161,6 +174,9 @@ class DvlAltimeter(LeafSystem):
 
     def _calc_altitude(self, context, output: BasicVector):
         output.SetAtIndex(0, context.get_discrete_state(self._measurement)[0])
+
+    def _calc_bottom_lock(self, context, output: BasicVector):
+        output.SetAtIndex(0, float(np.isfinite(context.get_discrete_state(self._measurement)[0])))
 
     def _calc_seabed_elevation(self, context, output: BasicVector):
         altitude = context.get_discrete_state(self._measurement)[0]

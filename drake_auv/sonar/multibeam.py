@@ -29,7 +29,8 @@ class MultibeamSonar(RangeSonar):
         mount_position: sensor position in the body frame, m (with a named mount).
         beam_width_deg: beam cone angle, deg (0: one ray per beam).
         noise: error options (default: none).
-        seed: seed of the noise.
+        seed: the run's seed, drawn through `stream` (`drake_auv.random_streams`).
+        stream: the noise's random stream.
         max_incidence_deg: grazing limit, deg.
         axis_hits_output: declare the `axis_hits` output (`AxisHits`, true world).
     """
@@ -37,7 +38,8 @@ class MultibeamSonar(RangeSonar):
     def __init__(self, world, num_beams: int = 480, fan_deg: float = 120.0, rate: float = 10.0,
                  max_range: float = 20.0, mount="down", mount_position=(0.0, 0.0, 0.0),
                  beam_width_deg: float = 0.0, noise: SonarNoise | None = None, seed: int = 0,
-                 max_incidence_deg: float = 85.0, axis_hits_output: bool = False):
+                 max_incidence_deg: float = 85.0, axis_hits_output: bool = False,
+                 stream: str = "multibeam"):
         if not (np.isfinite(rate) and rate > 0):
             raise ValueError(f"rate must be > 0 pings/s, got {rate}")
         if isinstance(mount, str):
@@ -50,7 +52,8 @@ class MultibeamSonar(RangeSonar):
                            max_incidence=np.radians(max_incidence_deg),
                            noise=noise if noise is not None else SonarNoise())
         self._geometry = beam_geometry(model, self.angles)
-        super().__init__(world, model, 1.0 / rate, seed, axis_hits=axis_hits_output)
+        super().__init__(world, model, 1.0 / rate, seed, axis_hits=axis_hits_output,
+                         stream=stream)
 
     def update_angles(self, n: int) -> np.ndarray:
         return self.angles

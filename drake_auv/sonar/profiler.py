@@ -39,7 +39,8 @@ class PencilBeamProfiler(RangeSonar):
         mount_position: sensor position in the body frame, m.
         mount: a full `SonarMount`, overriding scan_plane and mount_position.
         noise: error options (default: none).
-        seed: seed of the noise.
+        seed: the run's seed, drawn through `stream` (`drake_auv.random_streams`).
+        stream: the noise's random stream.
         max_incidence_deg: grazing limit, deg.
         planes: {mission leg: scan plane} where the head is tilted to another plane than
             `scan_plane` (a tilt unit: vertical on vertical-following legs); with it the
@@ -51,7 +52,8 @@ class PencilBeamProfiler(RangeSonar):
                  beam_width_deg: float = 1.5, max_range: float = 20.0,
                  mount_position=(0.0, 0.0, 0.0), mount: SonarMount | None = None,
                  noise: SonarNoise | None = None, seed: int = 0,
-                 max_incidence_deg: float = 85.0, planes: dict[int, str] | None = None):
+                 max_incidence_deg: float = 85.0, planes: dict[int, str] | None = None,
+                 stream: str = "profiler"):
         if scan_plane not in ("horizontal", "vertical"):
             raise ValueError(f"scan_plane must be 'horizontal' or 'vertical', got {scan_plane!r}")
         lo, hi = (float(a) for a in sector_deg)
@@ -89,7 +91,7 @@ class PencilBeamProfiler(RangeSonar):
         cycle = (2 * np.pi if width >= 2 * np.pi - 1e-9 else 2 * width) / self.step
         self._cycle = int(round(cycle)) if abs(cycle - round(cycle)) < 1e-6 else None
         self._geometry_cache = {}
-        super().__init__(world, model, 1.0 / update_rate, seed)
+        super().__init__(world, model, 1.0 / update_rate, seed, stream=stream)
         if self.planes:
             self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
 

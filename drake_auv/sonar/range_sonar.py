@@ -4,7 +4,8 @@ Inputs `true_state` (12, to cast against the true world) and `estimated_state` (
 the returns in the navigation frame); output `returns` (`SonarReturns`, the abstract state
 written by a periodic unrestricted update, so the beams are cast at the sensor's rate and not
 at every integrator step). Update n (n = 0, 1, ...) fires at t = n * period; its noise draws
-come from `default_rng([seed, n])`, so the same seed gives the same returns. With
+come from the run's stream of the sonar (`stream`, a name in `drake_auv.random_streams`), child
+n, so the same seed gives the same returns. With
 `axis_hits`, a second output `axis_hits` (`AxisHits`, true world, for scoring only) holds the
 faces the beams' axes hit in the same update, so a coverage recorder of the same beams need
 not cast them again.
@@ -18,6 +19,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.geometry.raycast import RayCaster
+from drake_auv.random_streams import generator, stream as random_stream
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.sonar.beams import (AxisHits, BeamGeometry, SonarModel, beam_geometry,
                                    scan_with_hits)
@@ -38,14 +40,15 @@ class RangeSonar(LeafSystem):
     """Base of the sonar systems; subclasses give the beam angles of each update."""
 
     def __init__(self, world, model: SonarModel, period: float, seed: int = 0,
-                 axis_hits: bool = False):
+                 axis_hits: bool = False, stream: str = "multibeam"):
         super().__init__()
         if not (np.isfinite(period) and period > 0):
             raise ValueError(f"sonar update period must be > 0 s, got {period}")
         self.caster = as_caster(world)
         self.model = model
         self.period = float(period)
-        self.seed = int(seed)
+        self.seed, self.stream = int(seed), str(stream)
+        random_stream(self.seed, self.stream)  # checks the seed and the stream's name
         self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
         self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
         self._returns_index = self.DeclareAbstractState(
@@ -74,7 +77,7 @@ class RangeSonar(LeafSystem):
     def _update_returns(self, context, state):
         n = context.get_abstract_state(self._returns_index).get_value().sequence
         model = self.scan_model(context)
-        rng = np.random.default_rng([self.seed, n]) if model.noise.enabled else None
+        rng = generator(self.seed, self.stream, n) if model.noise.enabled else None
         returns, hits = scan_with_hits(self.caster, model, None,
                                        self.true_state_input.Eval(context),
                                        self.estimated_state_input.Eval(context), rng=rng,

@@ -18,6 +18,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.output_files import replacing
 from drake_auv.terrain.bathymetry import Bathymetry
 
 _EARTH_RADIUS = 6378137.0  # WGS 84 semi-major axis, m (the sphere of Pseudo-Mercator)
@@ -118,7 +119,11 @@ def _read_raster(path: FilePath) -> Bathymetry:
     except RasterioIOError as err:
         raise ValueError(f"{path}: not a raster GDAL can read ({err})") from None
     z = np.ma.filled(band, np.nan)
-    z[~np.isfinite(z)] = np.nan
+    if np.isinf(z).any():  # refused as `Bathymetry` refuses it, not read as no-data
+        i, j = np.argwhere(np.isinf(z))[0]
+        raise ValueError(f"{path}: {int(np.isinf(z).sum())} infinite cell(s) (first {z[i, j]} "
+                         f"at row {i}, column {j} of the file); elevations must be finite "
+                         "metres, no-data cells the file's nodata value or NaN")
     ny, nx = z.shape
     a, b, c, d, e, f = transform.a, transform.b, transform.c, transform.d, transform.e, transform.f
     jac = np.array([[a, b], [d, e]])  # map units per (column, row) step
@@ -164,8 +169,9 @@ def write_geotiff(bathy: Bathymetry, path) -> None:
     x0, y0 = bathy.origin
     ny, nx = bathy.shape
     transform = Affine(dx, 0.0, x0 - dx / 2, 0.0, -dy, y0 + (ny - 0.5) * dy)
-    with rasterio.open(path, "w", driver="GTiff", width=nx, height=ny, count=1,
-                       dtype="float32", nodata=np.float32(-9999.0), transform=transform,
-                       crs=bathy.crs if bathy.crs and bathy.crs.startswith("EPSG") else None) as ds:
+    crs = bathy.crs if bathy.crs and bathy.crs.startswith("EPSG") else None
+    with replacing(path) as temporary, rasterio.open(
+            temporary, "w", driver="GTiff", width=nx, height=ny, count=1, dtype="float32",
+            nodata=np.float32(-9999.0), transform=transform, crs=crs) as ds:
         data = np.where(np.isfinite(bathy.z), bathy.z, -9999.0)[::-1].astype(np.float32)
         ds.write(data, 1)

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.systems.framework import DiagramBuilder
-from pydrake.systems.primitives import LogVectorOutput, TrajectorySource, VectorLogSink
+from pydrake.systems.primitives import (ConstantVectorSource, LogVectorOutput, TrajectorySource,
+                                        VectorLogSink)
 
 from drake_auv.vehicle.control import TrackingGains
 from drake_auv.vehicle.navigation import NavigationParams
@@ -80,11 +81,13 @@ class TrackingHandles:
 def build_tracking_diagram(path: Path, speed: float = 0.5, params: Girona500Params | None = None,
                            navigation: NavigationParams | None = None, initial_state=None,
                            gains: TrackingGains | None = None, time_step: float = 0.05,
-                           log_period: float = 0.1, scene=None):
+                           log_period: float = 0.1, scene=None, current=None):
     """A Diagram that flies `path` at `speed` (m/s): source -> tracker -> allocation -> dynamics.
 
     The vehicle starts at rest on the first sample with the first heading unless
     `initial_state` is given. True state and reference are logged every `log_period` s.
+    `current` (3, m/s, world frame): a uniform steady current (a source named `water` feeds
+    the dynamics and the navigation); None: still water.
     With a `drake_auv.visualization.Scene`, the vehicle and its trail are drawn there.
     Exported outputs: `state` (true) and `estimated_state`. Returns (diagram, TrackingHandles).
     """
@@ -97,6 +100,15 @@ def build_tracking_diagram(path: Path, speed: float = 0.5, params: Girona500Para
         initial_state[5] = path.unwrapped_heading()[0]
     builder = DiagramBuilder()
     vehicle = add_girona500(builder, params, navigation, initial_state, gains, time_step)
+    if current is not None:
+        current = np.asarray(current, dtype=float)
+        if current.shape != (3,) or not np.all(np.isfinite(current)):
+            raise ValueError(f"current must be 3 finite numbers (world x, y, z, m/s), got "
+                             f"{current}")
+        water = builder.AddNamedSystem("water", ConstantVectorSource(
+            np.concatenate([current, np.zeros(3)])))
+        builder.Connect(water.get_output_port(), vehicle.dynamics.water_input)
+        builder.Connect(water.get_output_port(), vehicle.navigation.water_input)
     source = builder.AddNamedSystem("reference", TrajectorySource(trajectory, 1))
     builder.Connect(source.get_output_port(), vehicle.tracker.reference_input)
     state_log = LogVectorOutput(vehicle.dynamics.state_output, builder, log_period)

@@ -10,6 +10,7 @@ animation as one standalone HTML file, with the camera framed on the scene.
 
 from __future__ import annotations
 
+import logging
 import math
 from pathlib import Path as FilePath
 
@@ -18,6 +19,7 @@ from pydrake.geometry import Box, Capsule, Meshcat, MeshcatParams, Rgba
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import LeafSystem
 
+from drake_auv.output_files import write_text
 from drake_auv.planning.path import Path
 from drake_auv.signals import VehicleState
 
@@ -41,6 +43,22 @@ def _rgba(value) -> Rgba:
     return Rgba(*value) if len(value) == 4 else Rgba(*value, 1.0)
 
 
+def _local_meshcat(live: bool, port: int | None) -> Meshcat:
+    """A Meshcat served on localhost. Only a live one announces its URL: a headless run
+    needs the server for its HTML recording alone, and nobody is meant to open it."""
+    params = MeshcatParams(host="localhost")
+    if port is not None:
+        params.port = port
+    logger = logging.getLogger("drake")
+    level = logger.level
+    if not live:
+        logger.setLevel(logging.WARNING)
+    try:
+        return Meshcat(params)
+    finally:
+        logger.setLevel(level)
+
+
 class Scene:
     """One Meshcat scene (served on localhost only). Attributes: `meshcat`, `root` (scene-tree
     prefix), `live` (a browser watches it while the mission flies: the mission Diagram then
@@ -48,8 +66,9 @@ class Scene:
     `recording`, `bounds` (box of the meshes and paths drawn), `camera_framed`."""
 
     def __init__(self, meshcat: Meshcat | None = None, root: str = "drake_auv",
-                 live: bool = False):
-        self.meshcat = meshcat if meshcat is not None else Meshcat(MeshcatParams(host="localhost"))
+                 live: bool = False, port: int | None = None):
+        """`port`: the live view's port (None: Drake's first free one from 7000)."""
+        self.meshcat = meshcat if meshcat is not None else _local_meshcat(live, port)
         self.root = "/" + root.strip("/")
         self.live = live
         self.recording = False
@@ -171,7 +190,7 @@ class Scene:
             self.recording = False
         filename = FilePath(filename)
         filename.parent.mkdir(parents=True, exist_ok=True)
-        filename.write_text(self.meshcat.StaticHtml())
+        write_text(filename, self.meshcat.StaticHtml())
         return filename
 
 

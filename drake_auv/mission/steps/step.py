@@ -144,7 +144,7 @@ class Wiring:
 
             dvl = self.added["dvl"] = self.builder.AddNamedSystem("dvl", DvlAltimeter(
                 self.caster, noise=self.spec.sonar_noise.to_noise() is not None,
-                seed=self.spec.seed + 2))
+                seed=self.spec.seed))
             self.builder.Connect(self.vehicle.dynamics.state_output, dvl.true_state_input)
             self.builder.Connect(self.estimated, dvl.estimated_state_input)
             self.builder.Connect(dvl.returns_output, self.mapper.dvl_input)

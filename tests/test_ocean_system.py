@@ -1,0 +1,98 @@
+"""The `Ocean` system: the water at the vehicle on its `water` port (FixValue, Eval), its
+turbulence in the Context (a named discrete-state group, the generator abstract state)."""
+
+import copy
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from drake_auv.ocean.current import MeanCurrent, VerticalProfile
+from drake_auv.ocean.model import OceanModel
+from drake_auv.ocean.spec import ocean_from_raw
+from drake_auv.ocean.system import Ocean
+from drake_auv.ocean.turbulence import Turbulence
+from drake_auv.signals import PORT_SIGNALS, VehicleState, Water
+
+
+def _state(x=0.0, y=0.0, z=-10.0):
+    state = VehicleState.zeros()
+    state.x, state.y, state.z = x, y, z
+    state.yaw, state.u = 1.0, 0.5  # the vehicle's attitude and speed do not matter
+    return state[:]
+
+
+def test_the_water_port_carries_the_current_at_the_vehicle():
+    model = OceanModel(MeanCurrent(0.4, 90.0), VerticalProfile(depth_m=(0.0, 20.0),
+                                                               factor=(1.0, 0.5)))
+    ocean = Ocean(model)
+    context = ocean.CreateDefaultContext()
+    ocean.GetInputPort("state").FixValue(context, _state(z=-10.0))
+    water = Water(ocean.GetOutputPort("water").Eval(context))
+    np.testing.assert_allclose(water.velocity, [0.3, 0.0, 0.0], atol=1e-15)
+    np.testing.assert_array_equal(water.acceleration, 0.0)
+    assert PORT_SIGNALS["water"] is Water and Water.size() == 6
+
+
+def test_waves_give_the_model_s_velocity_and_acceleration_at_the_vehicle():
+    spec = ocean_from_raw({"current": {"speed_mps": 0.2, "towards_deg": 0},
+                           "waves": {"hs_m": 1.5, "tp_s": 7, "depth_m": 30}})
+    model = spec.model(np.random.default_rng(3))
+    ocean = Ocean(model)
+    context = ocean.CreateDefaultContext()
+    context.SetTime(12.5)
+    ocean.GetInputPort("state").FixValue(context, _state(3.0, -4.0, -2.0))
+    water = Water(ocean.GetOutputPort("water").Eval(context))
+    velocity, acceleration = model.water(12.5, [[3.0, -4.0, -2.0]])
+    np.testing.assert_array_equal(water.velocity, velocity[0])
+    np.testing.assert_array_equal(water.acceleration, acceleration[0])
+    assert np.any(water.acceleration != 0.0)
+    context.SetTime(13.0)  # the output follows time (its cache depends on it)
+    later = ocean.GetOutputPort("water").Eval(context)
+    np.testing.assert_array_equal(later, np.concatenate(model.water(13.0, [[3.0, -4.0, -2.0]]),
+                                                        axis=1)[0])
+    assert ocean.HasDirectFeedthrough(0, 0)  # state -> water
+
+
+def test_turbulence_lives_in_the_context_and_is_seeded():
+    model = OceanModel(MeanCurrent(0.3, 0.0),
+                       turbulence=Turbulence(speed_sd_mps=0.05, direction_sd_deg=10.0,
+                                             time_constant_s=20.0))
+    ocean = Ocean(model, seed=4, period=0.1)
+
+    def run(context, seconds):
+        ocean.GetInputPort("state").FixValue(context, _state())
+        simulator = Simulator(ocean, context)
+        simulator.AdvanceTo(seconds)
+        return ocean.turbulence(context), Water(ocean.GetOutputPort("water").Eval(context))
+
+    first = ocean.CreateDefaultContext()
+    start = ocean.turbulence(first)
+    assert np.any(start != 0.0)  # drawn from the stationary law
+    twin = copy.deepcopy(first)  # the same seed, its own generator
+    a, water_a = run(first, 5.0)
+    b, water_b = run(twin, 5.0)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(water_a[:], water_b[:])
+    assert not np.allclose(a, start)
+    # the water follows the deviation: speed 0.3 + ds, heading turned by the angle
+    assert np.hypot(water_a.vx, water_a.vy) == pytest.approx(0.3 + a[0])
+    assert np.arctan2(water_a.vx, water_a.vy) == pytest.approx(a[1])
+    other = Ocean(model, seed=5)
+    assert not np.allclose(other.turbulence(other.CreateDefaultContext()), start)
+
+
+def test_still_turbulence_declares_no_update():
+    ocean = Ocean(OceanModel(MeanCurrent(0.1, 0.0)))
+    context = ocean.CreateDefaultContext()
+    np.testing.assert_array_equal(ocean.turbulence(context), 0.0)
+    ocean.GetInputPort("state").FixValue(context, _state())
+    simulator = Simulator(ocean, context)
+    simulator.AdvanceTo(1.0)
+    assert simulator.get_num_unrestricted_updates() == 0
+    turbulent = Ocean(OceanModel(turbulence=Turbulence(speed_sd_mps=0.1)), period=0.25)
+    context = turbulent.CreateDefaultContext()
+    turbulent.GetInputPort("state").FixValue(context, _state())
+    simulator = Simulator(turbulent, context)
+    simulator.AdvanceTo(1.0)
+    assert simulator.get_num_unrestricted_updates() == 4  # at 0, 0.25, 0.5, 0.75 s
