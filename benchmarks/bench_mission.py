@@ -20,8 +20,12 @@ the same simulated time (the reference) plus the native ray casts and OctoMap in
 work this mission does at this fidelity whatever its Python costs; its ratio to the reference
 is the most this mission could reach.
 
+`--sea` instead measures what the sea costs: the mission as given (the boulder's default sea)
+and the same mission in still water (`ocean=none`), run after run in turns, compared per
+simulated second (the dives differ in length) in wall and in CPU seconds of simulation.
+
     .venv/bin/python benchmarks/bench_mission.py [--runs 3] [--seed 0] [--set KEY=VALUE]
-        [--shares]
+        [--shares | --sea]
 """
 
 from __future__ import annotations
@@ -182,6 +186,25 @@ def outcome(result) -> str:
             f"{clearance:.2f} m, contact {'yes' if clearance <= VEHICLE_RADIUS else 'no'}")
 
 
+def sea_cost(spec, still, runs: int) -> None:
+    """Medians over `runs` alternating pairs of the wall and CPU seconds of simulation per
+    simulated second, `spec` (a sea) against `still` (the same mission in still water)."""
+    pairs = [(one_run(spec), one_run(still)) for _ in range(runs)]
+
+    def per_s(run, key):
+        return run[key] / run["sim"]
+
+    for key, name in (("wall", "wall"), ("sim_cpu", "CPU")):
+        sea = float(np.median([per_s(a, key) for a, _ in pairs]))
+        calm = float(np.median([per_s(b, key) for _, b in pairs]))
+        print(f"{name} seconds of simulation per simulated second: sea {1e3 * sea:.2f} ms, "
+              f"still water {1e3 * calm:.2f} ms: the sea costs {sea / calm - 1:+.1%} "
+              "(target <= +10 %)")
+    for label, index in (("sea", 0), ("still water", 1)):
+        outcomes = sorted({pair[index]["outcome"] for pair in pairs})
+        print(f"the dive in {label}: {'; '.join(outcomes)}")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
@@ -190,8 +213,17 @@ def main(argv=None) -> int:
                         metavar="KEY=VALUE", help="override the mission file (repeatable)")
     parser.add_argument("--shares", action="store_true",
                         help="one more run, timed by parts, and the mission's floor")
+    parser.add_argument("--sea", action="store_true",
+                        help="the sea's cost: the mission against itself in still water")
     args = parser.parse_args(argv)
     spec = load_mission("boulder", seed=args.seed, overrides=args.overrides)
+    if args.sea:
+        print(machine())
+        print(f"{args.runs} pair(s) of runs of the boulder mission, seed {args.seed}"
+              + (f", {' '.join(args.overrides)}" if args.overrides else ""))
+        sea_cost(spec, load_mission("boulder", seed=args.seed,
+                                    overrides=[*args.overrides, "ocean=none"]), args.runs)
+        return 0
     runs = [one_run(spec) for _ in range(args.runs)]
     med = {k: float(np.median([r[k] for r in runs])) for k in runs[0] if k != "outcome"}
     print(machine())

@@ -160,7 +160,7 @@ def test_a_mission_on_the_users_own_files_in_utm(tmp_path):
     with open(out / "trajectory.csv") as f:
         rows = list(csv.DictReader(f))
     assert list(rows[0]) == ["t", "x", "y", "z", "roll", "pitch", "yaw", "est_x", "est_y",
-                             "est_z"]
+                             "est_z", "current_x", "current_y", "current_z"]
     east = np.array([float(r["x"]) for r in rows])
     assert np.all(np.abs(east - LOCAL_ORIGIN[0]) < 100.0)  # back in UTM eastings
     dot = (out / "diagram.dot").read_text()

@@ -53,7 +53,7 @@ def _write(path):
 
 
 def _boulder(*overrides):
-    return load_mission("boulder", overrides=["limits.max_time_s=12", *overrides])
+    return load_mission("boulder", overrides=["limits.max_time_s=12", "ocean=none", *overrides])
 
 
 def test_a_still_sea_adds_no_ocean_system():

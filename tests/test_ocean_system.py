@@ -1,5 +1,6 @@
-"""The `Ocean` system: the water at the vehicle on its `water` port (FixValue, Eval), its
-turbulence in the Context (a named discrete-state group, the generator abstract state)."""
+"""The `Ocean` system: the water at the vehicle on its `water` port (FixValue, Eval), sampled
+once per step, its turbulence in the Context (named discrete-state groups, draws keyed by the
+update's index)."""
 
 import copy
 
@@ -22,12 +23,21 @@ def _state(x=0.0, y=0.0, z=-10.0):
     return state[:]
 
 
+def _initialized(ocean, state, t=0.0):
+    """A context of `ocean` at time `t` with its initialization events run; its simulator."""
+    context = ocean.CreateDefaultContext()
+    ocean.GetInputPort("state").FixValue(context, state)
+    context.SetTime(t)
+    simulator = Simulator(ocean, context)
+    simulator.Initialize()
+    return context, simulator
+
+
 def test_the_water_port_carries_the_current_at_the_vehicle():
     model = OceanModel(MeanCurrent(0.4, 90.0), VerticalProfile(depth_m=(0.0, 20.0),
                                                                factor=(1.0, 0.5)))
     ocean = Ocean(model)
-    context = ocean.CreateDefaultContext()
-    ocean.GetInputPort("state").FixValue(context, _state(z=-10.0))
+    context, _ = _initialized(ocean, _state(z=-10.0))
     water = Water(ocean.GetOutputPort("water").Eval(context))
     np.testing.assert_allclose(water.velocity, [0.3, 0.0, 0.0], atol=1e-15)
     np.testing.assert_array_equal(water.acceleration, 0.0)
@@ -38,27 +48,26 @@ def test_waves_give_the_model_s_velocity_and_acceleration_at_the_vehicle():
     spec = ocean_from_raw({"current": {"speed_mps": 0.2, "towards_deg": 0},
                            "waves": {"hs_m": 1.5, "tp_s": 7, "depth_m": 30}})
     model = spec.model(np.random.default_rng(3))
-    ocean = Ocean(model)
-    context = ocean.CreateDefaultContext()
-    context.SetTime(12.5)
-    ocean.GetInputPort("state").FixValue(context, _state(3.0, -4.0, -2.0))
+    ocean = Ocean(model, period=0.05)
+    context, simulator = _initialized(ocean, _state(3.0, -4.0, -2.0), t=12.5)
     water = Water(ocean.GetOutputPort("water").Eval(context))
     velocity, acceleration = model.water(12.5, [[3.0, -4.0, -2.0]])
     np.testing.assert_array_equal(water.velocity, velocity[0])
     np.testing.assert_array_equal(water.acceleration, acceleration[0])
     assert np.any(water.acceleration != 0.0)
-    context.SetTime(13.0)  # the output follows time (its cache depends on it)
-    later = ocean.GetOutputPort("water").Eval(context)
-    np.testing.assert_array_equal(later, np.concatenate(model.water(13.0, [[3.0, -4.0, -2.0]]),
-                                                        axis=1)[0])
-    assert ocean.HasDirectFeedthrough(0, 0)  # state -> water
+    # each step's sample holds the water of the step's own time: what the dynamics read then
+    for t in (12.75, 13.0):
+        simulator.AdvanceTo(t)
+        np.testing.assert_allclose(ocean.GetOutputPort("water").Eval(context), np.concatenate(
+            model.water(t, [[3.0, -4.0, -2.0]]), axis=1)[0], rtol=0, atol=1e-12)
+    assert not ocean.HasDirectFeedthrough(0, 0)  # a sample: no algebraic loop with the plant
 
 
 def test_turbulence_lives_in_the_context_and_is_seeded():
     model = OceanModel(MeanCurrent(0.3, 0.0),
                        turbulence=Turbulence(speed_sd_mps=0.05, direction_sd_deg=10.0,
                                              time_constant_s=20.0))
-    ocean = Ocean(model, seed=4, period=0.1)
+    ocean = Ocean(model, seed=4, turbulence_period=0.1)
 
     def run(context, seconds):
         ocean.GetInputPort("state").FixValue(context, _state())
@@ -69,7 +78,7 @@ def test_turbulence_lives_in_the_context_and_is_seeded():
     first = ocean.CreateDefaultContext()
     start = ocean.turbulence(first)
     assert np.any(start != 0.0)  # drawn from the stationary law
-    twin = copy.deepcopy(first)  # the same seed, its own generator
+    twin = copy.deepcopy(first)  # the same seed: the same draws
     a, water_a = run(first, 5.0)
     b, water_b = run(twin, 5.0)
     np.testing.assert_array_equal(a, b)
@@ -84,15 +93,12 @@ def test_turbulence_lives_in_the_context_and_is_seeded():
 
 def test_still_turbulence_declares_no_update():
     ocean = Ocean(OceanModel(MeanCurrent(0.1, 0.0)))
-    context = ocean.CreateDefaultContext()
+    context, simulator = _initialized(ocean, _state())
+    simulator.AdvanceTo(1.0)
     np.testing.assert_array_equal(ocean.turbulence(context), 0.0)
-    ocean.GetInputPort("state").FixValue(context, _state())
-    simulator = Simulator(ocean, context)
+    assert context.get_discrete_state(1).GetAtIndex(0) == 0  # no draw
+    turbulent = Ocean(OceanModel(turbulence=Turbulence(speed_sd_mps=0.1)),
+                      turbulence_period=0.25)
+    context, simulator = _initialized(turbulent, _state())
     simulator.AdvanceTo(1.0)
-    assert simulator.get_num_unrestricted_updates() == 0
-    turbulent = Ocean(OceanModel(turbulence=Turbulence(speed_sd_mps=0.1)), period=0.25)
-    context = turbulent.CreateDefaultContext()
-    turbulent.GetInputPort("state").FixValue(context, _state())
-    simulator = Simulator(turbulent, context)
-    simulator.AdvanceTo(1.0)
-    assert simulator.get_num_unrestricted_updates() == 4  # at 0, 0.25, 0.5, 0.75 s
+    assert context.get_discrete_state(1).GetAtIndex(0) == 4  # at 0, 0.25, 0.5, 0.75 s

@@ -173,7 +173,8 @@ def add_ocean(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpe
     model.check((bounds[0, 0], bounds[0, 1], bounds[1, 0], bounds[1, 1]), -bounds[0, 2],
                 cap if np.isfinite(cap) else 0.0,
                 plan.nominal.points if plan.nominal is not None else None)
-    ocean = builder.AddNamedSystem("ocean", Ocean(model, seed=spec.seed))
+    ocean = builder.AddNamedSystem("ocean", Ocean(model, seed=spec.seed,
+                                                  period=vehicle.dynamics.time_step))
     builder.Connect(vehicle.dynamics.state_output, ocean.state_input)
     builder.Connect(ocean.water_output, vehicle.dynamics.water_input)
     builder.Connect(ocean.water_output, vehicle.navigation.water_input)

@@ -55,9 +55,14 @@ class Turbulence:
         """The deviation (2,) (or (m, 2): m independent processes) after `dt` seconds, by
         the exact OU transition."""
         deviation = np.asarray(deviation, dtype=float)
+        return self.advance(deviation, dt, rng.standard_normal(deviation.shape))
+
+    def advance(self, deviation, dt: float, normals) -> np.ndarray:
+        """The exact OU transition over `dt` seconds of `deviation` (2,) or (m, 2), given
+        its standard normal draws `normals` (same shape)."""
         decay = math.exp(-dt / self.time_constant_s)
         spread = self.sd() * math.sqrt(-math.expm1(-2.0 * dt / self.time_constant_s))
-        return decay * deviation + spread * rng.standard_normal(deviation.shape)
+        return decay * np.asarray(deviation, dtype=float) + spread * np.asarray(normals)
 
 
 def perturb(velocity, rate, deviation) -> tuple[np.ndarray, np.ndarray]:
