@@ -41,7 +41,8 @@ class ParameterError(ValueError):
 class Check:
     """What a field accepts. kind "number": in [low, high] (ends open when named), `integer`,
     elementwise for an array; "choice": one of `choices`; "bool"; "text": a non-empty string;
-    "path": a `pathlib.Path`; "vector": `len(names)` finite numbers. `nullable`: None too.
+    "path": a `pathlib.Path`; "vector": `len(names)` finite numbers (or one of `choices`, a
+    word standing for a vector the user of the field works out). `nullable`: None too.
     `unit` is the field's unit, `key` its mission-file name, `scale` file value -> field value,
     `note` replaces the generated description of what is allowed."""
 
@@ -90,7 +91,8 @@ class Check:
         elif self.kind == "path":
             text = "a file path"
         else:
-            text = f"[{', '.join(self.names)}] ({unit})"
+            text = f"[{', '.join(self.names)}] ({unit})" + "".join(
+                f" or {c!r}" for c in self.choices)
         return text + (" or null" if self.nullable and self.kind != "bool" else "")
 
     def problem(self, value) -> str | None:
@@ -107,9 +109,11 @@ class Check:
         if self.kind == "path":
             return None if isinstance(value, Path) else "is not a file path"
         if self.kind == "vector":
-            ok = (isinstance(value, (list, tuple)) and len(value) == len(self.names)
-                  and all(is_number(v) and math.isfinite(v) for v in value))
-            return None if ok else f"is not {len(self.names)} finite numbers"
+            ok = (isinstance(value, str) and value in self.choices) or (
+                isinstance(value, (list, tuple)) and len(value) == len(self.names)
+                and all(is_number(v) and math.isfinite(v) for v in value))
+            return None if ok else f"is not {len(self.names)} finite numbers" + "".join(
+                f" or {c!r}" for c in self.choices)
         values = np.asarray(value, dtype=object).reshape(-1)
         if not values.size or not all(is_number(v) for v in values):
             return "is not a number"

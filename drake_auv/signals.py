@@ -105,13 +105,10 @@ Reference = _signal(
 LegSignal = _signal(
     "LegSignal", ("index", "start_s"),
     "The supervisor's `leg` (2): the leg flying and when it began (s).")
-PathStatus = _signal(
-    "PathStatus", ("leg", "end_s"),
-    "`PathReference.status` (2): the leg of the path held (-1 before any) and its end time, s.")
-ReplannerStatus = _signal(
-    "ReplannerStatus", ("leg", "finished", "next_index"),
-    "`Replanner.status` (3): the leg last flown (-1 before any), whether every waypoint is "
-    "visited (0/1), the next nominal waypoint.")
+BehaviourStatus = _signal(
+    "BehaviourStatus", ("leg", "finished", "progress"),
+    "A behaviour's `status` (3, `drake_auv.behaviour`): the leg it last flew (-1 before any), "
+    "finished (0/1), its own measure of progress (the behaviour's docstring names it).")
 ReplannerProgress = _signal(
     "ReplannerProgress", ("leg", "next_index", "steps", "finished"),
     "The replanner's `progress` group (4): leg flown (-1 none yet), next waypoint, steps of "
@@ -122,12 +119,6 @@ ReplanningStep = _signal(
     "`Replanner.step` (7): sim time of the last step (s), its wall time and its map query's "
     "(s), the next waypoint, whether a section was planned (0/1), STOMP's iterations and the "
     "occupied voxels the query gave (what the step's cost follows).")
-PilotStatus = _signal(
-    "PilotStatus", ("leg", "finished", "item"),
-    "`AutopilotPilot.status` (3): leg (-1 before any), finished (0/1), current item.")
-ExplorerStatus = _signal(
-    "ExplorerStatus", ("leg", "finished", "viewpoints"),
-    "`ViewPlanner.status` (3): leg (-1 before any), finished (0/1), viewpoints reached.")
 ExplorerProgress = _signal(
     "ExplorerProgress", ("leg", "steps", "finished", "viewpoints", "no_gain_steps"),
     "The view planner's `progress` group (5): leg flown (-1 none yet), planning steps of this "
@@ -194,10 +185,7 @@ PORT_SIGNALS = {
     "reference": Reference, "response_reference": Reference, "leg": LegSignal,
     "response": Response, "profile": Profile, "step": ReplanningStep, "wrench": Wrench,
     "thrust": Thrust, "thrust_command": Thrust, "thrust_saturation": Thrust, "water": Water,
-    "path_status": PathStatus, "replanner_status": ReplannerStatus,
-    "autopilot_status": PilotStatus, "explorer_status": ExplorerStatus,
-    ("PathReference", "status"): PathStatus, ("Replanner", "status"): ReplannerStatus,
-    ("AutopilotPilot", "status"): PilotStatus, ("ViewPlanner", "status"): ExplorerStatus,
+    "status": BehaviourStatus,
     ("ViewPlanner", "step"): ExplorerStep,
 }
 
@@ -207,6 +195,8 @@ def port_signal(port):
     ports have size 0, so they never match)."""
     name = port.get_name()
     view = PORT_SIGNALS.get((type(port.get_system()).__name__, name), PORT_SIGNALS.get(name))
+    if view is None and name.endswith("_status"):  # the supervisor's input of a behaviour's
+        view = BehaviourStatus
     return view if view is not None and view.size() == port.size() else None
 
 

@@ -32,14 +32,15 @@ from pydrake.systems.primitives import LogVectorOutput
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.geometry.visibility import coverage_share
 from drake_auv.geometry.raycast import RayCaster
-from drake_auv.leg_signal import LEG_SIZE, read_leg
+from drake_auv.behaviour import LEG_SIZE, read_leg
 from drake_auv.mapping.mapper import OctreeMapper
 from drake_auv.mission.config import FollowStep, load_mission
 from drake_auv.mission.diagram import (SUPERVISOR_PERIOD, add_behaviours,
                                        add_coverage_recorders, add_sonars)
-from drake_auv.mission.plan import plan_mission, terrain_elevation
+from drake_auv.mission.plan import plan_mission
+from drake_auv.mission.steps.step import Wiring, terrain_elevation
 from drake_auv.mission.site import load_site
-from drake_auv.signals import LegSignal, Reference, ReplannerStatus, VehicleState
+from drake_auv.signals import BehaviourStatus, LegSignal, Reference, VehicleState
 from drake_auv.vehicle.diagram import add_girona500
 
 SPACING = 0.5  # m between the follower's samples along the track
@@ -53,7 +54,7 @@ class ConstantAltitudeFollower(LeafSystem):
     `leg` input says when). Ports, those of the `Replanner` it replaces, laid out by
     `drake_auv.signals`: inputs `estimated_state` (`VehicleState`, unused: an open-loop
     reference) and `leg` (`LegSignal`); outputs `reference` (`Reference`, world) and `status`
-    (`ReplannerStatus`, leg -1 off its legs).
+    (`BehaviourStatus`, leg -1 off its legs; progress: the next sample of the track).
     """
 
     def __init__(self, path, terrain, altitude: float, speed: float, legs):
@@ -72,7 +73,7 @@ class ConstantAltitudeFollower(LeafSystem):
         self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self.DeclareVectorOutputPort("reference", Reference.size(), self._calc_reference)
-        self.DeclareVectorOutputPort("status", ReplannerStatus.size(), self._calc_status)
+        self.DeclareVectorOutputPort("status", BehaviourStatus.size(), self._calc_status)
 
     def _along(self, context) -> tuple[int, float]:
         """(leg, metres flown along the track; -1 before the leg)."""
@@ -95,11 +96,11 @@ class ConstantAltitudeFollower(LeafSystem):
 
     def _calc_status(self, context, output):
         leg, s = self._along(context)
-        status = ReplannerStatus.zeros()
+        status = BehaviourStatus.zeros()
         status.leg = leg if s >= 0 else -1.0
         if s >= 0:
             status.finished = float(s >= self.arc[-1])
-            status.next_index = float(np.searchsorted(self.arc, s))
+            status.progress = float(np.searchsorted(self.arc, s))
         output.SetFromVector(status[:])
 
 
@@ -117,8 +118,10 @@ def build(site, spec, plan, caster, follower=None):
                                     OctreeMapper(resolution=spec.replanner.voxel_m))
     builder.Connect(returns["multibeam"], mapper.multibeam_input)
     builder.Connect(returns["profiler"], mapper.profiler_input)
-    *_, supervisor, _ = add_behaviours(builder, vehicle, profiler, mapper, spec, plan, site,
-                                       estimated, returns, replanner=follower)
+    wiring = Wiring(builder, spec, plan, site, caster, vehicle, estimated, mapper, returns,
+                    profiler)
+    supervisor, *_ = add_behaviours(builder, wiring,
+                                    own=None if follower is None else {"replan": follower})
     camera, multibeam_coverage = add_coverage_recorders(
         builder, caster, vehicle, spec, site, site.max_range, multibeam)
     logs = (LogVectorOutput(vehicle.dynamics.state_output, builder, 0.1),
@@ -136,7 +139,7 @@ def fly(site, spec, plan, caster, follower=None, max_time: float | None = None) 
     simulator.AdvanceTo(max_time if max_time is not None else plan.budget)
     context = simulator.get_context()
     state_log, leg_log = (log.FindLog(context) for log in logs)
-    survey = plan.replan_legs[0]
+    survey = next(iter(plan.legs_of("replan")))
     legs = LegSignal(leg_log.data().T)
     started = legs.start_s[legs.index == survey]
     outcome = supervisor.outcomes(supervisor.GetMyContextFromRoot(context))[survey]
@@ -189,7 +192,7 @@ def main(argv=None) -> int:
     plan = plan_mission(spec, site)
     caster = RayCaster(site.world)
     follower = ConstantAltitudeFollower(plan.nominal, terrain_elevation(site), args.altitude,
-                                        plan.survey_speed, plan.replan_legs)
+                                        plan.survey_speed, tuple(plan.legs_of("replan")))
     follower.set_name("constant_altitude")
     rows = {"built-in: STOMP replanner": fly(site, spec, plan, caster, None, args.max_time),
             f"yours: constant altitude {args.altitude:g} m":

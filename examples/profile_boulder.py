@@ -40,7 +40,7 @@ def follow_spec(depth: float, offset: float):
 def run(spec, site, scene=None):
     """Flies `spec` at `site`; returns the follow leg's time series."""
     result = run_mission(spec, site, scene=scene)
-    leg = next(iter(result.plan.follow_legs))
+    leg = next(iter(result.plan.legs_of("follow")))
     mask = result.leg_at == leg
     x = result.state[mask].T
     lo, hi = site.target_mesh.bounds

@@ -39,7 +39,7 @@ def run(spec, site, scene=None):
     """Flies `spec` (the `c_object` mission) at `site`; returns the follow leg's time series
     and the turn count."""
     result = run_mission(spec, site, scene=scene)
-    leg = next(iter(result.plan.follow_legs))
+    leg = next(iter(result.plan.legs_of("follow")))
     mask = result.leg_at == leg
     controller = result.handles.controller
     follower = controller.follower(controller.GetMyContextFromRoot(result.context))
@@ -48,7 +48,7 @@ def run(spec, site, scene=None):
                 mode=Profile(result.profile[mask]).mode,
                 estimated=Profile(result.profile[mask]).distance,
                 clearance=result.clearance[mask], turns=follower.turns,
-                offset=result.plan.follow_legs[leg].params.offset)
+                offset=result.plan.legs_of("follow")[leg].params.offset)
 
 
 def figure(result, filename):

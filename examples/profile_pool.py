@@ -46,7 +46,7 @@ RANGE_SIGMA = 0.05  # m, range noise of the spurious-returns run
 def follow_leg(result, mode: str) -> dict:
     """The samples of the follow leg in `mode`: t (s since it began), x (n, 12) true state,
     profile (n, 7) the controller's output, clearance (n,) true, and its `FollowingParams`."""
-    leg, config = next((i, c) for i, c in result.plan.follow_legs.items() if c.mode == mode)
+    leg, config = next((i, c) for i, c in result.plan.legs_of("follow").items() if c.mode == mode)
     mask = result.leg_at == leg
     t = result.times[mask]
     return dict(t=t - t[0], x=result.state[mask], profile=result.profile[mask],

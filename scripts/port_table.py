@@ -2,9 +2,9 @@
 
 `port_rows()` builds the boulder mission's Diagram with every fault spliced in and a live
 scene and an MCAP log (so the fault gates, the viewers and the recorder are there too), adds
-the systems only a fly step
-brings (the DVL and the autopilot pilot) and the one an explore step brings (the view
-planner), and walks every drake_auv system's ports: its name,
+the systems only a fly step brings (the DVL and the autopilot pilot), the one an explore step
+brings (the view planner) and a hover step's (the station keeper), and walks every drake_auv
+system's ports: its name,
 direction and type (a vector's size, an abstract port's value class). The meaning of each port
 is the doc's own column, kept by (system, direction, port); a port without a row gets an empty
 meaning, so the table the code gives differs from the committed one until its row is written.
@@ -60,6 +60,7 @@ def _systems():
     from drake_auv.mission.diagram import build_mission_diagram
     from drake_auv.mission.plan import plan_mission
     from drake_auv.mission.site import load_site
+    from drake_auv.mission.steps.hover import station_keeper
     from drake_auv.rosio.writer import McapLog
     from drake_auv.sonar.altimeter import DvlAltimeter
     from drake_auv.visualization import Scene
@@ -76,7 +77,8 @@ def _systems():
                          ("dvl (fly, explore steps)", DvlAltimeter(handles.caster)),
                          ("autopilot (fly steps)", AutopilotPilot({})),
                          ("view_planner (explore steps)", ViewPlanner(
-                             {0: ExploreParameters(region=(0.0, 0.0, -2.0, 1.0, 1.0, -1.0))}))]:
+                             {0: ExploreParameters(region=(0.0, 0.0, -2.0, 1.0, 1.0, -1.0))})),
+                         ("station_keeper (hover steps)", station_keeper()({}))]:
         if type(system).__module__.startswith("drake_auv"):
             found.setdefault(type(system).__name__, ([], system))[0].append(name)
     return [(cls, names, system) for cls, (names, system) in found.items()], len(site.target_faces)
@@ -112,7 +114,7 @@ def builder_rows() -> list[str]:
 
     rows = []
     for function in (add_girona500, diagram.add_faults, diagram.add_sonars,
-                     diagram.add_autopilot, diagram.add_behaviours,
+                     diagram.add_behaviours, diagram.add_ocean,
                      diagram.add_coverage_recorders, add_mission_view, add_mcap_recorder,
                      diagram.build_mission_diagram):
         parameters = ", ".join(inspect.signature(function).parameters)

@@ -9,7 +9,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 
 from drake_auv.autopilot.items import FlownMission, LocalLeg
-from drake_auv.autopilot.pilot import AutopilotPilot, PilotStatus
+from drake_auv.autopilot.pilot import AutopilotPilot, BehaviourStatus
 from drake_auv.autopilot.semantics import item_reached, item_reference, start_record
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.sonar.altimeter import DvlAltimeter, DvlParams, measure_altitude
@@ -133,7 +133,7 @@ def fly(mission: FlownMission, world, start, t_end):
     simulator = Simulator(diagram)
     simulator.AdvanceTo(t_end)
     context = simulator.get_context()
-    status = PilotStatus(pilot.status_output.Eval(pilot.GetMyContextFromRoot(context)))
+    status = BehaviourStatus(pilot.status_output.Eval(pilot.GetMyContextFromRoot(context)))
     return log.FindLog(context).data().T, status
 
 
@@ -148,7 +148,7 @@ def test_terrain_following_over_a_slope(autopilot):
             LocalLeg(kind, (40.0, 0.0), "altitude", 6.0, start=(0.0, 0.0) if kind == "section"
                      else None, speed=0.5, tolerance=1.0))
     states, status = fly(FlownMission(autopilot, legs), world, state(x=-5.0, z=-25.0), 160.0)
-    assert status.finished == 1 and status.item == 1
+    assert status.finished == 1 and status.progress == 1
     seabed = -30.0 + 0.2 * states[:, 0]
     along = states[:, 0] > 5.0
     altitude = states[along, 2] - seabed[along]
@@ -165,11 +165,11 @@ def test_the_pilot_serves_only_its_leg():
     pilot.leg_input.FixValue(context, [1.0, 0.0])
     simulator = Simulator(pilot, context)
     simulator.AdvanceTo(0.25)
-    assert PilotStatus(pilot.status_output.Eval(context)).leg == -1  # leg 1 is not its own
+    assert BehaviourStatus(pilot.status_output.Eval(context)).leg == -1  # leg 1 is not its own
     np.testing.assert_allclose(pilot.reference_output.Eval(context)[:3], [3.0, 0.0, -4.0])
     pilot.leg_input.FixValue(context, [2.0, 0.25])
     simulator.AdvanceTo(0.5)
-    assert PilotStatus(pilot.status_output.Eval(context)).leg == 2
+    assert BehaviourStatus(pilot.status_output.Eval(context)).leg == 2
     assert pilot.reference_output.Eval(context)[2] == -10.0
 
 

@@ -16,7 +16,7 @@ from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mapping.scan_log import SOURCES, ScanLog
 from drake_auv.mission.config import MissionFileError, load_mission, mission_from_dict
 from drake_auv.mission.plan import plan_mission
-from drake_auv.mission.spec import NO_RETURN_CLEAR_M
+from drake_auv.mission.steps.explore import NO_RETURN_CLEAR_M
 from drake_auv.mission.site import load_site
 
 from test_exploration import scanned_wall  # noqa: E402  (tests/ is on sys.path)
@@ -152,9 +152,8 @@ def test_explore_dive_gains_coverage_without_contact():
 def test_explore_leg_ends_when_the_planner_says_finished():
     from drake_auv.mission.legs import Leg, goal_reached
 
-    leg = Leg("explore", 0, "explore", "explorer", 1800.0)
-    x, progress, none = np.zeros(12), np.zeros(4), np.full(3, -1.0)
-    args = (leg, 2, 10.0, x, progress, np.full(2, -1.0), none, none)
+    leg = Leg("explore", 0, "explore", "finished", 1800.0)
+    args = (leg, 2, 10.0, np.zeros(12), np.zeros(4))
     assert not goal_reached(*args, np.array([2.0, 0.0, 5.0]))
     assert not goal_reached(*args, np.array([1.0, 1.0, 5.0]))  # another leg's
     assert goal_reached(*args, np.array([2.0, 1.0, 5.0]))

@@ -87,7 +87,7 @@ def test_rules_back_off_away_from_the_map_abort_straight_up_reference_at_speed()
 
 
 def _supervisor(behaviour="replan"):
-    legs = (Leg("survey", 0, behaviour, "replanner", 1000.0),)
+    legs = (Leg("survey", 0, behaviour, "finished", 1000.0),)
     builder = DiagramBuilder()
     sup = builder.AddSystem(MissionSupervisor(
         legs, {"path": 0, "follow": 1, "replan": 2, "response": 3}, 0.5))
@@ -98,7 +98,7 @@ def _supervisor(behaviour="replan"):
     x = np.zeros(12)
     x[:3] = (0.0, 0.0, -5.0)
     sup.state_input.FixValue(context, x)
-    sup.replanner_status_input.FixValue(context, [0.0, 0.0, 0.0])
+    sup.status_inputs["replan"].FixValue(context, [0.0, 0.0, 0.0])
     sup.reference_input.FixValue(context, np.r_[x[:3], 0.0, np.zeros(4)])
     sup.map_input.FixValue(context, OnlineMap(0.5))
     for name in ("multibeam", "profiler"):

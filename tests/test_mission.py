@@ -111,22 +111,23 @@ def test_same_seed_same_numbers_and_the_seed_matters():
 
 def test_supervisor_sequences_legs_switches_and_terminates():
     legs = (Leg("transit", 0, "path", "arrive", 100.0, target=(0.0, 0.0, -5.0)),
-            Leg("survey", 1, "replan", "replanner", 100.0))
+            Leg("survey", 1, "replan", "finished", 100.0))
     supervisor = MissionSupervisor(legs, {"path": 0, "replan": 1})
     context = supervisor.CreateDefaultContext()
     state = np.zeros(12)
     state[2] = -5.0
     supervisor.state_input.FixValue(context, state)
-    supervisor.path_status_input.FixValue(context, [0.0, 2.0])  # leg 0's path ends at 2 s
-    supervisor.replanner_status_input.FixValue(context, [-1.0, 0.0, 0.0])
+    supervisor.status_inputs["path"].FixValue(context, [0.0, 0.0, 0.5])  # leg 0's path flying
+    supervisor.status_inputs["replan"].FixValue(context, [-1.0, 0.0, 0.0])
     simulator = Simulator(supervisor, context)
-    simulator.AdvanceTo(1.0)
+    simulator.AdvanceTo(1.9)
     assert supervisor.leg_output.Eval(context).tolist() == [0.0, 0.0]
     assert supervisor.behaviour_output.Eval(context) == InputPortIndex(0)
+    supervisor.status_inputs["path"].FixValue(context, [0.0, 1.0, 1.0])  # flown, at 1.9 s
     simulator.AdvanceTo(2.6)
     assert supervisor.leg_output.Eval(context).tolist() == [1.0, 2.0]
     assert supervisor.behaviour_output.Eval(context) == InputPortIndex(1)
-    supervisor.replanner_status_input.FixValue(context, [1.0, 1.0, 9.0])
+    supervisor.status_inputs["replan"].FixValue(context, [1.0, 1.0, 9.0])
     simulator.set_monitor(supervisor.monitor)
     status = simulator.AdvanceTo(50.0)
     assert status.reason() == status.ReturnReason.kReachedTerminationCondition
@@ -138,7 +139,7 @@ def test_a_leg_that_never_arrives_times_out():
     supervisor = MissionSupervisor(legs, {"path": 0})
     context = supervisor.CreateDefaultContext()
     supervisor.state_input.FixValue(context, np.zeros(12))
-    supervisor.path_status_input.FixValue(context, [0.0, 1.0])
+    supervisor.status_inputs["path"].FixValue(context, [0.0, 1.0, 1.0])
     simulator = Simulator(supervisor, context)
     simulator.set_monitor(supervisor.monitor)
     simulator.AdvanceTo(20.0)
@@ -166,7 +167,7 @@ def test_a_mission_on_the_users_own_files_in_utm(tmp_path):
     assert "mission_supervisor" in dot
     # every vector port labelled with its signal's fields, the logs' inputs too
     assert dot.count(">reference [x y z yaw vx vy vz yaw_rate]<") >= 2
-    assert ">leg [index start_s]<" in dot and ">status [leg end_s]<" in dot
+    assert ">leg [index start_s]<" in dot and ">status [leg finished progress]<" in dot
     assert ">data [mode cause start_s x0 y0 z0 yaw0 x1 y1 z1]<" in dot  # the response log
 
 

@@ -11,7 +11,8 @@ import pytest
 
 from drake_auv.following.behaviours import FollowConfig, FollowingParams
 from drake_auv.mission.config import MissionFileError, load_mission, mission_to_dict
-from drake_auv.mission.spec import FollowStep, mission_keys
+from drake_auv.mission.spec import mission_keys
+from drake_auv.mission.steps.follow import FollowStep
 from drake_auv.params import ParameterError, param, validate
 from drake_auv.replanning.section import ReplanningParameters
 from drake_auv.replanning.stomp import StompParameters
@@ -119,7 +120,7 @@ def test_plan_runs_without_pydrake():
 
         spec = load_mission("pool")
         plan = plan_mission(spec, load_site(spec.site, spec.seed))
-        assert len(plan.legs) == 4 and len(plan.follow_legs) == 2, plan.legs
+        assert len(plan.legs) == 4 and len(plan.legs_of("follow")) == 2, plan.legs
         assert not any(m.split(".")[0] == "pydrake" for m in sys.modules)
         print("planned", len(plan.legs))
     """)

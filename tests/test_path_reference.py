@@ -61,13 +61,16 @@ def test_goto_leg_is_timed_from_the_leg_start_and_ends_at_the_target():
     assert reference.reference_output.Eval(context) == pytest.approx([0, 0, -5, 0, 0, 0, 0, 0])
     reference.leg_input.FixValue(context, [1.0, 3.0])
     simulator.AdvanceTo(7.0)
-    leg, end = reference.status_output.Eval(context)
+    leg, finished, progress = reference.status_output.Eval(context)
+    end = reference.held(context).trajectory.end_time()
     assert leg == 1.0 and end == pytest.approx(3.0 + 20.0, abs=0.11)  # 10 m at 0.5 m/s
+    assert finished == 0.0 and progress == pytest.approx((7.0 - 3.0) / (end - 3.0))
     ref = reference.reference_output.Eval(context)
     assert ref[0] == pytest.approx(0.5 * (7.0 - 3.0), abs=0.06)
     assert ref[4] == pytest.approx(0.5, abs=1e-6)
     simulator.AdvanceTo(30.0)
     assert reference.reference_output.Eval(context) == pytest.approx([10, 0, -5, 0, 0, 0, 0, 0])
+    assert reference.status_output.Eval(context).tolist() == [1.0, 1.0, 1.0]  # flown
 
 
 def test_nominal_leg_flies_the_input_path_after_a_transit():
@@ -77,7 +80,7 @@ def test_nominal_leg_flies_the_input_path_after_a_transit():
     reference.nominal_input.FixValue(context, AbstractValue.Make(nominal))
     simulator = Simulator(reference, context)
     simulator.AdvanceTo(1.0)
-    end = reference.status_output.Eval(context)[1]
+    end = reference.held(context).trajectory.end_time()
     # 5 m of transit, its last segment also turning 90 deg at 15 deg/s (6 s), then 10 m
     assert end == pytest.approx(4.0 + 6.0 + 10.0, abs=0.2)
     simulator.AdvanceTo(end - 5.0)
@@ -93,30 +96,31 @@ def test_leg_goals():
     for angle in np.linspace(0.0, 2 * np.pi * 0.99, 40):
         x[:2] = 5.0 * np.cos(angle), 5.0 * np.sin(angle)
         progress = advance_progress(loops, progress, x)
-    assert not goal_reached(loops, 0, 0.0, x, progress, [-1, 0], [-1, 0, 0])
+    assert not goal_reached(loops, 0, 0.0, x, progress, [-1, 0, 0])
     x[:2] = 5.0, 0.05
     progress = advance_progress(loops, progress, x)
-    assert goal_reached(loops, 0, 0.0, x, progress, [-1, 0], [-1, 0, 0])
+    assert goal_reached(loops, 0, 0.0, x, progress, [-1, 0, 0])
     along = Leg("follow", 0, "follow", "distance", 100.0, direction=(1.0, 0.0), distance=10.0,
                 end_depth=2.0)
     progress = start_progress(along, np.zeros(12))
     x = np.zeros(12)
     x[:3] = 11.0, 0.0, -3.0
-    assert not goal_reached(along, 0, 0.0, x, progress, [-1, 0], [-1, 0, 0])  # too deep
+    assert not goal_reached(along, 0, 0.0, x, progress, [-1, 0, 0])  # too deep
     x[2] = -1.5
-    assert goal_reached(along, 0, 0.0, x, progress, [-1, 0], [-1, 0, 0])
+    assert goal_reached(along, 0, 0.0, x, progress, [-1, 0, 0])
     arrive = Leg("transit", 2, "path", "arrive", 100.0, target=(1.0, 0.0, 0.0), tolerance=0.5)
     x = np.zeros(12)
-    assert not goal_reached(arrive, 2, 5.0, x, progress, [2, 4.0], [-1, 0, 0])  # 1 m away
+    assert not goal_reached(arrive, 2, 5.0, x, progress, [2, 1, 1])  # 1 m away
     x[0] = 0.8
-    assert not goal_reached(arrive, 2, 3.0, x, progress, [2, 4.0], [-1, 0, 0])  # path not done
-    assert goal_reached(arrive, 2, 5.0, x, progress, [2, 4.0], [-1, 0, 0])
-    assert not goal_reached(arrive, 2, 5.0, x, progress, [1, 4.0], [-1, 0, 0])  # other leg's
+    assert not goal_reached(arrive, 2, 3.0, x, progress, [2, 0, 0.7])  # path not done
+    assert goal_reached(arrive, 2, 5.0, x, progress, [2, 1, 1])
+    assert not goal_reached(arrive, 2, 5.0, x, progress, [1, 1, 1])  # other leg's
     handing = Leg("transit", 2, "path", "arrive", 100.0, target=(10.0, 0.0, 0.0), handover=5.0)
     x[0] = 4.0
-    assert not goal_reached(handing, 2, 1.0, x, progress, [2, 40.0], [-1, 0, 0])  # 6 m away
+    assert not goal_reached(handing, 2, 1.0, x, progress, [2, 0, 0.1])  # 6 m away
     x[0] = 5.5
-    assert goal_reached(handing, 2, 1.0, x, progress, [2, 40.0], [-1, 0, 0])  # path not done
-    replan = Leg("survey", 3, "replan", "replanner", 100.0)
-    assert goal_reached(replan, 3, 0.0, x, progress, [-1, 0], [3, 1, 7])
-    assert not goal_reached(replan, 3, 0.0, x, progress, [-1, 0], [2, 1, 7])
+    assert goal_reached(handing, 2, 1.0, x, progress, [2, 0, 0.1])  # path not done
+    replan = Leg("survey", 3, "replan", "finished", 100.0)
+    assert goal_reached(replan, 3, 0.0, x, progress, [3, 1, 7])
+    assert not goal_reached(replan, 3, 0.0, x, progress, [2, 1, 7])  # another leg's
+    assert not goal_reached(replan, 3, 0.0, x, progress, [3, 0, 7])  # not finished

@@ -8,27 +8,26 @@ autopilots' 10 Hz control rate) it checks the current item's arrival and hold, a
 next; the `reference` output is the tracker's reference for the current item.
 
 Discrete-state groups: `item` (`semantics.ITEM_FIELDS`, the current item's record) and
-`status` (`signals.PilotStatus`, -1 before its first leg).
+`status` (`signals.BehaviourStatus`, -1 before its first leg; progress: the current item).
 
-Ports (views in `drake_auv.signals`): inputs `estimated_state` (`VehicleState`), `leg`
-(`LegSignal`), `seabed_elevation` (1, m, NaN without bottom lock: the `DvlAltimeter`'s);
-outputs `reference` (`Reference`) and `status` (`PilotStatus`).
+A `Behaviour` (`drake_auv.behaviour`). Ports (views in `drake_auv.signals`): inputs
+`estimated_state` (`VehicleState`), `leg` (`LegSignal`), `seabed_elevation` (1, m, NaN without
+bottom lock: the `DvlAltimeter`'s); outputs `reference` (`Reference`) and `status`
+(`BehaviourStatus`).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from pydrake.systems.framework import LeafSystem
 
 from drake_auv.autopilot.items import FlownMission
 from drake_auv.autopilot.semantics import (INDEX, ITEM_FIELDS, REACHED_S, SEABED_Z,
                                            item_reached, item_reference, start_record)
-from drake_auv.leg_signal import LEG_SIZE, read_leg
-from drake_auv.signals import PilotStatus, Reference, VehicleState
-from drake_auv.vehicle.path_reference import trajectory_reference
+from drake_auv.behaviour import Behaviour, trajectory_reference
+from drake_auv.signals import BehaviourStatus
 
 
-class AutopilotPilot(LeafSystem):
+class AutopilotPilot(Behaviour):
     """Flies `missions` (see the module docstring).
 
     Args:
@@ -37,44 +36,40 @@ class AutopilotPilot(LeafSystem):
     """
 
     def __init__(self, missions: FlownMission | dict[int, FlownMission], period: float = 0.1):
-        super().__init__()
+        super().__init__({0: missions} if isinstance(missions, FlownMission) else missions)
         if not (np.isfinite(period) and 0 < period <= 1.0):
             raise ValueError(f"AutopilotPilot period must be in (0, 1] s, got {period}")
-        self.missions = {0: missions} if isinstance(missions, FlownMission) else dict(missions)
+        self.missions = self.legs
         self.period = float(period)
-        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
-        self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self.seabed_input = self.DeclareVectorInputPort("seabed_elevation", 1)
         initial = np.full(len(ITEM_FIELDS), np.nan)
         self._item = self.DeclareDiscreteState(initial)
-        status = PilotStatus.zeros()
+        status = BehaviourStatus.zeros()
         status.leg = -1.0  # before its first leg
         self._status = self.DeclareDiscreteState(status[:])
         self.DeclareInitializationDiscreteUpdateEvent(self._update_item)
         self.DeclarePeriodicDiscreteUpdateEvent(self.period, 0.0, self._update_item)
-        self.reference_output = self.DeclareVectorOutputPort(
-            "reference", Reference.size(), self._calc_reference,
-            prerequisites_of_calc={self.discrete_state_ticket(self._item),
-                                   self.discrete_state_ticket(self._status),
-                                   self.input_port_ticket(self.state_input.get_index()),
-                                   self.input_port_ticket(self.seabed_input.get_index())})
-        self.status_output = self.DeclareStateOutputPort("status", self._status)
+        self.DeclareReferenceOutput(self._calc_reference, {
+            self.discrete_state_ticket(self._item), self.discrete_state_ticket(self._status),
+            self.input_port_ticket(self.state_input.get_index()),
+            self.input_port_ticket(self.seabed_input.get_index())})
+        self.DeclareStatusOutput(group=self._status)
 
     def _seabed(self, context) -> float:
         return float(self.seabed_input.Eval(context)[0]) if self.seabed_input.HasValue(
             context) else float("nan")
 
     def _update_item(self, context, discrete_state):
-        leg, _ = read_leg(self.leg_input, context)
+        leg = self.leg(context)
         mission = self.missions.get(leg)
         if mission is None:
             return
-        status = PilotStatus(context.get_discrete_state(self._status).get_value().copy())
+        status = BehaviourStatus(context.get_discrete_state(self._status).get_value().copy())
         t, x, seabed = context.get_time(), self.state_input.Eval(context), self._seabed(context)
         if status.leg != leg:  # the leg begins: its first item
             discrete_state.set_value(self._item, start_record(
                 mission.autopilot, mission.legs, 0, t, x, seabed))
-            status = PilotStatus.zeros()
+            status = BehaviourStatus.zeros()
             status.leg = leg
             discrete_state.set_value(self._status, status[:])
             return
@@ -93,13 +88,13 @@ class AutopilotPilot(LeafSystem):
             else:
                 record = start_record(mission.autopilot, mission.legs, following, t, x,
                                       record[SEABED_Z])
-                status.item = following
+                status.progress = following
         discrete_state.set_value(self._item, record)
         discrete_state.set_value(self._status, status[:])
 
     def _calc_reference(self, context, output):
         x = self.state_input.Eval(context)
-        status = PilotStatus(context.get_discrete_state(self._status).get_value())
+        status = BehaviourStatus(context.get_discrete_state(self._status).get_value())
         mission = self.missions.get(int(status.leg))
         if mission is None:  # before its first leg: hold the estimated pose
             output.SetFromVector(trajectory_reference(None, 0.0, self.state_input, context))

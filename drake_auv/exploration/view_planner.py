@@ -19,9 +19,10 @@ the measured seabed (or flat top) under the vehicle plus `GUARD` clearances, bet
 planning steps as well: a flat top seen only at grazing incidence is free water in the octree
 until the DVL's beams map it (boulder seed 2 descended onto the top to 0.19 m without it).
 
-Ports: inputs `estimated_state` (`VehicleState`), `map` (`OnlineMap`), `leg` (`LegSignal`),
-`seabed_elevation` (1, m, navigation frame, NaN without bottom lock; may be unconnected);
-outputs `reference` (`Reference`), `status` (`ExplorerStatus`, -1 before any leg) and `step`
+A `Behaviour` (`drake_auv.behaviour`). Ports: inputs `estimated_state` (`VehicleState`), `leg`
+(`LegSignal`), `map` (`OnlineMap`), `seabed_elevation` (1, m, navigation frame, NaN without
+bottom lock; may be unconnected); outputs `reference` (`Reference`), `status`
+(`BehaviourStatus`, -1 before any leg; progress: the viewpoints reached) and `step`
 (`ExplorerStep`).
 """
 
@@ -32,18 +33,16 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import LeafSystem
 from pydrake.trajectories import PiecewisePolynomial
 
 from drake_auv.exploration.frontiers import LabelGrid, multibeam_returns, scan_rays
 from drake_auv.exploration.planner import ExploreParameters, Target, plan_view
-from drake_auv.leg_signal import LEG_SIZE, read_leg
+from drake_auv.behaviour import Behaviour, trajectory_reference
+from drake_auv.random_streams import stream
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import Path
-from drake_auv.random_streams import stream
-from drake_auv.signals import (ExplorerProgress, ExplorerStatus, ExplorerStep, Reference,
+from drake_auv.signals import (BehaviourStatus, ExplorerProgress, ExplorerStep, Reference,
                                VehicleState)
-from drake_auv.vehicle.path_reference import trajectory_reference
 
 YAW_RATE = np.radians(15.0)  # rad/s, the largest commanded yaw rate
 GUARD = 0.75  # clearances the reference keeps above the DVL's seabed
@@ -65,7 +64,7 @@ class _View:
         return self
 
 
-class ViewPlanner(LeafSystem):
+class ViewPlanner(Behaviour):
     """Flies the explore legs `legs` ({leg index: `ExploreParameters`}).
 
     Args:
@@ -76,34 +75,27 @@ class ViewPlanner(LeafSystem):
     """
 
     def __init__(self, legs: dict[int, ExploreParameters], period: float = 5.0, seed: int = 0):
-        super().__init__()
         if not legs:
             raise ValueError("ViewPlanner needs at least one leg")
+        super().__init__(legs)
         if not (np.isfinite(period) and 0.5 <= period <= 60.0):
             raise ValueError(f"ViewPlanner period must be in [0.5, 60] s, got {period}")
-        self.legs = dict(legs)
         self.period, self.seed = float(period), int(seed)
-        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
-        self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self.seabed_input = self.DeclareVectorInputPort("seabed_elevation", 1)
-        self._view_index = self.DeclareAbstractState(AbstractValue.Make(_View()))
+        self._view_index = self.DeclareTrajectoryState(_View())
         progress = ExplorerProgress.zeros()
         progress.leg = -1.0
         self._progress = self.DeclareDiscreteState(progress[:])
         self._last_step = self.DeclareDiscreteState(ExplorerStep.size())
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, self.period, self._update)
-        self.reference_output = self.DeclareVectorOutputPort(
-            "reference", Reference.size(), self._calc_reference,
-            prerequisites_of_calc={self.abstract_state_ticket(self._view_index),
-                                   self.time_ticket(),
-                                   self.input_port_ticket(self.state_input.get_index()),
-                                   self.input_port_ticket(self.leg_input.get_index()),
-                                   self.input_port_ticket(self.seabed_input.get_index())})
-        self.status_output = self.DeclareVectorOutputPort(
-            "status", ExplorerStatus.size(), self._calc_status,
-            prerequisites_of_calc={self.discrete_state_ticket(self._progress)})
+        self.DeclareReferenceOutput(self._calc_reference, {
+            self.abstract_state_ticket(self._view_index), self.time_ticket(),
+            self.input_port_ticket(self.state_input.get_index()),
+            self.input_port_ticket(self.leg_input.get_index()),
+            self.input_port_ticket(self.seabed_input.get_index())})
+        self.DeclareStatusOutput(self._status, {self.discrete_state_ticket(self._progress)})
         self.step_output = self.DeclareStateOutputPort("step", self._last_step)
 
     def view(self, context) -> _View:
@@ -119,7 +111,7 @@ class ViewPlanner(LeafSystem):
         return ExplorerStep(context.get_discrete_state(self._last_step).get_value().copy())
 
     def _update(self, context, state):
-        leg, _ = read_leg(self.leg_input, context)
+        leg = self.leg(context)
         if leg not in self.legs:
             return  # not flying: nothing to do
         params = self.legs[leg]
@@ -191,7 +183,7 @@ class ViewPlanner(LeafSystem):
         reference = Reference(trajectory_reference(self.view(context).trajectory,
                                                    context.get_time(), self.state_input,
                                                    context))
-        leg, _ = read_leg(self.leg_input, context)
+        leg = self.leg(context)
         if leg in self.legs and self.seabed_input.HasValue(context):
             floor = (self.seabed_input.Eval(context)[0]
                      + GUARD * self.legs[leg].clearance)
@@ -199,11 +191,11 @@ class ViewPlanner(LeafSystem):
                 reference.z, reference.vz = floor, max(reference.vz, 0.0)
         output.SetFromVector(reference[:])
 
-    def _calc_status(self, context, output):
-        progress, status = self.progress(context), ExplorerStatus.zeros()
-        status.leg, status.finished, status.viewpoints = (progress.leg, progress.finished,
-                                                          progress.viewpoints)
-        output.SetFromVector(status[:])
+    def _status(self, context) -> BehaviourStatus:
+        progress, status = self.progress(context), BehaviourStatus.zeros()
+        status.leg, status.finished, status.progress = (progress.leg, progress.finished,
+                                                        progress.viewpoints)
+        return status
 
 
 def exploration_summary(handles, context, outcomes: list[str]) -> dict | None:

@@ -12,10 +12,12 @@ sequence and leg (`Consumed`), and `profile` (`Profile`). Between updates the re
 position is extrapolated with its velocity, so the tracker's position error does not build up
 along the profile.
 
-Ports: inputs `returns` (`SonarReturns`), `estimated_state` (`VehicleState`), `leg`
-(`LegSignal`); outputs `reference` (`Reference`, world) and `profile` (`Profile`, in the scan
-plane's 2D axes: horizontal x, y; vertical s, h; mode an index into `MODES`; distances NaN
-while no profile is seen).
+A `Behaviour` (`drake_auv.behaviour`). Ports: inputs `estimated_state` (`VehicleState`), `leg`
+(`LegSignal`), `returns` (`SonarReturns`); outputs `reference` (`Reference`, world), `status`
+(`BehaviourStatus`: the leg last fed, -1 before any; never finished, the supervisor ends its
+legs on their laps or distance; progress the sequence of the last returns fed) and `profile`
+(`Profile`, in the scan plane's 2D axes: horizontal x, y; vertical s, h; mode an index into
+`MODES`; distances NaN while no profile is seen).
 """
 
 from __future__ import annotations
@@ -23,14 +25,12 @@ from __future__ import annotations
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import LeafSystem
 
-from drake_auv.leg_signal import LEG_SIZE, read_leg
+from drake_auv.behaviour import Behaviour, trajectory_reference
 from drake_auv.following.behaviours import FollowConfig, FollowerState
 from drake_auv.random_streams import stream
-from drake_auv.signals import Consumed, Profile, Reference, VehicleState
+from drake_auv.signals import BehaviourStatus, Consumed, Profile, Reference
 from drake_auv.sonar.returns import SonarReturns
-from drake_auv.vehicle.path_reference import trajectory_reference
 
 MODES = ("search", "follow", "turn")
 
@@ -42,7 +42,7 @@ def _no_profile(mode: str = "search") -> np.ndarray:
     return profile[:]
 
 
-class ProfileFollowingController(LeafSystem):
+class ProfileFollowingController(Behaviour):
     """Drives the tracker from profiler returns.
 
     Args:
@@ -56,19 +56,16 @@ class ProfileFollowingController(LeafSystem):
 
     def __init__(self, legs: FollowConfig | dict[int, FollowConfig] = FollowConfig(),
                  period: float = 0.1, seed: int = 0):
-        super().__init__()
+        super().__init__({0: legs} if isinstance(legs, FollowConfig) else legs)
         if not (np.isfinite(period) and 1e-3 <= period <= 5.0):
             raise ValueError(f"ProfileFollowingController period must be in [0.001, 5] s, "
                              f"got {period}")
-        self.legs = {0: legs} if isinstance(legs, FollowConfig) else dict(legs)
         if not self.legs:
             raise ValueError("ProfileFollowingController needs at least one leg")
         self.period = float(period)
         self.seed = int(seed)
         self.returns_input = self.DeclareAbstractInputPort(
             "returns", AbstractValue.Make(SonarReturns.empty(20.0)))
-        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
-        self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self._followers = {leg: config.follower(stream(self.seed, "following", leg))
                            for leg, config in self.legs.items()}  # immutable
         self._follower_index = self.DeclareAbstractState(
@@ -79,14 +76,13 @@ class ProfileFollowingController(LeafSystem):
         self._profile = self.DeclareDiscreteState(_no_profile())
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_reference)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_reference)
-        self.reference_output = self.DeclareVectorOutputPort(
-            "reference", Reference.size(), self._calc_reference,
-            prerequisites_of_calc={self.discrete_state_ticket(self._reference),
-                                   self.discrete_state_ticket(self._reference_time),
-                                   self.discrete_state_ticket(self._consumed),
-                                   self.input_port_ticket(self.leg_input.get_index()),
-                                   self.input_port_ticket(self.state_input.get_index()),
-                                   self.time_ticket()})
+        self.DeclareReferenceOutput(self._calc_reference, {
+            self.discrete_state_ticket(self._reference),
+            self.discrete_state_ticket(self._reference_time),
+            self.discrete_state_ticket(self._consumed),
+            self.input_port_ticket(self.leg_input.get_index()),
+            self.input_port_ticket(self.state_input.get_index()), self.time_ticket()})
+        self.DeclareStatusOutput(self._status, {self.discrete_state_ticket(self._consumed)})
         self.profile_output = self.DeclareStateOutputPort("profile", self._profile)
 
     def follower(self, context) -> FollowerState:
@@ -95,7 +91,7 @@ class ProfileFollowingController(LeafSystem):
         return context.get_abstract_state(self._follower_index).get_value()
 
     def _update_reference(self, context, state):
-        leg, _ = read_leg(self.leg_input, context)
+        leg = self.leg(context)
         follower = self._followers.get(leg)
         if follower is None:
             return  # not flying
@@ -126,8 +122,14 @@ class ProfileFollowingController(LeafSystem):
         discrete.set_value(self._consumed, consumed[:])
         discrete.set_value(self._profile, profile[:])
 
+    def _status(self, context) -> BehaviourStatus:
+        consumed = Consumed(context.get_discrete_state(self._consumed).get_value())
+        status = BehaviourStatus.zeros()
+        status.leg, status.progress = consumed.leg, consumed.sequence
+        return status
+
     def _calc_reference(self, context, output):
-        leg, _ = read_leg(self.leg_input, context)
+        leg = self.leg(context)
         consumed = Consumed(context.get_discrete_state(self._consumed).get_value())
         if consumed.leg != leg:  # before the leg's first update
             output.SetFromVector(trajectory_reference(None, 0.0, self.state_input, context))

@@ -9,7 +9,8 @@ mission file and stored resolved absolute; a field whose file unit differs (`sca
 
 Every bad value raises `MissionFileError`, one line naming the file, the dotted key and what is
 allowed there: the ranges are the dataclasses' own (`drake_auv.params.validate`), this module
-only converts the YAML types and ties fields together (`RULES`). The names below are
+only converts the YAML types and ties fields together (`RULES`; a step's: its kind's `check`,
+`drake_auv.mission.steps`). The names below are
 re-exported so `from drake_auv.mission.config import X` serves every class of the spec.
 """
 
@@ -23,18 +24,26 @@ import yaml
 
 from drake_auv.mission.overrides import apply_overrides, one_line
 from drake_auv.ocean.spec import OceanSpecError, ocean_from_raw, ocean_to_raw
-from drake_auv.mission.spec import (FAULT_CLASSES, FLY_FORMATS, REALISTIC_NOISE, SECTIONS,
-                                    STEP_KINDS, TOP_KEYS, ExploreStep, FaultsSpec, FlyStep, FollowStep,
-                                    LimitsSpec, MissionFileError, MissionSpec,
-                                    NavigationJumpFault, PayloadSpec, PlanStep, ReplannerSpec,
-                                    SiteSpec, SonarNoiseSpec, SonarSilentFault, Step, SurveyStep,
-                                    ThrusterFailureFault, mission_keys)
+from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, TOP_KEYS,
+                                    FaultsSpec, LimitsSpec, MissionFileError, MissionSpec,
+                                    NavigationJumpFault, PayloadSpec, ReplannerSpec, SiteSpec,
+                                    SonarNoiseSpec, SonarSilentFault, ThrusterFailureFault,
+                                    mission_keys)
+from drake_auv.mission.steps import STEPS, step_specs
+from drake_auv.mission.steps.explore import ExploreStep
+from drake_auv.mission.steps.fly import FLY_FORMATS, FlyStep
+from drake_auv.mission.steps.follow import FollowStep
+from drake_auv.mission.steps.plan import PlanStep
+from drake_auv.mission.steps.survey import SurveyStep
 from drake_auv.mission.yaml_text import MAX_BYTES, MAX_VALUES, YamlLimitError, load_yaml_file
 from drake_auv.params import NESTED, ParameterError, is_number, checks
 from drake_auv.sonar.noise import SonarNoise
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "missions"
-_STEP_ALLOWED = "a non-empty list of one-key mappings: " + ", ".join(STEP_KINDS)
+
+
+def _steps_allowed() -> str:
+    return "a non-empty list of one-key mappings: " + ", ".join(STEPS)
 
 
 def builtin_missions() -> list[str]:
@@ -142,7 +151,7 @@ class _Reader:
 
     def steps(self, raw) -> tuple:
         if not isinstance(raw, list) or not raw:
-            self.fail("steps", f"{raw!r} is not a non-empty list", _STEP_ALLOWED)
+            self.fail("steps", f"{raw!r} is not a non-empty list", _steps_allowed())
         steps = []
         for i, item in enumerate(raw):
             where = f"steps[{i}]"
@@ -151,17 +160,14 @@ class _Reader:
             elif isinstance(item, dict) and len(item) == 1:
                 (kind, body), = item.items()
             else:
-                self.fail(where, f"{item!r} is not a one-key mapping", _STEP_ALLOWED)
-            if kind not in STEP_KINDS:
-                self.fail(where, f"unknown step {kind!r}", ", ".join(STEP_KINDS))
-            steps.append(self.section(STEP_KINDS[kind], body, f"{where}.{kind}"))
-        plans = [i for i, s in enumerate(steps) if isinstance(s, PlanStep)]
-        if len(plans) > 1:
-            self.fail(f"steps[{plans[1]}].plan", "a second plan step", "at most one plan step")
-        for i, step in enumerate(steps):
-            if isinstance(step, SurveyStep) and not (plans and plans[0] < i):
-                self.fail(f"steps[{i}].survey", "no earlier plan step to survey",
-                          "a survey after a plan step")
+                self.fail(where, f"{item!r} is not a one-key mapping", _steps_allowed())
+            if kind not in STEPS:
+                self.fail(where, f"unknown step {kind!r}", ", ".join(STEPS))
+            step = self.section(STEPS[kind].spec, body, f"{where}.{kind}")
+            STEPS[kind].check(self, step, f"{where}.{kind}")
+            steps.append(step)
+        for kind in STEPS.values():
+            kind.check_steps(self, tuple(steps))
         return tuple(steps)
 
     def prior_needed(self, site: SiteSpec, steps: tuple) -> None:
@@ -170,7 +176,7 @@ class _Reader:
         if site.world is None or site.prior is not None or site.prior_from_world:
             return
         for i, step in enumerate(steps):
-            if step.KIND in NEEDS_PRIOR:
+            if STEPS[step.KIND].needs_prior:
                 self.fail(f"steps[{i}].{step.KIND}", "needs a prior map and the site has "
                           "none (site.prior is missing)", "site.prior: <raster>, site."
                           "prior_from_world: true (sampled from the world mesh), or explore "
@@ -181,7 +187,7 @@ class _Reader:
         for key in ("site", "steps"):
             if key not in raw:
                 self.fail(key, "missing (required)",
-                          "a site mapping" if key == "site" else _STEP_ALLOWED)
+                          "a site mapping" if key == "site" else _steps_allowed())
         top = {key: raw.get(key, default) for key, default in
                (("name", Path(self.label).stem), ("seed", 0), ("description", None))}
         for key, value in top.items():  # MissionSpec's own checks, before its sections
@@ -235,62 +241,7 @@ def _site_rule(reader: _Reader, v, where: str):
                     "raster", "false, or true with world and no prior")
 
 
-def _plan_rule(reader: _Reader, v, where: str):
-    contour = v.method == "contour"
-    if contour and v.depth is None:
-        reader.fail(f"{where}.depth", "missing (required by method contour)",
-                    checks(PlanStep)["depth"].allowed())
-    only = ("depth", "end_width_m", "end_heading_deg", "end_overrun_m") if not contour else (
-        "slice_count", "slice_spacing", "min_area_m2")
-    for key in only:
-        if getattr(v, key) is not None:
-            reader.fail(f"{where}.{key}", f"not used by method {v.method}",
-                        "null (or the other method)")
-
-
-def _follow_rule(reader: _Reader, v, where: str):
-    ends = ("distance_m", "end_depth_m")
-    if v.mode == "vertical" and all(getattr(v, k) is None for k in ends):
-        reader.fail(where, "a vertical follow needs an end",
-                    "distance_m and/or end_depth_m")
-    if v.mode == "horizontal":
-        for key in ends:
-            if getattr(v, key) is not None:
-                reader.fail(f"{where}.{key}", "only for mode vertical",
-                            "null for a horizontal follow (it ends after `loops` laps)")
-
-
-def _fly_rule(reader: _Reader, v, where: str):
-    path = v.file  # a Path: `validate` has refused None
-    if path.suffix.lower() not in FLY_FORMATS:
-        reader.fail(f"{where}.file", f"{path.name}: unknown mission format "
-                    f"{path.suffix or '(no extension)'!r}", ", ".join(FLY_FORMATS))
-    if not path.is_file():
-        reader.fail(f"{where}.file", f"{path.name} not found ({path})",
-                    checks(FlyStep)["file"].allowed())
-    if v.heave_in_3d and FLY_FORMATS[path.suffix.lower()] != "cola2":
-        reader.fail(f"{where}.heave_in_3d", "only for COLA2 missions (.xml)",
-                    "false for a .plan file")
-
-
-def _explore_rule(reader: _Reader, v, where: str):
-    region = v.region
-    if not all(region[k] < region[k + 3] for k in range(3)):
-        reader.fail(f"{where}.region", f"{list(region)} has min >= max on an axis",
-                    "xmin < xmax, ymin < ymax, zmin < zmax")
-    if region[2] >= 0.0:
-        reader.fail(f"{where}.region", f"zmin {region[2]:g} is not below the sea surface",
-                    "zmin < 0 m (z up, sea surface z = 0)")
-    if v.omega <= v.clearance_m:
-        reader.fail(f"{where}.omega", f"{v.omega:g} m is not above clearance_m "
-                    f"{v.clearance_m:g} m (a viewpoint at omega would break the clearance)",
-                    f"omega > clearance_m ({v.clearance_m:g} m)")
-
-
-NEEDS_PRIOR = ("plan", "follow", "fly")  # step kinds that read the prior map
-
-RULES = {SiteSpec: _site_rule, PlanStep: _plan_rule, FollowStep: _follow_rule,
-         FlyStep: _fly_rule, ExploreStep: _explore_rule}
+RULES = {SiteSpec: _site_rule}  # a section's rules; a step's are its kind's `check`
 
 
 def mission_from_dict(raw: dict, base_dir, label: str, source: Path | None = None
@@ -362,8 +313,8 @@ def load_mission(source, seed: int | None = None, overrides=()) -> MissionSpec:
 
 
 __all__ = ["BUILTIN_DIR", "FAULT_CLASSES", "FLY_FORMATS", "REALISTIC_NOISE", "RULES",
-           "STEP_KINDS", "TOP_KEYS", "FaultsSpec", "FlyStep", "FollowStep", "LimitsSpec",
-           "MissionFileError", "MissionSpec", "NavigationJumpFault", "PayloadSpec", "PlanStep",
-           "ReplannerSpec", "SiteSpec", "SonarNoiseSpec", "SonarSilentFault", "Step",
-           "SurveyStep", "ThrusterFailureFault", "apply_overrides", "builtin_missions",
+           "STEPS", "TOP_KEYS", "ExploreStep", "FaultsSpec", "FlyStep", "FollowStep",
+           "LimitsSpec", "MissionFileError", "MissionSpec", "NavigationJumpFault",
+           "PayloadSpec", "PlanStep", "ReplannerSpec", "SiteSpec", "SonarNoiseSpec",
+           "SonarSilentFault", "SurveyStep", "step_specs", "ThrusterFailureFault", "apply_overrides", "builtin_missions",
            "load_mission", "mission_from_dict", "mission_to_dict"]

@@ -21,7 +21,10 @@ silence gate after a sonar, a failure between the allocation and the dynamics, a
 the navigation; the supervisor sees the returns, the reference and the map to detect them, and
 drives the switch's fourth input, `response`, while it answers.
 Behaviours that are not flying skip their periodic updates, and `PortSwitch` evaluates only
-the selected reference.
+the selected reference. The path reference (transits) is always there; every other behaviour
+is added by the step kind that flies it (`drake_auv.mission.steps`: follow, survey, fly,
+explore, a step's own), behind the switch input of its name, its status on the supervisor's
+`<name>_status`.
 """
 
 from __future__ import annotations
@@ -33,32 +36,28 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, LogVectorOutput, PortSwitch
 
-from drake_auv.autopilot.pilot import AutopilotPilot
 from drake_auv.coverage.recorder import CoverageRecorder
-from drake_auv.exploration.view_planner import ViewPlanner
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.mapping.mapper import OctreeMapper
 from drake_auv.mission.config import MissionSpec
 from drake_auv.mission.faults import NavigationJump, SonarSilence, ThrusterFailure
-from drake_auv.mission.plan import SENSOR_AZIMUTH, MissionPlan, plan_mission, terrain_elevation
+from drake_auv.mission.plan import MissionPlan, plan_mission
+from drake_auv.mission.steps import behaviour_step
+from drake_auv.mission.steps.step import LOG_PERIOD, Wiring, terrain_elevation
+from drake_auv.mission.steps.survey import connect_replanner
 from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
-from drake_auv.following.controller import ProfileFollowingController
 from drake_auv.ocean.system import Ocean
 from drake_auv.random_streams import generator
-from drake_auv.replanning.replanner import Replanner
 from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.sonar.profiler import FOLLOWING_SETUP, PencilBeamProfiler
 from drake_auv.vehicle.diagram import VehicleSystems, add_girona500
 from drake_auv.vehicle.path_reference import PathReference
 
-LOG_PERIOD = 0.1  # s, of the state logs
 SUPERVISOR_PERIOD = 0.5  # s
 CAMERA_SIDE = {"port": (0.0, 1.0, 0.0), "starboard": (0.0, -1.0, 0.0),
                "down": (0.0, 0.0, -1.0), "forward": (1.0, 0.0, 0.0)}
-BEHAVIOURS = ("path", "follow", "replan", "autopilot", "explore", "response")  # switch inputs
-EXPLORE_PERIOD = 5.0  # s, of the view planner's planning steps
 
 
 @dataclass
@@ -71,21 +70,42 @@ class MissionHandles:
     multibeam: MultibeamSonar
     profiler: PencilBeamProfiler
     mapper: OctreeMapper
-    path_reference: PathReference
-    controller: ProfileFollowingController | None
-    replanner: Replanner | None
     supervisor: MissionSupervisor
     camera_coverage: CoverageRecorder
     multibeam_coverage: CoverageRecorder
     logs: dict  # name -> VectorLogSink: state, estimated_state, reference, leg, response,
-    # profile, replanning; `run_mission` spools them to disk as the dive runs (after it, a log
-    # holds its last samples only; `MissionResult` holds the whole dive)
+    # and the behaviours' (profile, replanning, exploration); `run_mission` spools them to
+    # disk as the dive runs (after it, a log holds its last samples only; `MissionResult`
+    # holds the whole dive)
     faults: dict  # fault name -> the system injecting it (only the mission's faults)
-    autopilot: AutopilotPilot | None = None  # with a fly step: the pilot
-    dvl: DvlAltimeter | None = None  # with a fly or an explore step
-    explorer: ViewPlanner | None = None  # with an explore step: the view planner
+    behaviours: dict  # behaviour name -> its system ("path": the path reference, always)
+    dvl: DvlAltimeter | None = None  # with a step that needs one (fly, explore)
     ocean: Ocean | None = None  # with a sea (`ocean:` not none): the water at the vehicle
     mcap: object = None  # with an `McapLog`: the `rosio.McapRecorder` writing into it
+
+    @property
+    def path_reference(self) -> PathReference:
+        return self.behaviours["path"]
+
+    @property
+    def controller(self):
+        """The profile-following controller (None without a follow step)."""
+        return self.behaviours.get("follow")
+
+    @property
+    def replanner(self):
+        """The replanner (None without a replanned survey)."""
+        return self.behaviours.get("replan")
+
+    @property
+    def autopilot(self):
+        """The autopilot pilot (None without a fly step)."""
+        return self.behaviours.get("autopilot")
+
+    @property
+    def explorer(self):
+        """The view planner (None without an explore step)."""
+        return self.behaviours.get("explore")
 
 
 def add_faults(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec):
@@ -164,101 +184,62 @@ def add_ocean(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpe
     return ocean
 
 
-def add_autopilot(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
-                  spec: MissionSpec, plan: MissionPlan, estimated):
-    """The DVL (ray casting on the true world, realistic unless the sonars are clean), with a
-    fly step (the autopilot flies the exported files on the DVL's seabed) or an explore step
-    (its beams map the seabed and flat tops under the vehicle, where no sonar sees), and the
-    autopilot pilot of the fly steps; returns (pilot, dvl), None for what no step needs."""
-    if not (plan.autopilot_legs or plan.explore_legs):
-        return None, None
-    dvl = builder.AddNamedSystem("dvl", DvlAltimeter(
-        caster, noise=spec.sonar_noise.to_noise() is not None, seed=spec.seed))
-    builder.Connect(vehicle.dynamics.state_output, dvl.true_state_input)
-    builder.Connect(estimated, dvl.estimated_state_input)
-    if not plan.autopilot_legs:
-        return None, dvl
-    pilot = builder.AddNamedSystem("autopilot", AutopilotPilot(plan.autopilot_legs))
-    builder.Connect(dvl.seabed_output, pilot.seabed_input)
-    return pilot, dvl
-
-
-def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, mapper,
-                   spec: MissionSpec, plan: MissionPlan, site: Site, estimated, returns,
-                   pilot: AutopilotPilot | None = None, replanner=None, dvl=None):
-    """The nominal plan's source, the behaviours (with `pilot`, the autopilot flying exported
-    files), the reference switch and the supervisor (watching the sonars' `returns`, the
-    reference and the map), wired; `dvl`: the DVL whose seabed guards the view planner.
-    `replanner`: a LeafSystem of your own (not yet added) to
-    fly the replanning legs instead of the built-in `Replanner`, with its ports: inputs
-    `estimated_state` (12), `leg` (2) and, if it declares them, `map` and `nominal`; outputs
-    `reference` (8) and `status` (3: `[leg, finished, next_index]`, finished > 0 ends the
-    leg); see `examples/custom_controller.py`. Returns (path_reference, controller,
-    replanner, supervisor, switch)."""
-    source = None
+def add_behaviours(builder: DiagramBuilder, wiring: Wiring, own: dict | None = None):
+    """The nominal plan's source, the path reference (transits, surveys flown as planned), the
+    behaviour of every step kind the plan flies (`MissionStep.add_behaviour`, in the
+    registry's order), the reference switch and the supervisor (watching the sonars'
+    returns, the reference and the map), wired: each behaviour's `estimated_state`, `leg`,
+    `reference` (to the switch input of its name) and `status` (to the supervisor's
+    `<name>_status`). `own`: {behaviour name: a LeafSystem of your own, not yet added} to fly
+    that behaviour's legs instead of the built-in one, with the `Behaviour` ports (inputs
+    `estimated_state` (12), `leg` (2) and, for "replan", if it declares them, `map` and
+    `nominal`; outputs `reference` (8) and `status` (3: `[leg, finished, progress]`,
+    finished > 0 ends the leg)); see `examples/custom_controller.py`. Returns (supervisor,
+    switch, {behaviour name: system}); `wiring.nominal` is set."""
+    own = dict(own or {})
+    plan = wiring.plan
     if plan.nominal is not None:  # the off-line plan, as a signal
         source = builder.AddNamedSystem("nominal_plan",
                                         ConstantValueSource(AbstractValue.Make(plan.nominal)))
+        wiring.nominal = source.get_output_port()
+    names = ["path", *(name for name in plan.behaviours if name != "path"), "response"]
     switch = builder.AddNamedSystem("reference_switch", PortSwitch(8))
-    ports = {name: switch.DeclareInputPort(name).get_index() for name in BEHAVIOURS}
+    ports = {name: switch.DeclareInputPort(name).get_index() for name in names}
     supervisor = builder.AddNamedSystem("mission_supervisor",
                                         MissionSupervisor(plan.legs, ports,
                                                           SUPERVISOR_PERIOD))
     path_reference = builder.AddNamedSystem("path_reference", PathReference(
-        plan.path_legs, terrain=terrain_elevation(site),
-        clearance=spec.replanner.params.clearance))
-    if source is not None:
-        builder.Connect(source.get_output_port(), path_reference.nominal_input)
+        plan.legs_of("path"), terrain=terrain_elevation(wiring.site),
+        clearance=wiring.spec.replanner.params.clearance))
+    if wiring.nominal is not None:
+        builder.Connect(wiring.nominal, path_reference.nominal_input)
     behaviours = {"path": path_reference}
-    controller = None
-    if plan.follow_legs:
-        controller = builder.AddNamedSystem("profile_following", ProfileFollowingController(
-            plan.follow_legs, period=profiler.period, seed=spec.seed))
-        builder.Connect(returns["profiler"], controller.returns_input)
-        behaviours["follow"] = controller
-    if plan.replan_legs:
-        if replanner is None:
-            replanner = builder.AddNamedSystem("replanner", Replanner(
-                spec.replanner.to_params(plan.omega, plan.method), speed=plan.survey_speed,
-                period=spec.replanner.period_s,
-                sensor_azimuth=SENSOR_AZIMUTH.get(spec.payload.multibeam_mount),
-                seed=spec.seed, legs=plan.replan_legs, optimizer=spec.replanner.optimizer))
+    for name in names[1:-1]:
+        step = behaviour_step(name)
+        if name in own:
+            behaviours[name] = builder.AddSystem(own.pop(name))
+            if name == "replan":
+                connect_replanner(wiring, behaviours[name])
         else:
-            builder.AddSystem(replanner)
-        for name, port in (("map", mapper.map_output), ("nominal", source.get_output_port())):
-            if replanner.HasInputPort(name):
-                builder.Connect(port, replanner.GetInputPort(name))
-        builder.Connect(replanner.GetOutputPort("status"), supervisor.replanner_status_input)
-        behaviours["replan"] = replanner
-    else:
-        replanner = None
-    if pilot is not None:
-        builder.Connect(pilot.status_output, supervisor.autopilot_status_input)
-        behaviours["autopilot"] = pilot
-    if plan.explore_legs:
-        explorer = builder.AddNamedSystem("view_planner", ViewPlanner(
-            plan.explore_legs, period=EXPLORE_PERIOD, seed=spec.seed))
-        builder.Connect(mapper.map_output, explorer.map_input)
-        builder.Connect(explorer.status_output, supervisor.explorer_status_input)
-        if dvl is not None:
-            builder.Connect(dvl.seabed_output, explorer.seabed_input)
-        behaviours["explore"] = explorer
+            behaviours[name] = step.add_behaviour(wiring, plan.legs_of(name))
+    if own:
+        raise ValueError(f"no legs for the behaviour(s) {sorted(own)} of `own`")
     for name, system in behaviours.items():
-        builder.Connect(estimated, system.GetInputPort("estimated_state"))
+        builder.Connect(wiring.estimated, system.GetInputPort("estimated_state"))
         builder.Connect(supervisor.leg_output, system.GetInputPort("leg"))
         builder.Connect(system.GetOutputPort("reference"), switch.GetInputPort(name))
+        builder.Connect(system.GetOutputPort("status"), supervisor.status_inputs[name])
     if plan.profiler_planes:
-        builder.Connect(supervisor.leg_output, profiler.leg_input)
+        builder.Connect(supervisor.leg_output, wiring.profiler.leg_input)
     builder.Connect(supervisor.response_reference_output, switch.GetInputPort("response"))
-    for name, port in returns.items():
+    for name, port in wiring.returns.items():
         builder.Connect(port, supervisor.returns_inputs[name])
     builder.Connect(switch.get_output_port(), supervisor.reference_input)
-    builder.Connect(mapper.map_output, supervisor.map_input)
-    builder.Connect(path_reference.status_output, supervisor.path_status_input)
-    builder.Connect(estimated, supervisor.state_input)
+    builder.Connect(wiring.mapper.map_output, supervisor.map_input)
+    builder.Connect(wiring.estimated, supervisor.state_input)
     builder.Connect(supervisor.behaviour_output, switch.get_port_selector_input_port())
-    builder.Connect(switch.get_output_port(), vehicle.tracker.reference_input)
-    return path_reference, controller, replanner, supervisor, switch
+    builder.Connect(switch.get_output_port(), wiring.vehicle.tracker.reference_input)
+    return supervisor, switch, behaviours
 
 
 def add_coverage_recorders(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
@@ -306,19 +287,15 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
                                               estimated, faults)
     mapper = builder.AddNamedSystem("octree_mapper", OctreeMapper(
         resolution=spec.replanner.voxel_m, multibeam_stride=spec.replanner.multibeam_stride,
-        discretize=spec.replanner.discretize, no_return_clear_m=min(
-            (s.no_return_clear_m for s in spec.steps if s.KIND == "explore"), default=np.inf)))
+        discretize=spec.replanner.discretize, no_return_clear_m=min(  # a step may set it
+            (getattr(s, "no_return_clear_m", np.inf) for s in spec.steps), default=np.inf)))
     builder.Connect(returns["multibeam"], mapper.multibeam_input)
     builder.Connect(returns["profiler"], mapper.profiler_input)
-    pilot, dvl = add_autopilot(builder, caster, vehicle, spec, plan, estimated)
-    if dvl is not None:
-        builder.Connect(dvl.returns_output, mapper.dvl_input)
+    wiring = Wiring(builder, spec, plan, site, caster, vehicle, estimated, mapper, returns,
+                    profiler)
+    supervisor, switch, behaviours = add_behaviours(builder, wiring)
+    dvl, replanner = wiring.added.get("dvl"), behaviours.get("replan")
     ocean = add_ocean(builder, vehicle, spec, site, plan, dvl)
-    path_reference, controller, replanner, supervisor, switch = add_behaviours(
-        builder, vehicle, profiler, mapper, spec, plan, site, estimated, returns, pilot,
-        dvl=dvl)
-    explorer = (builder.GetMutableSubsystemByName("view_planner") if plan.explore_legs
-                else None)
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
                                                         max_range, multibeam)
     logs = {
@@ -330,12 +307,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     }
     if ocean is not None:
         logs["water"] = LogVectorOutput(ocean.water_output, builder, LOG_PERIOD)
-    if controller is not None:
-        logs["profile"] = LogVectorOutput(controller.profile_output, builder, LOG_PERIOD)
-    if replanner is not None:
-        logs["replanning"] = LogVectorOutput(replanner.step_output, builder, replanner.period)
-    if explorer is not None:
-        logs["exploration"] = LogVectorOutput(explorer.step_output, builder, explorer.period)
+    logs.update(wiring.logs)
     for name, log in logs.items():
         log.set_name(f"{name}_log")
     recorder = None
@@ -365,10 +337,11 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
 
             add_mission_view(builder, scene, plan.legs, supervisor.leg_output, estimated,
                              switch.get_output_port(),
-                             replanner.section_output if replanner is not None else None)
+                             replanner.GetOutputPort("section") if replanner is not None
+                             and replanner.HasOutputPort("section") else None)
     diagram = builder.Build()
     diagram.set_name(f"mission_{spec.name}")
-    handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, path_reference,
-                             controller, replanner, supervisor, camera, multibeam_coverage, logs,
-                             faults, pilot, dvl, explorer, ocean, recorder)
+    handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, supervisor,
+                             camera, multibeam_coverage, logs, faults, behaviours, dvl, ocean,
+                             recorder)
     return diagram, handles

@@ -1,10 +1,11 @@
 """Legs: a mission's steps as the supervisor flies them, and when each one is done. Pure.
 
-A mission step becomes one or two legs: a transit to where the step begins, then the step's
-own behaviour (profile following, the nominal plan, the replanner, or an exported vehicle
-mission flown by the autopilot pilot, which needs no transit: its first item is one). A leg is done by its
-goal, judged only on what the vehicle knows (its estimated state, the behaviours' status, the
-operator's chart of the site), or by its time budget.
+A mission step becomes one or two legs (`drake_auv.mission.steps`): a transit to where the
+step begins, then the step's own behaviour (profile following, the nominal plan, the
+replanner, or an exported vehicle mission flown by the autopilot pilot, which needs no
+transit: its first item is one). A leg is done by its goal, judged only on what the vehicle
+knows (its estimated state, its behaviour's status, the operator's chart of the site), or by
+its time budget.
 """
 
 from __future__ import annotations
@@ -13,11 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_auv.signals import (ExplorerStatus, LegProgress, PathStatus, PilotStatus,
-                               ReplannerStatus, VehicleState)
+from drake_auv.signals import BehaviourStatus, LegProgress, VehicleState
 
-BEHAVIOURS = ("path", "follow", "replan", "autopilot", "explore")
-GOALS = ("arrive", "loops", "distance", "path_end", "replanner", "autopilot", "explorer")
+GOALS = ("arrive", "loops", "distance", "finished")
 
 
 @dataclass(frozen=True)
@@ -27,13 +26,14 @@ class Leg:
     Attributes:
         phase: name of the part of the mission it belongs to ("transit", "follow", "survey").
         step: index of the mission step it flies (-1: none).
-        behaviour: which behaviour drives the tracker (`BEHAVIOURS`).
-        goal: how the leg ends (`GOALS`): "arrive" within `tolerance` m of `target`; "loops"
-            turns around `centre` (x, y); "distance" m along `direction` (x, y) from where the
-            leg began, and shallower than `end_depth` m if given; "path_end" past the end of
-            the path reference's path; "replanner" when the replanner has visited every
-            waypoint; "autopilot" when the autopilot pilot has flown the file's last item;
-            "explorer" when the view planner finds nothing more worth seeing.
+        behaviour: the name of the behaviour that drives the tracker ("path", "follow",
+            "replan", "autopilot", "explore" or a step's own: `drake_auv.mission.steps`).
+        goal: how the leg ends (`GOALS`): "arrive" within `tolerance` m of `target` once the
+            behaviour has finished its path; "loops" turns around `centre` (x, y); "distance"
+            m along `direction` (x, y) from where the leg began, and shallower than
+            `end_depth` m if given; "finished" when the behaviour reports the leg finished
+            (`leg_finished`: the path flown, every waypoint replanned, the
+            file's last item flown, nothing more worth seeing).
         max_duration: the leg ends anyway after this, s (a timed-out leg is reported).
         handover: an "arrive" leg ends as soon as the vehicle is within this distance of
             `target`, m (the next behaviour flies the rest; None: it ends on arrival).
@@ -54,8 +54,9 @@ class Leg:
     handover: float | None = None
 
     def __post_init__(self):
-        if self.behaviour not in BEHAVIOURS:
-            raise ValueError(f"Leg behaviour must be one of {BEHAVIOURS}, got {self.behaviour!r}")
+        if not (isinstance(self.behaviour, str) and self.behaviour.isidentifier()):
+            raise ValueError(f"Leg behaviour must be a name (an identifier), got "
+                             f"{self.behaviour!r}")
         if self.goal not in GOALS:
             raise ValueError(f"Leg goal must be one of {GOALS}, got {self.goal!r}")
         if not (np.isfinite(self.max_duration) and self.max_duration > 0):
@@ -89,31 +90,27 @@ def advance_progress(leg: Leg, progress: np.ndarray, x: np.ndarray) -> np.ndarra
     return advanced[:]
 
 
+def leg_finished(status: np.ndarray, index: int) -> bool:
+    """The one rule: whether a behaviour's `status` (`BehaviourStatus`) reports leg `index`
+    finished."""
+    status = BehaviourStatus(status)
+    return bool(status.leg == index and status.finished > 0)
+
+
 def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.ndarray,
-                 path_status: np.ndarray, replanner_status: np.ndarray,
-                 autopilot_status: np.ndarray | None = None,
-                 explorer_status: np.ndarray | None = None) -> bool:
+                 status: np.ndarray) -> bool:
     """Whether leg number `index` has reached its goal at time `t` s, from the estimated state
-    `x` (`signals.VehicleState`), its progress record (`LegProgress`), the path reference's
-    status (`PathStatus`), the replanner's (`ReplannerStatus`), the autopilot pilot's
-    (`PilotStatus`) and the view planner's (`ExplorerStatus`)."""
+    `x` (`signals.VehicleState`), its progress record (`LegProgress`) and its behaviour's
+    status (`BehaviourStatus`, every field -1 while unknown)."""
     state, progress = VehicleState(x), LegProgress(progress)
-    path, replanner = PathStatus(path_status), ReplannerStatus(replanner_status)
+    if leg.goal == "finished":
+        return leg_finished(status, index)
     if leg.goal == "arrive":
         distance = np.linalg.norm(state.position - np.asarray(leg.target))
-        if leg.handover is not None and path.leg == index and distance <= leg.handover:
+        if (leg.handover is not None and BehaviourStatus(status).leg == index
+                and distance <= leg.handover):
             return True
-        return path.leg == index and t >= path.end_s and distance <= leg.tolerance
-    if leg.goal == "path_end":
-        return path.leg == index and t >= path.end_s
-    if leg.goal == "replanner":
-        return replanner.leg == index and replanner.finished > 0
-    if leg.goal == "autopilot":
-        pilot = None if autopilot_status is None else PilotStatus(autopilot_status)
-        return pilot is not None and pilot.leg == index and pilot.finished > 0
-    if leg.goal == "explorer":
-        explorer = None if explorer_status is None else ExplorerStatus(explorer_status)
-        return explorer is not None and explorer.leg == index and explorer.finished > 0
+        return leg_finished(status, index) and distance <= leg.tolerance
     if leg.goal == "loops":
         return abs(progress.turned) >= 2.0 * np.pi * leg.loops
     along = ((state.x - progress.start_x) * leg.direction[0]

@@ -12,8 +12,9 @@ import re
 
 import yaml
 
-from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, STEP_KINDS,
-                                    TOP_KEYS, MissionFileError, mission_keys)
+from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, TOP_KEYS,
+                                    MissionFileError, mission_keys)
+from drake_auv.mission.steps import step_specs
 from drake_auv.mission.yaml_text import load_yaml
 from drake_auv.ocean.spec import OCEAN_KEYS, PARTS
 from drake_auv.ocean.tides import TidalConstituent
@@ -64,8 +65,9 @@ def _set(raw: dict, parts: list[str], value, label: str):
             kind = step
         else:
             kind = next(iter(step)) if isinstance(step, dict) and len(step) == 1 else None
-        if kind not in STEP_KINDS:
-            fail(1, "not a valid step to set keys in", STEP_KINDS)
+        specs = step_specs()
+        if kind not in specs:
+            fail(1, "not a valid step to set keys in", specs)
         if len(rest) == 1:
             steps[index] = value
             return
@@ -76,7 +78,7 @@ def _set(raw: dict, parts: list[str], value, label: str):
             return
         if isinstance(step, str) or step[kind] is None:
             step = steps[index] = {kind: {}}
-        node, keys, offset = step[kind], tuple(mission_keys(STEP_KINDS[kind])), 3
+        node, keys, offset = step[kind], tuple(mission_keys(specs[kind])), 3
     elif head == "sonar_noise":
         preset = raw.get("sonar_noise")
         node = (dict(REALISTIC_NOISE) if preset in (None, "realistic")

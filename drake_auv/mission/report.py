@@ -64,9 +64,9 @@ def near_distance(result: MissionResult) -> float:
     for a mission that only flies an exported file)."""
     if result.plan.omega is not None:
         return 2.0 * result.plan.omega
-    if not result.plan.follow_legs:
+    if not result.plan.legs_of("follow"):
         return float("inf")
-    return 2.0 * max(step.params.offset for step in result.plan.follow_legs.values())
+    return 2.0 * max(step.params.offset for step in result.plan.legs_of("follow").values())
 
 
 def _scored_samples(result: MissionResult) -> np.ndarray:

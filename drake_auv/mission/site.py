@@ -33,8 +33,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from drake_auv.mission.config import (FollowStep, MissionFileError, MissionSpec, PlanStep,
-                                      SiteSpec)
+from drake_auv.mission.config import MissionFileError, MissionSpec, SiteSpec
+from drake_auv.mission.steps import STEPS
 from drake_auv.random_streams import generator
 from drake_auv.scenarios import get_scenario
 from drake_auv.signals import VehicleState
@@ -313,13 +313,17 @@ def _target_faces(world: trimesh.Trimesh, target: trimesh.Trimesh, origin: np.nd
     return faces
 
 
-def _deepest(site: Site, lo, hi) -> float:
-    """Depth of the prior's deepest cell with its centre in the local box [lo, hi] (x, y),
-    m; the whole prior's when the box holds none."""
-    gx, gy = np.meshgrid(site.prior.x, site.prior.y)
-    inside = (gx >= lo[0]) & (gx <= hi[0]) & (gy >= lo[1]) & (gy <= hi[1]) & site.prior.valid
-    z = site.prior.z[inside] if inside.any() else site.prior.z[site.prior.valid]
-    return float(-z.min())
+def check_inside(site: Site, xy_site, where: str, label: str) -> tuple[float, float]:
+    """(x, y) local of the site-coordinates point `xy_site`; raises MissionFileError (naming
+    `where`) when it lies outside the world."""
+    (x0, y0), (x1, y1) = site.world.bounds[:, :2]
+    x, y = site.to_local(xy_site)[:2]
+    if not (x0 <= x <= x1 and y0 <= y <= y1):
+        (sx0, sy0), (sx1, sy1) = site.to_site(site.world.bounds[:, :2])
+        raise MissionFileError(label, where, f"({xy_site[0]:g}, {xy_site[1]:g}) is outside "
+                               "the world", f"x in [{sx0:.1f}, {sx1:.1f}], y in [{sy0:.1f}, "
+                               f"{sy1:.1f}] m (site coordinates)")
+    return x, y
 
 
 def check_in_water(site: Site, points, label: str, where: str, names) -> None:
@@ -360,54 +364,13 @@ def check_path_in_water(path, site: Site, label: str, where: str) -> None:
 
 def check_against_site(spec: MissionSpec, site: Site) -> None:
     """Checks the mission values only the site can judge, against the prior map (what the
-    operator knows) and the world's bounds: starts inside the world's bounds and in the water
-    (`check_in_water`: against the world itself), follow depths above the seabed under the
-    structure, plan offsets and contour depths that leave water. Raises MissionFileError (one
-    line) on the first problem."""
+    operator knows) and the world's bounds: the start inside the world's bounds and in the
+    water (`check_in_water`: against the world itself), and each step's own (its kind's
+    `check_site`: follow depths above the seabed under the structure, plan offsets and contour
+    depths that leave water). Raises MissionFileError (one line) on the first problem."""
     label = spec.source.name if spec.source is not None else spec.name
-    (x0, y0), (x1, y1) = site.world.bounds[:, :2]
-    (sx0, sy0), (sx1, sy1) = site.to_site(site.world.bounds[:, :2])
-    inside = f"x in [{sx0:.1f}, {sx1:.1f}], y in [{sy0:.1f}, {sy1:.1f}] m (site coordinates)"
-
-    def check_xy(xy_site, where: str):
-        x, y = site.to_local(xy_site)[:2]
-        if not (x0 <= x <= x1 and y0 <= y <= y1):
-            raise MissionFileError(label, where, f"({xy_site[0]:g}, {xy_site[1]:g}) is outside "
-                                   "the world", inside)
-        return x, y
-
     if spec.site.start is not None:
-        x, y = check_xy(spec.site.start, "site.start")
+        x, y = check_inside(site, spec.site.start, "site.start", label)
         check_in_water(site, [x, y, spec.site.start[2]], label, "site.start", "")
-    target_lo, target_hi = site.target_mesh.bounds[:, :2]
     for i, step in enumerate(spec.steps):
-        where = f"steps[{i}].{step.KIND}"
-        if isinstance(step, FollowStep):
-            if step.start is not None:
-                check_xy(step.start, f"{where}.start")
-            if step.depth is not None:
-                if step.start is not None:
-                    x, y = site.to_local(step.start)
-                    seabed = -float(site.prior.elevation_at(x, y))
-                    place = f"at ({step.start[0]:g}, {step.start[1]:g})"
-                else:
-                    seabed = _deepest(site, target_lo - step.offset, target_hi + step.offset)
-                    place = "under the structure"
-                if step.depth >= seabed:
-                    raise MissionFileError(label, f"{where}.depth",
-                                           f"{step.depth:g} m is below the seabed "
-                                           f"({seabed:.1f} m {place})",
-                                           f"(0, {seabed:.1f}) m")
-        elif isinstance(step, PlanStep):
-            deepest = float(-np.nanmin(site.prior.z))
-            if step.method == "coverage" and step.omega >= deepest:
-                raise MissionFileError(label, f"{where}.omega", f"{step.omega:g} m leaves no "
-                                       f"water (the prior's deepest point is {deepest:.1f} m)",
-                                       f"[0.5, {deepest:.1f}) m")
-            if step.method == "contour":
-                shallowest = float(-np.nanmax(site.prior.z))
-                if not shallowest < step.depth < deepest:
-                    raise MissionFileError(label, f"{where}.depth", f"{step.depth:g} m cuts "
-                                           "no structure in the prior map (its depths span "
-                                           f"{shallowest:.1f} to {deepest:.1f} m)",
-                                           f"({max(shallowest, 0.0):.1f}, {deepest:.1f}) m")
+        STEPS[step.KIND].check_site(site, step, f"steps[{i}].{step.KIND}", label)

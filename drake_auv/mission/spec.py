@@ -2,7 +2,8 @@
 
 A mission names a site (a built-in scenario or the user's own files), the error sources
 (navigation drift, sonar noise, prior-map shift), the replanner, the payload, the limits and the
-steps flown in order in one dive (`plan`, `follow`, `survey`, `fly`), and optional injected
+steps flown in order in one dive (`plan`, `follow`, `survey`, `fly`, `explore`, ...: each
+kind's spec lives in its module of `drake_auv.mission.steps`), and optional injected
 `faults` (a silent sonar, a failed thruster, a navigation jump) for campaigns. Units are SI with
 the unit in the key's name where it is not obvious (`_m`, `_s`, `_deg`); depths are positive
 down, metres.
@@ -21,12 +22,9 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import ClassVar
 
-from drake_auv.exploration.planner import ExploreParameters
-from drake_auv.following.behaviours import FollowingParams
 from drake_auv.ocean.spec import OceanSpec
-from drake_auv.params import CHECK, NESTED, like, nested, param, validate
+from drake_auv.params import CHECK, NESTED, nested, param, validate
 from drake_auv.random_streams import MAX_SEED, SEED_RANGE
 from drake_auv.replanning.section import OPTIMIZERS, ReplanningParameters
 from drake_auv.scenarios import list_scenarios
@@ -42,13 +40,13 @@ REALISTIC_NOISE = dict(range_sigma=0.1, dropout_prob=0.05, spurious_prob=0.02,
                        surface_prob=0.5, side_lobe_deg=20.0, side_lobe_gain=0.08,
                        echo_threshold=0.05)
 
-NO_RETURN_CLEAR_M = 12.0  # m, explore's free-water clearing by beams without an echo
 SCENARIOS = tuple(name for name, _ in list_scenarios())
 _FILE = "a file path, relative to the mission file"
-_DEPTH = dict(low=0.0, high=11000.0, low_open=True, unit="m", nullable=True)
-_TIME = dict(low=0.0, low_open=True, unit="s", nullable=True)
-_SPEED = dict(low=0.05, high=1.4, unit="m/s")
-_ANGLE = dict(low=-360.0, high=360.0, unit="deg")
+# the ranges of the steps' fields of one kind (`param(**DEPTH_M)`)
+DEPTH_M = dict(low=0.0, high=11000.0, low_open=True, unit="m", nullable=True)
+TIME_S = dict(low=0.0, low_open=True, unit="s", nullable=True)
+SPEED_MS = dict(low=0.05, high=1.4, unit="m/s")
+ANGLE_DEG = dict(low=-360.0, high=360.0, unit="deg")
 
 
 class MissionFileError(ValueError):
@@ -199,7 +197,7 @@ class LimitsSpec:
     """Attributes: max_time_s: cap on the dive's simulated time, s (None: none);
     time_margin: a step may last this many times its nominal duration."""
 
-    max_time_s: float | None = param(None, **_TIME)
+    max_time_s: float | None = param(None, **TIME_S)
     time_margin: float = param(1.4, low=1.0, high=5.0)
 
     def __post_init__(self):
@@ -212,170 +210,6 @@ class OutputsSpec:
     messages (`drake_auv.rosio`), as it flies (a campaign's runs write none)."""
 
     mcap: bool = param(False, kind="bool")
-
-    def __post_init__(self):
-        validate(self)
-
-
-@dataclass(frozen=True)
-class PlanStep:
-    """Off-line plan on the prior map; a later `survey` flies it.
-
-    Attributes:
-        omega: offset to the terrain, m.
-        method: "coverage" (`plan_coverage`: lanes and slices) or "contour" (one contour at
-            `depth`, `drake_auv.planning.contour.nominal_contour`).
-        slice_count, slice_spacing: slicing planes per high-slope region and their spacing, m
-            (None: from the footprint); coverage only.
-        slope_threshold, aperture_deg, overlap, min_area_m2: classification and sensor
-            parameters of `plan_coverage` (deg, fraction, m^2); coverage only.
-        depth: depth of the contour, m; contour only, required there.
-        end_width_m, end_heading_deg, end_overrun_m: contour only: fly around the end of a
-            long structure, `end_width_m` wide, facing `end_heading_deg` (deg from +x, None:
-            0), the contour kept `end_overrun_m` further (None: 7 m, the largest prior error
-            plus 2 m); see `nominal_contour` (end_width_m None: the whole closed contour).
-        speed: survey speed, m/s.
-    """
-
-    KIND: ClassVar[str] = "plan"
-    omega: float = param(low=0.5, high=100.0, unit="m")
-    method: str = param("coverage", kind="choice", choices=("coverage", "contour"))
-    slice_count: int | None = param(None, low=1, high=20, integer=True, nullable=True)
-    slice_spacing: float | None = param(None, low=0.0, high=50.0, low_open=True, unit="m",
-                                        nullable=True)
-    slope_threshold: float = param(0.5, low=0.0, high=10.0, low_open=True)
-    aperture_deg: float = param(60.0, low=5.0, high=170.0, unit="deg")
-    overlap: float = param(0.1, low=0.0, high=0.9)
-    min_area_m2: float | None = param(None, low=0.0, unit="m^2", nullable=True)
-    depth: float | None = param(None, **_DEPTH)
-    end_width_m: float | None = param(None, low=0.0, high=1000.0, low_open=True, unit="m",
-                                      nullable=True)
-    end_heading_deg: float | None = param(None, **_ANGLE, nullable=True)
-    end_overrun_m: float | None = param(None, low=0.0, high=100.0, unit="m", nullable=True)
-    speed: float = param(0.5, **_SPEED)
-
-    def __post_init__(self):
-        validate(self)
-
-
-@dataclass(frozen=True)
-class FollowStep:
-    """Sensor-based profile following with the pencil-beam profiler.
-
-    Attributes:
-        mode: "horizontal" (around the structure at a constant depth) or "vertical" (in a
-            vertical plane, over and under the profile).
-        offset: distance to keep from the profile, m.
-        depth: depth where following starts (horizontal: and holds), m (None: the depth of
-            the vehicle when the step starts).
-        loops: horizontal: laps around the structure.
-        distance_m: vertical: end after this horizontal distance along the plane, m.
-        end_depth_m: vertical: end once shallower than this (with `distance_m`: both), m.
-        heading_deg: vertical: yaw of the plane, deg (None: the vehicle's heading).
-        start: (x, y) in site coordinates where following begins, m (None: by the runner).
-        speed: speed along the profile, m/s.
-        corner_weight: weight of the range along the normal in the controlled distance (see
-            `FollowingParams`), in [0, 1].
-        min_depth_m: the following never rises above this depth, m.
-        max_time_s: cap on the step's simulated time, s.
-    """
-
-    KIND: ClassVar[str] = "follow"
-    mode: str = param(kind="choice", choices=("horizontal", "vertical"))
-    offset: float = like(FollowingParams, "offset", required=True)
-    depth: float | None = param(None, **_DEPTH)
-    loops: float = param(1.0, low=0.0, high=100.0, low_open=True)
-    distance_m: float | None = param(None, low=0.0, high=10000.0, low_open=True, unit="m",
-                                     nullable=True)
-    end_depth_m: float | None = param(None, **_DEPTH)
-    heading_deg: float | None = param(None, **_ANGLE, nullable=True)
-    start: tuple | None = param(None, kind="vector", names=("x", "y"), unit="m, site coordinates",
-                                nullable=True)
-    speed: float = like(FollowingParams, "speed")
-    corner_weight: float = like(FollowingParams, "corner_weight")
-    min_depth_m: float = like(FollowingParams, "min_depth")
-    max_time_s: float | None = param(None, **_TIME)
-
-    def __post_init__(self):
-        validate(self)
-
-
-@dataclass(frozen=True)
-class SurveyStep:
-    """The plan of the earlier `plan` step, flown with realtime replanning (or as planned).
-
-    Attributes: replanning: replan against the on-line map; max_time_s: cap, s (None: the
-    plan's duration times `limits.time_margin`)."""
-
-    KIND: ClassVar[str] = "survey"
-    replanning: bool = param(True, kind="bool")
-    max_time_s: float | None = param(None, **_TIME)
-
-    def __post_init__(self):
-        validate(self)
-
-
-@dataclass(frozen=True)
-class FlyStep:
-    """An exported vehicle mission flown the way its autopilot executes it
-    (`drake_auv.autopilot`): COLA2 goto/section/park or ArduSub AUTO waypoints.
-
-    Attributes:
-        file: the mission file, relative to the mission file: COLA2 mission XML (`.xml`) or a
-            QGroundControl plan (`.plan`, flown as ArduSub AUTO); the extension names the
-            format.
-        heave_in_3d: COLA2 only: the vehicle is configured with heave_in_3D (depth
-            interpolated along each section).
-        speed: m/s where the file commands none (ArduSub before its first DO_CHANGE_SPEED).
-        max_time_s: cap, s (None: the file's nominal duration times `limits.time_margin`).
-    """
-
-    KIND: ClassVar[str] = "fly"
-    file: Path = param(kind="path", note="a COLA2 mission (.xml) or QGroundControl plan (.plan) "
-                                         "file, relative to the mission file")
-    heave_in_3d: bool = param(False, kind="bool")
-    speed: float = param(0.5, **_SPEED)
-    max_time_s: float | None = param(None, **_TIME)
-
-    def __post_init__(self):
-        validate(self)
-
-    @property
-    def autopilot(self) -> str:
-        return FLY_FORMATS[self.file.suffix.lower()]
-
-
-FLY_FORMATS = {".xml": "cola2", ".plan": "ardusub"}
-
-
-@dataclass(frozen=True)
-class ExploreStep:
-    """On-line view planning from the octree, no prior map (`drake_auv.exploration`).
-
-    Attributes:
-        region: [xmin, ymin, zmin, xmax, ymax, zmax] where the structure is believed to be,
-            site coordinates, m (z up, negative below the sea surface).
-        omega: preferred viewing distance, m, above `clearance_m`.
-        max_time_s: cap on the step's simulated time, s.
-        clearance_m: least distance of a viewpoint to mapped or unknown space, m.
-        strategy: "gain" (surface newly seen against travel), "nearest" (nearest frontier
-            first) or "random" (a random frontier, seeded by the mission seed).
-        min_gain_m2: exploring ends when no viewpoint would newly see this, m^2.
-        no_return_clear_m: how far a sonar beam without an echo clears free water in the
-            on-line map while the mission explores, m (`mapping.OctreeMap`; the sonar's range
-            or more: cleared to it). No echo is not proof of water, and explore's paths
-            cross only the water the map holds.
-    """
-
-    KIND: ClassVar[str] = "explore"
-    region: tuple = param(kind="vector", names=("xmin", "ymin", "zmin", "xmax", "ymax", "zmax"),
-                          unit="m, site coordinates")
-    omega: float = like(ExploreParameters, "omega")
-    max_time_s: float = param(1800.0, low=0.0, low_open=True, unit="s")
-    clearance_m: float = like(ExploreParameters, "clearance")
-    strategy: str = like(ExploreParameters, "strategy")
-    min_gain_m2: float = like(ExploreParameters, "min_gain_m2")
-    no_return_clear_m: float = param(NO_RETURN_CLEAR_M, low=0.0, low_open=True, unit="m")
 
     def __post_init__(self):
         validate(self)
@@ -413,7 +247,7 @@ class NavigationJumpFault:
 
     time_s: float | None = param(None, low=0.0, unit="s", nullable=True)
     error_m: float = param(3.0, low=0.0, high=100.0, unit="m")
-    direction_deg: float = param(0.0, **_ANGLE)
+    direction_deg: float = param(0.0, **ANGLE_DEG)
 
     def __post_init__(self):
         validate(self)
@@ -437,12 +271,6 @@ class FaultsSpec:
                 if (f.time_s if name == "navigation_jump" else f.start_s) is not None}
 
 
-# The step kinds, in the order error messages list them. A new kind: a frozen dataclass with
-# `KIND` and `param` fields, added to `Step` and `STEP_KINDS` here; a rule tying its fields
-# together goes in `drake_auv.mission.config.RULES`, how it flies in `mission.plan`.
-Step = PlanStep | FollowStep | SurveyStep | FlyStep | ExploreStep
-STEP_KINDS = {cls.KIND: cls
-              for cls in (PlanStep, FollowStep, SurveyStep, FlyStep, ExploreStep)}
 FAULT_CLASSES = {"sonar_silent": SonarSilentFault, "thruster_failure": ThrusterFailureFault,
                  "navigation_jump": NavigationJumpFault}
 

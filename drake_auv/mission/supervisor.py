@@ -18,12 +18,11 @@ Discrete-state groups, each with its view in `drake_auv.signals`: `leg` (`LegSig
 reached, 2 timed out, 3 aborted), `done` (1 after the last leg or an abort), `watch` (`Watch`)
 and `response` (`Response`).
 
-Ports: inputs `estimated_state` (`VehicleState`), `path_status` (`PathStatus`),
-`replanner_status` (`ReplannerStatus`), `autopilot_status` (`PilotStatus`),
-`explorer_status` (`ExplorerStatus`),
-`multibeam_returns`, `profiler_returns` (`SonarReturns`), `reference` (`Reference`), `map`
-(`OnlineMap`) (all but the first may be left unconnected: the rule that needs one is then
-off); outputs `leg` (`LegSignal`), `behaviour` (`InputPortIndex`), `response` (`Response`,
+Ports: inputs `estimated_state` (`VehicleState`), one `<behaviour>_status`
+(`BehaviourStatus`) per behaviour it sequences (`path_status`, `follow_status`, ...: a leg's
+goal reads its own behaviour's), `multibeam_returns`, `profiler_returns` (`SonarReturns`),
+`reference` (`Reference`), `map` (`OnlineMap`) (all but the first may be left unconnected: the
+rule that needs one is then off); outputs `leg` (`LegSignal`), `behaviour` (`InputPortIndex`), `response` (`Response`,
 the group, for a log) and `response_reference` (`Reference`).
 """
 
@@ -38,8 +37,8 @@ from drake_auv.mission.legs import Leg, advance_progress, goal_reached, start_pr
 from drake_auv.mission.safety import (CAUSES, RESPONSES, SENSORS, SafetyRules, abort_target,
                                       back_off_target, closing, relied_sensors,
                                       response_record, response_reference)
-from drake_auv.signals import (ExplorerStatus, LegProgress, LegSignal, PathStatus, PilotStatus,
-                               Reference, ReplannerStatus, Response, VehicleState, Watch)
+from drake_auv.signals import (BehaviourStatus, LegProgress, LegSignal, Reference, Response,
+                               VehicleState, Watch)
 from drake_auv.sonar.returns import SonarReturns
 
 OUTCOMES = ("flying", "goal", "timed out", "aborted")
@@ -51,7 +50,8 @@ class MissionSupervisor(LeafSystem):
     Args:
         legs: the mission's legs, in order (at least one).
         behaviour_ports: {behaviour name: index of the PortSwitch input it drives}, and
-            "response" for the `response_reference` output (needed by the safety rules).
+            "response" for the `response_reference` output (needed by the safety rules); each
+            behaviour's status is read from the input `<name>_status` (`status_inputs`).
         period: judging period, s, in (0, 5].
         rules: the `SafetyRules` (default thresholds).
     """
@@ -70,13 +70,9 @@ class MissionSupervisor(LeafSystem):
         self.behaviour_ports = dict(behaviour_ports)
         self.rules = rules if rules is not None else SafetyRules()
         self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
-        self.path_status_input = self.DeclareVectorInputPort("path_status", PathStatus.size())
-        self.replanner_status_input = self.DeclareVectorInputPort("replanner_status",
-                                                                  ReplannerStatus.size())
-        self.autopilot_status_input = self.DeclareVectorInputPort("autopilot_status",
-                                                                  PilotStatus.size())
-        self.explorer_status_input = self.DeclareVectorInputPort("explorer_status",
-                                                                 ExplorerStatus.size())
+        self.status_inputs = {name: self.DeclareVectorInputPort(f"{name}_status",
+                                                                BehaviourStatus.size())
+                              for name in self.behaviour_ports if name != "response"}
         empty = AbstractValue.Make(SonarReturns.empty(1.0))
         self.returns_inputs = {name: self.DeclareAbstractInputPort(f"{name}_returns", empty)
                                for name in SENSORS}
@@ -104,9 +100,11 @@ class MissionSupervisor(LeafSystem):
             prerequisites_of_calc={self.discrete_state_ticket(self._response),
                                    self.time_ticket()})
 
-    def _status(self, port, context, view) -> np.ndarray:
-        """A status input's value (laid out as `view`); every field -1 while unconnected."""
-        return port.Eval(context) if port.HasValue(context) else np.full(view.size(), -1.0)
+    def _status(self, behaviour: str, context) -> np.ndarray:
+        """The status of `behaviour` (`BehaviourStatus`); every field -1 while unconnected."""
+        port = self.status_inputs[behaviour]
+        return (port.Eval(context) if port.HasValue(context)
+                else np.full(BehaviourStatus.size(), -1.0))
 
     def _leg_now(self, context):
         return LegSignal(context.get_discrete_state(self._leg).get_value())
@@ -219,11 +217,7 @@ class MissionSupervisor(LeafSystem):
         progress = advance_progress(leg, context.get_discrete_state(self._progress).get_value(),
                                     x)
         outcome = 0
-        if goal_reached(leg, index, t, x, progress,
-                        self._status(self.path_status_input, context, PathStatus),
-                        self._status(self.replanner_status_input, context, ReplannerStatus),
-                        self._status(self.autopilot_status_input, context, PilotStatus),
-                        self._status(self.explorer_status_input, context, ExplorerStatus)):
+        if goal_reached(leg, index, t, x, progress, self._status(leg.behaviour, context)):
             outcome = 1
         elif t - start >= leg.max_duration:
             outcome = 2

@@ -16,9 +16,10 @@ The nominal plan is an input (`nominal`, a `Path` from a source system), the map
 `signals.ReplannerProgress`) and the record of the last step (`last_step` group:
 `signals.ReplanningStep`), which the `step` output exposes for a `LogVectorOutput`.
 
-Ports (views in `drake_auv.signals`): inputs `estimated_state` (`VehicleState`), `map`
-(`OnlineMap`), `nominal` (`Path`), `leg` (`LegSignal`); outputs `reference` (`Reference`,
-world), `status` (`ReplannerStatus`, the leg last flown, -1 before any), `step`
+A `Behaviour` (`drake_auv.behaviour`). Ports (views in `drake_auv.signals`): inputs
+`estimated_state` (`VehicleState`), `leg` (`LegSignal`), `map` (`OnlineMap`), `nominal`
+(`Path`); outputs `reference` (`Reference`, world), `status` (`BehaviourStatus`, the leg last
+flown, -1 before any; finished once every waypoint is visited; progress the next waypoint), `step`
 (`ReplanningStep`) and `section` ((N, 3) the last optimised section's trajectory, navigation
 frame, m; (0, 3) before any: for a viewer).
 """
@@ -30,19 +31,16 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import LeafSystem
 from pydrake.trajectories import PiecewisePolynomial
 
-from drake_auv.leg_signal import LEG_SIZE, read_leg
+from drake_auv.behaviour import Behaviour
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import Path
 from drake_auv.planning.polyline import arc_length, motion_heading
 from drake_auv.random_streams import stream
 from drake_auv.replanning.section import (OPTIMIZERS, ReplanningParameters, SectionPlan,
                                           replan_section)
-from drake_auv.signals import (Reference, ReplannerProgress, ReplannerStatus, ReplanningStep,
-                               VehicleState)
-from drake_auv.vehicle.path_reference import trajectory_reference
+from drake_auv.signals import BehaviourStatus, ReplannerProgress, ReplanningStep, VehicleState
 
 
 @dataclass(frozen=True)
@@ -60,7 +58,7 @@ def _placeholder_path() -> Path:
     return Path(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))
 
 
-class Replanner(LeafSystem):
+class Replanner(Behaviour):
     """Replans the next section of the `nominal` input's waypoints against the on-line map.
 
     Args:
@@ -86,7 +84,7 @@ class Replanner(LeafSystem):
                  period: float = 1.0, sensor_azimuth: float | None = np.pi / 2,
                  heading_offset: float = 0.0, yaw_rate: float = np.radians(15.0),
                  seed: int = 0, offset_labels=("slice",), legs=(0,), optimizer: str = "stomp"):
-        super().__init__()
+        super().__init__(dict.fromkeys(int(leg) for leg in legs))
         if optimizer not in OPTIMIZERS:
             raise ValueError(f"optimizer must be one of {OPTIMIZERS}, got {optimizer!r}")
         self.optimizer = optimizer
@@ -102,27 +100,18 @@ class Replanner(LeafSystem):
         self.heading_offset, self.yaw_rate = float(heading_offset), float(yaw_rate)
         self.seed = int(seed)
         self.offset_labels = tuple(offset_labels)
-        self.legs = frozenset(int(leg) for leg in legs)
-        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
         self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
         self.nominal_input = self.DeclareAbstractInputPort(
             "nominal", AbstractValue.Make(_placeholder_path()))
-        self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
-        self._plan_index = self.DeclareAbstractState(AbstractValue.Make(_Plan()))
+        self._plan_index = self.DeclareTrajectoryState(_Plan())
         progress = ReplannerProgress.zeros()
         progress.leg = -1.0  # none flown yet
         self._progress = self.DeclareDiscreteState(progress[:])
         self._last_step = self.DeclareDiscreteState(ReplanningStep.size())
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_plan)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, self.period, self._update_plan)
-        self.reference_output = self.DeclareVectorOutputPort(
-            "reference", Reference.size(), self._calc_reference,
-            prerequisites_of_calc={self.abstract_state_ticket(self._plan_index),
-                                   self.time_ticket(),
-                                   self.input_port_ticket(self.state_input.get_index())})
-        self.status_output = self.DeclareVectorOutputPort(
-            "status", ReplannerStatus.size(), self._calc_status,
-            prerequisites_of_calc={self.discrete_state_ticket(self._progress)})
+        self.DeclareReferenceOutput()
+        self.DeclareStatusOutput(self._status, {self.discrete_state_ticket(self._progress)})
         self.step_output = self.DeclareStateOutputPort("step", self._last_step)
         self.section_output = self.DeclareAbstractOutputPort(
             "section", lambda: AbstractValue.Make(np.zeros((0, 3))), self._calc_section,
@@ -133,7 +122,7 @@ class Replanner(LeafSystem):
         return context.get_abstract_state(self._plan_index).get_value().plan
 
     def _update_plan(self, context, state):
-        leg, _ = read_leg(self.leg_input, context)
+        leg = self.leg(context)
         if leg not in self.legs:
             return  # not flying: nothing to do
         t = context.get_time()
@@ -199,18 +188,13 @@ class Replanner(LeafSystem):
         trajectory.shiftRight(t)
         return trajectory
 
-    def _calc_reference(self, context, output):
-        output.SetFromVector(trajectory_reference(
-            context.get_abstract_state(self._plan_index).get_value().trajectory,
-            context.get_time(), self.state_input, context))
-
     def _calc_section(self, context, output):
         plan = self.section(context)
         output.set_value(np.zeros((0, 3)) if plan is None else plan.trajectory)
 
-    def _calc_status(self, context, output):
+    def _status(self, context) -> BehaviourStatus:
         progress = ReplannerProgress(context.get_discrete_state(self._progress).get_value())
-        status = ReplannerStatus.zeros()
-        status.leg, status.finished, status.next_index = (progress.leg, progress.finished,
-                                                          progress.next_index)
-        output.SetFromVector(status[:])
+        status = BehaviourStatus.zeros()
+        status.leg, status.finished, status.progress = (progress.leg, progress.finished,
+                                                        progress.next_index)
+        return status

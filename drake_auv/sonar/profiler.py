@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from drake_auv.leg_signal import LEG_SIZE, read_leg
+from drake_auv.behaviour import LEG_SIZE, read_leg
 from drake_auv.sonar.noise import SonarNoise
 from drake_auv.sonar.beams import SonarModel, SonarMount, head_angles
 from drake_auv.sonar.range_sonar import RangeSonar

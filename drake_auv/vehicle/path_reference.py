@@ -9,58 +9,25 @@ piece's first-order hold, shifted after the one before and concatenated in time)
 the leg's start (`shiftRight`) and held in abstract state; the `reference` output is Drake's
 value and first derivative of it (past its end: its end value, zero rates).
 
-Ports: inputs `estimated_state` (12), `leg` (2), `nominal` (`Path`, only for `nominal` legs);
-outputs `reference` (8, world) and `status` (2: `[leg, end_time]` of the path held, -1 before
-any, so a supervisor can tell when it has been flown).
+A `Behaviour` (`drake_auv.behaviour`). Ports: inputs `estimated_state` (12), `leg` (2),
+`nominal` (`Path`, only for `nominal` legs); outputs `reference` (8, world) and `status`
+(`BehaviourStatus`: the leg of the path held, -1 before any; finished once its end time has
+passed; progress the share of its duration flown, 0 to 1).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import LeafSystem
-from pydrake.trajectories import PiecewisePolynomial
 
-from drake_auv.leg_signal import LEG_SIZE, read_leg
+from drake_auv.behaviour import Behaviour, TrajectoryHolder
 from drake_auv.planning.path import Path
 from drake_auv.planning.transit import transit
-from drake_auv.signals import Reference, VehicleState
+from drake_auv.signals import BehaviourStatus, VehicleState
 from drake_auv.vehicle.path_leg import PathLeg
 
 
-def trajectory_reference(trajectory: PiecewisePolynomial | None, t: float, state_input,
-                         context) -> np.ndarray:
-    """The reference (`signals.Reference`) of a timed [x, y, z, yaw] `trajectory` at `t` s:
-    its value and first derivative (Drake's; past the end, the end value, which `value` holds,
-    and zero rates), and with no trajectory the estimated pose from `state_input` held (zero
-    rates)."""
-    reference = Reference.zeros()
-    if trajectory is None:
-        state = VehicleState(state_input.Eval(context))
-        reference.position, reference.yaw = state.position, state.yaw
-        return reference[:]
-    reference.pose = trajectory.value(t)[:, 0]
-    if t < trajectory.end_time():
-        reference.rates = trajectory.EvalDerivative(t, 1)[:, 0]
-    return reference[:]
-
-
-@dataclass(frozen=True)
-class _Timed:
-    """The path being flown, timed (None before the first leg). A new leg stores a new one and
-    the trajectory is never modified once stored (`shiftRight` comes before), so Drake's state
-    copies, two at every update, may share it: a real copy of a plan's trajectory costs
-    2.3 us a segment (12 ms for 5000 segments, every 0.1 s)."""
-
-    trajectory: PiecewisePolynomial | None = None
-
-    def __deepcopy__(self, memo):
-        return self
-
-
-class PathReference(LeafSystem):
+class PathReference(Behaviour):
     """Flies `goto` and `nominal` legs.
 
     Args:
@@ -75,26 +42,21 @@ class PathReference(LeafSystem):
     def __init__(self, legs: PathLeg | dict[int, PathLeg], terrain=None, clearance: float = 3.0,
                  min_depth: float = 1.0, period: float = 0.1,
                  yaw_rate: float = np.radians(15.0)):
-        super().__init__()
+        super().__init__({0: legs} if isinstance(legs, PathLeg) else legs)
         if not (np.isfinite(period) and 0 < period <= 5.0):
             raise ValueError(f"PathReference period must be in (0, 5] s, got {period}")
-        self.legs = {0: legs} if isinstance(legs, PathLeg) else dict(legs)
         self.terrain, self.clearance, self.min_depth = terrain, float(clearance), float(min_depth)
         self.yaw_rate = float(yaw_rate)
-        self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
-        self.leg_input = self.DeclareVectorInputPort("leg", LEG_SIZE)
         self.nominal_input = self.DeclareAbstractInputPort(
             "nominal", AbstractValue.Make(Path(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))))
-        self._timed_index = self.DeclareAbstractState(AbstractValue.Make(_Timed()))
+        self._timed_index = self.DeclareTrajectoryState()
         self._flown = self.DeclareDiscreteState(np.array([-1.0, 0.0]))  # leg, end time
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_path)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update_path)
-        self.reference_output = self.DeclareVectorOutputPort(
-            "reference", Reference.size(), self._calc_reference,
-            prerequisites_of_calc={self.abstract_state_ticket(self._timed_index),
-                                   self.input_port_ticket(self.state_input.get_index()),
-                                   self.time_ticket()})
-        self.status_output = self.DeclareStateOutputPort("status", self._flown)
+        self.DeclareReferenceOutput()
+        self.DeclareStatusOutput(self._status, prerequisites={
+            self.discrete_state_ticket(self._flown), self.abstract_state_ticket(self._timed_index),
+            self.time_ticket()})
 
     def paths_for(self, leg: PathLeg, x: np.ndarray, nominal: Path | None) -> list[Path]:
         """The paths `leg` flies in order from the estimated state `x` (12): the transit, and
@@ -107,7 +69,7 @@ class PathReference(LeafSystem):
         return [path] if leg.kind == "goto" else [path, nominal]
 
     def _update_path(self, context, state):
-        leg, _ = read_leg(self.leg_input, context)
+        leg = self.leg(context)
         spec = self.legs.get(leg)
         if spec is None or context.get_discrete_state(self._flown)[0] == leg:
             return  # not ours, or already timed
@@ -116,10 +78,18 @@ class PathReference(LeafSystem):
             self.paths_for(spec, self.state_input.Eval(context), nominal), spec.speed,
             self.yaw_rate)
         trajectory.shiftRight(context.get_time())
-        state.get_mutable_abstract_state(self._timed_index).set_value(_Timed(trajectory))
+        state.get_mutable_abstract_state(self._timed_index).set_value(
+            TrajectoryHolder(trajectory))
         state.get_mutable_discrete_state(self._flown).set_value([leg, trajectory.end_time()])
 
-    def _calc_reference(self, context, output):
-        output.SetFromVector(trajectory_reference(
-            context.get_abstract_state(self._timed_index).get_value().trajectory,
-            context.get_time(), self.state_input, context))
+    def _status(self, context) -> BehaviourStatus:
+        leg, end = context.get_discrete_state(self._flown).get_value()
+        status, t = BehaviourStatus.zeros(), context.get_time()
+        status.leg = leg
+        trajectory = self.held(context).trajectory
+        if trajectory is not None:
+            start = trajectory.start_time()
+            status.finished = float(t >= end)
+            status.progress = 1.0 if end <= start else float(np.clip((t - start) / (end - start),
+                                                                     0.0, 1.0))
+        return status

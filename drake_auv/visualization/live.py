@@ -23,7 +23,7 @@ from pydrake.geometry import Cylinder, Rgba, Sphere
 from pydrake.math import RigidTransform
 from pydrake.systems.framework import LeafSystem
 
-from drake_auv.leg_signal import LEG_SIZE, read_leg
+from drake_auv.behaviour import LEG_SIZE, read_leg
 from drake_auv.mission.legs import Leg
 from drake_auv.signals import Reference, VehicleState
 
