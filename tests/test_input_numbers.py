@@ -74,8 +74,8 @@ def test_json_holds_null_with_the_reason_never_nan_or_infinity(tmp_path):
 def test_plans_report_json_is_strict(tmp_path, monkeypatch):
     report_dict = export.report_dict
 
-    def with_nan(plan, m3d):
-        return {**report_dict(plan, m3d), "undefined": math.nan}
+    def with_nan(plan, m3d, *args):
+        return {**report_dict(plan, m3d, *args), "undefined": math.nan}
 
     monkeypatch.setattr(export, "report_dict", with_nan)
     z = -20.0 - 0.2 * np.clip(np.arange(30.0)[None, :] - 10.0, 0.0, 8.0) * np.ones((25, 1))

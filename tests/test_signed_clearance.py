@@ -215,7 +215,7 @@ def test_a_file_item_within_its_precision_of_the_edge_flies(tmp_path):
     """A 6-decimal file's items may lie 0.22 m past the world's edge (two units of its last
     decimal): the project's own plan covers its region to the border. 1 m past: refused."""
     from drake_auv.autopilot.items import MissionItem, VehicleMission, position_tolerance
-    from drake_auv.mission.plan import flown_mission
+    from drake_auv.mission.steps.fly import flown_mission
 
     def mission(decimals):
         return VehicleMission("ardusub", (MissionItem("waypoint", round(41.5, decimals) + 10.0
