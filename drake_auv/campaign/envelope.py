@@ -197,9 +197,23 @@ def _edges(values: list[float], half_width: float) -> np.ndarray:
 
 
 def envelope_figure(verdict: dict, title: str) -> Figure:
-    """Three polar panels, speed as radius and the direction the current flows towards as
-    angle (clockwise from north, north up): contact rate, least clearance and median multibeam
-    coverage per cell, the no-contact envelope drawn in black on each."""
+    """envelope.png: the three panels of `envelope_axes` and a title saying how to read them."""
+    fig = Figure(figsize=(17, 6.2))
+    envelope_axes(fig, verdict)
+    fig.suptitle(f"{title}\n{READING}", fontsize=10)
+    return fig
+
+
+READING = ("radius: current speed (m/s); angle: the direction the current flows towards, "
+           "clockwise from north (north up)")
+
+
+def envelope_axes(fig, verdict: dict, rows: int = 1, row: int = 0, label: str = "",
+                  clearance_range=(None, None)) -> None:
+    """Three polar panels in row `row` of `rows` of `fig`, speed as radius and the direction
+    the current flows towards as angle (clockwise from north, north up): contact rate, least
+    clearance (colour range `clearance_range`, m) and median multibeam coverage per cell, the
+    no-contact envelope drawn in black on each; `label` heads their titles."""
     speeds = verdict["speeds"]
     towards = [p["towards_deg"] for p in verdict["directions"]]
     half = 180.0 / len(towards)
@@ -218,14 +232,13 @@ def envelope_figure(verdict: dict, title: str) -> Figure:
     boundary_r = np.append(np.repeat(outer, sub), outer[0])
     boundary_r = np.stack([boundary_r[:-1], boundary_r[:-1]], axis=1).ravel()
     boundary_t = np.stack([theta[:-1], theta[1:]], axis=1).ravel()
-    fig = Figure(figsize=(17, 6.2))
     panels = (("contact rate over the seeds (%)", "contact_rate", "Reds", 100.0, (0, 100)),
               ("least clearance over the seeds (m)", "least_clearance_m", "viridis", 1.0,
-               (None, None)),
+               clearance_range),
               ("median multibeam coverage (%)", "coverage_multibeam_median", "viridis", 100.0,
                (0, 100)))
     for k, (name, key, cmap, factor, (vmin, vmax)) in enumerate(panels):
-        ax = fig.add_subplot(1, 3, k + 1, projection="polar")
+        ax = fig.add_subplot(rows, 3, 3 * row + k + 1, projection="polar")
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)
         mesh = ax.pcolormesh(theta, radius,
@@ -237,14 +250,11 @@ def envelope_figure(verdict: dict, title: str) -> Figure:
         ax.set_rticks([v for v in speeds if v > 0])
         ax.set_rlabel_position(half)
         ax.tick_params(axis="y", labelsize=7)
-        ax.set_title(name, pad=14)
+        ax.set_title(f"{label}: {name}" if label else name, pad=14)
         ax.grid(alpha=0.4)
         fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1)
         if k == 0:
             ax.legend(loc="lower left", bbox_to_anchor=(-0.15, -0.16), fontsize=8)
-    fig.suptitle(f"{title}\nradius: current speed (m/s); angle: the direction the current "
-                 "flows towards, clockwise from north (north up)", fontsize=10)
-    return fig
 
 
 def envelope_markdown(mission: str, verdict: dict, line: str) -> str:
