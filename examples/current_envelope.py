@@ -91,9 +91,10 @@ def main(argv=None) -> int:
     safe = {mode: v["safe_mps"] for mode, v in verdicts.items()}
     wider = (safe["replanning"] is not None and
              (safe["nominal"] is None or safe["replanning"] >= safe["nominal"]))
+    text = {mode: "no speed" if v is None else f"{v:g} m/s" for mode, v in safe.items()}
     comparison = (f"Replanning's envelope is {'at least as wide as' if wider else 'narrower than'}"
-                  f" nominal's: {safe['replanning']} against {safe['nominal']} m/s from every "
-                  "direction (None: not even the slowest speed was safe).")
+                  f" nominal's: {text['replanning']} against {text['nominal']} from every "
+                  "direction.")
     write_text(out / "current_envelope.md", "\n".join(
         [f"# Operating envelope of {args.mission}: replanning and nominal", "",
          *(f"- {line}" for line in lines.values()), "", comparison, "",

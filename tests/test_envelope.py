@@ -6,6 +6,7 @@ line before anything is written."""
 from __future__ import annotations
 
 import csv
+import json
 
 import pytest
 
@@ -134,6 +135,9 @@ def test_cli_envelope_writes_rows_plot_and_verdict_and_reruns_nothing(tmp_path, 
     assert all(r["tracking_error_p95_m"] and r["thrust_saturation_share_max"] for r in rows)
     assert (out / "envelope.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert verdict in (out / "envelope.md").read_text()
+    saved = json.loads((out / "envelope.json").read_text())
+    assert saved["verdict"] == verdict and saved["command"]["directions"] == 2
+    assert saved["speeds"] == [0.0, 0.2, 0.4] and len(saved["cells"]) == 2 + 2 * 2
     assert main(argv) == 0  # a rerun runs nothing and writes every row once
     assert "5 runs (5 already in envelope.csv" in capsys.readouterr().out
     assert len(_csv(out / "envelope.csv")[1]) == 5

@@ -205,7 +205,8 @@ def envelope_figure(verdict: dict, title: str) -> Figure:
 
 
 READING = ("radius: current speed (m/s); angle: the direction the current flows towards, "
-           "clockwise from north (north up)")
+           "clockwise from north (north up); black line: the envelope, no seed touched within "
+           "it")
 
 
 def envelope_axes(fig, verdict: dict, rows: int = 1, row: int = 0, label: str = "",
@@ -244,8 +245,7 @@ def envelope_axes(fig, verdict: dict, rows: int = 1, row: int = 0, label: str = 
         mesh = ax.pcolormesh(theta, radius,
                              np.ma.masked_invalid(factor * np.repeat(grids[key], sub, axis=1)),
                              cmap=cmap, shading="flat", vmin=vmin, vmax=vmax)
-        ax.plot(boundary_t, boundary_r, color="black", linewidth=2.0,
-                label="no contact within (every seed)")
+        ax.plot(boundary_t, boundary_r, color="black", linewidth=2.0)
         ax.set_ylim(0, radius[-1])
         ax.set_rticks([v for v in speeds if v > 0])
         ax.set_rlabel_position(half)
@@ -253,8 +253,6 @@ def envelope_axes(fig, verdict: dict, rows: int = 1, row: int = 0, label: str = 
         ax.set_title(f"{label}: {name}" if label else name, pad=14)
         ax.grid(alpha=0.4)
         fig.colorbar(mesh, ax=ax, shrink=0.7, pad=0.1)
-        if k == 0:
-            ax.legend(loc="lower left", bbox_to_anchor=(-0.15, -0.16), fontsize=8)
 
 
 def envelope_markdown(mission: str, verdict: dict, line: str) -> str:
@@ -278,12 +276,13 @@ def envelope_markdown(mission: str, verdict: dict, line: str) -> str:
 
 
 def write_envelope(rows, out, mission: str, meta: dict, dpi: int = 110) -> tuple[dict, str]:
-    """Writes envelope.json, envelope.md and envelope.png into `out` from every row of
-    envelope.csv; returns (the verdict, its line)."""
+    """Writes envelope.json (`meta` as its `command`, the verdict's line and `envelope_verdict`),
+    envelope.md and envelope.png into `out` from every row of envelope.csv; returns (the
+    verdict, its line)."""
     out = Path(out)
     verdict = envelope_verdict(rows)
     line = verdict_line(mission, verdict)
-    write_json(out / "envelope.json", {**meta, "verdict": line, **verdict})
+    write_json(out / "envelope.json", {"command": meta, "verdict": line, **verdict})
     write_text(out / "envelope.md", envelope_markdown(mission, verdict, line))
     fig = envelope_figure(verdict, f"Operating envelope of {mission}, "
                                    f"{len(verdict['seeds'])} seed(s)")
