@@ -11,7 +11,7 @@ import warnings
 from drake_auv import __version__
 
 COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "reconstruct",
-            "campaign", "replay")
+            "campaign", "envelope", "replay")
 
 
 def build_parser() -> argparse.ArgumentParser:

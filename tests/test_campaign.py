@@ -13,6 +13,7 @@ import pytest
 
 from drake_auv.campaign import (ResultsFile, expand_runs, parse_seeds, parse_vary,
                                 run_campaign, run_task, wilson_interval)
+from drake_auv.campaign.grid import split_values
 from drake_auv.campaign.task import TIMING
 from drake_auv.cli import main
 from drake_auv.mission.config import MissionFileError
@@ -47,6 +48,43 @@ def test_runs_cover_every_combination_and_validate():
         expand_runs("breakwater", [0], parse_vary(["site.prior_eror_m=1"]))
     with pytest.raises(MissionFileError, match="prior_error_m: -1.0 is out of range"):
         expand_runs("breakwater", [0], parse_vary(["site.prior_error_m=0,-1"]))
+
+
+def test_vary_reaches_every_ocean_key():
+    """Every key of the `ocean:` section varies: the parts' scalars, a constituent's, a whole
+    flow list (its commas inside brackets), a UTC time (YAML reads it as a datetime), a
+    gridded file, and the sea itself (none or a mapping)."""
+    cases = {
+        "ocean.current.speed_mps=0,0.4": ("current", "speed_mps", [0.0, 0.4]),
+        "ocean.current.towards_deg=0,90": ("current", "towards_deg", [0.0, 90.0]),
+        "ocean.profile.seabed_depth_m=10,20": ("profile", "seabed_depth_m", [10.0, 20.0]),
+        "ocean.turbulence.direction_sd_deg=0,10": ("turbulence", "direction_sd_deg",
+                                                   [0.0, 10.0]),
+        "ocean.waves.hs_m=0.5,1": ("waves", "hs_m", [0.5, 1.0]),
+        "ocean.tides.0.amplitude_mps=0.1,0.2": ("tides", 0, [0.1, 0.2]),
+        "ocean.start_utc=2024-03-01T00:00:00Z,2024-03-01T06:00:00Z":
+            ("start_utc", None, ["2024-03-01T00:00:00Z", "2024-03-01T06:00:00Z"]),
+        "ocean.tides=[{name: M2, amplitude_mps: 0.1}],[{name: S2, amplitude_mps: 0.2}]":
+            ("tides", 0, [0.1, 0.2]),
+    }
+    base = ["ocean.tides=[{name: M2, amplitude_mps: 0.3}]"]
+    for item, (part, key, expected) in cases.items():
+        runs = expand_runs("breakwater", [0], parse_vary([item]), base)
+        oceans = [r.mission["ocean"] for r in runs]
+        if part == "tides":
+            got = [o["tides"][key]["amplitude_mps"] for o in oceans]
+        else:
+            got = [o[part] if key is None else o[part][key] for o in oceans]
+        assert got == expected, item
+    runs = expand_runs("monterey_wall", [0], parse_vary(
+        ["ocean.file=monterey_wall_current.nc,null"]))
+    assert runs[0].mission["ocean"]["file"].endswith("missions/monterey_wall_current.nc")
+    assert "file" not in runs[1].mission["ocean"]
+    runs = expand_runs("breakwater", [0], parse_vary(["ocean=none,{current: {speed_mps: 0.2}}"]))
+    assert runs[0].mission.get("ocean") is None
+    assert runs[1].mission["ocean"]["current"]["speed_mps"] == 0.2
+    assert split_values("1, [a, {b: 2, c: 'x,y'}], \"p,q\"") == ["1", " [a, {b: 2, c: 'x,y'}]",
+                                                                 ' "p,q"']
 
 
 def test_wilson_interval_known_values():

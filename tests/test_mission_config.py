@@ -51,14 +51,15 @@ def _with(**changes):
 
 def test_builtin_missions_load():
     assert builtin_missions() == ["boulder", "boulder_explore", "breakwater",
-                                  "breakwater_explore", "c_object", "monterey_wall", "pool"]
+                                  "breakwater_current", "breakwater_explore", "c_object",
+                                  "monterey_wall", "pool"]
     for name in builtin_missions():
         spec = load_mission(name)
         assert spec.name == name and spec.steps and spec.source.name == f"{name}.yaml"
         if name == "monterey_wall":  # cut from a shared tile on first use
             assert spec.site.tile.is_file() and spec.site.roi == (80.0, 120.0, 240.0, 280.0)
         else:
-            assert spec.site.scenario == name.removesuffix("_explore")
+            assert spec.site.scenario == name.removesuffix("_explore").removesuffix("_current")
     boulder = load_mission("boulder")
     plan, follow, survey = boulder.steps
     assert (plan.omega, plan.slice_count, plan.slice_spacing) == (10.0, 2, 2.0)
@@ -66,6 +67,12 @@ def test_builtin_missions_load():
     assert isinstance(survey, SurveyStep) and survey.replanning
     assert boulder.site.prior_error_m == 3.0 and boulder.payload.multibeam_mount == "port"
     assert load_mission("breakwater").steps[0].method == "contour"
+    sea = load_mission("breakwater_current").ocean  # cross-shore onto the blocks' south face
+    assert (sea.current.speed_mps, sea.current.towards_deg) == (0.3, 0.0)
+    assert [(c.name, c.amplitude_mps, c.flood_towards_deg) for c in sea.tides] == [("M2", 0.1,
+                                                                                   0.0)]
+    assert (sea.turbulence.speed_sd_mps, sea.waves.hs_m, sea.waves.tp_s) == (0.03, 1.0, 8.0)
+    assert load_mission("monterey_wall").ocean.file.name == "monterey_wall_current.nc"
     vertical = load_mission("pool").steps[1]
     assert (vertical.mode, vertical.start, vertical.end_depth_m) == ("vertical", (-6.0, 0.0), 1.3)
 

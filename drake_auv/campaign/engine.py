@@ -108,11 +108,13 @@ def connect(workers: int | None = None, scheduler: str | None = None):
 
 
 def run_campaign(runs, results: ResultsFile, client, progress: bool = True,
-                 retries: int = 1) -> dict:
+                 retries: int = 1, task=run_task, desc: str = "campaign") -> dict:
     """Runs the `runs` (`CampaignRun`) whose key is not in `results`, on `client`; returns
     counts {total, skipped, ok, failed, contact}. `retries`: resubmissions of a task that
-    raised (the task itself turns a mission's errors into failed rows). A row that cannot be
-    written raises CampaignError (one line) once the other tasks are cancelled."""
+    raised (the task itself turns a mission's errors into failed rows); `task`: the function
+    a worker calls on a run's mission (default `run_task`); `desc`: the progress bar's label.
+    A row that cannot be written raises CampaignError (one line) once the other tasks are
+    cancelled."""
     from distributed import as_completed
 
     done = results.done()
@@ -120,9 +122,9 @@ def run_campaign(runs, results: ResultsFile, client, progress: bool = True,
     counts = dict(total=len(runs), skipped=len(runs) - len(todo), ok=0, failed=0, contact=0)
     if not todo:
         return counts
-    futures = {client.submit(run_task, run.mission, pure=False, retries=retries): run
+    futures = {client.submit(task, run.mission, pure=False, retries=retries): run
                for run in todo}
-    bar = tqdm(total=len(todo), unit="run", desc="campaign", disable=not progress)
+    bar = tqdm(total=len(todo), unit="run", desc=desc, disable=not progress)
     try:
         for future in as_completed(futures):
             run = futures.pop(future)

@@ -24,8 +24,9 @@ OUTPUTS = ("campaign.json", "results.csv", "summary.md", "summary.json", "covera
            "clearance.png", "variants.png", LOCK_FILE)
 
 
-def check_output(out) -> None:
-    """Raises CampaignError (one line) when `out` cannot hold a campaign's files."""
+def check_output(out, outputs=OUTPUTS) -> None:
+    """Raises CampaignError (one line) when `out` cannot hold a campaign's files (`outputs`:
+    their names)."""
     out = Path(out)
     allowed = "allowed: a writable folder, new or holding this campaign"
     if out.exists() and not out.is_dir():
@@ -37,7 +38,7 @@ def check_output(out) -> None:
         raise CampaignError(f"-o {out}: {parent} is a file, not a folder; {allowed}")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise CampaignError(f"-o {out}: {parent} is not writable; {allowed}")
-    for name in OUTPUTS:
+    for name in outputs:
         path = out / name
         if path.exists() and not path.is_file():
             raise CampaignError(f"-o {out}: {path} is a folder, not a file; {allowed}")

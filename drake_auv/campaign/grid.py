@@ -45,13 +45,33 @@ def parse_seeds(text: str) -> list[int]:
     return list(range(a, b))
 
 
+def split_values(text: str) -> list[str]:
+    """`V1,V2,...` split on the commas outside YAML brackets and quotes, so a value may be a
+    flow list or mapping: `[{name: M2, amplitude_mps: 0.1}],none` is two values."""
+    parts, depth, quote, start = [], 0, None, 0
+    for i, char in enumerate(text):
+        if quote:
+            quote = None if char == quote else quote
+        elif char in "'\"":
+            quote = char
+        elif char in "[{":
+            depth += 1
+        elif char in "]}":
+            depth -= 1
+        elif char == "," and depth == 0:
+            parts.append(text[start:i])
+            start = i + 1
+    return [*parts, text[start:]]
+
+
 def parse_vary(items) -> list[tuple[str, list[str]]]:
-    """`KEY=V1,V2,...` strings -> [(key, [value texts])] (values split on commas, as typed)."""
+    """`KEY=V1,V2,...` strings -> [(key, [value texts])] (values split on the commas outside
+    brackets and quotes, as typed)."""
     out = []
     for item in items:
         key, sep, values = item.partition("=")
         key = key.strip()
-        texts = [v.strip() for v in values.split(",")]
+        texts = [v.strip() for v in split_values(values)]
         if not sep or not key or not all(texts):
             raise ValueError(f"--vary: {item!r} is not KEY=V1,V2,...; allowed: a dotted key "
                              "of the mission file and comma-separated values, e.g. "

@@ -35,13 +35,14 @@ def _text(value) -> str:
 
 
 class ResultsFile:
-    """`path` (results.csv) with the columns of `vary_keys`; creates it with its header, or
-    checks that it can be appended to."""
+    """`path` (results.csv) with the columns of `vary_keys` (or `header`: the same names in
+    another order, other metrics); creates it with its header, or checks that it can be
+    appended to."""
 
-    def __init__(self, path, vary_keys):
+    def __init__(self, path, vary_keys, header=None):
         self.path = Path(path)
         self.vary_keys = list(vary_keys)
-        self.columns = columns(self.vary_keys)
+        self.columns = list(header) if header is not None else columns(self.vary_keys)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         if self.path.is_symlink():
             raise ValueError(f"{self.path} is a symbolic link; allowed: a regular file or none "

@@ -43,10 +43,11 @@ def metrics_row(summary: dict) -> dict:
         real_time_factor=timing["real_time_factor"])
 
 
-def run_task(mission: dict) -> dict:
+def run_task(mission: dict, row=metrics_row) -> dict:
     """Flies `mission` (a `mission_to_dict` mapping, absolute paths) and returns its row:
-    `status` "ok" with `METRICS` and `TIMING`, or "failed" with `error`; never raises an
-    `Exception` (a worker killed mid-run is Dask's to retry)."""
+    `status` "ok" with the metrics `row` takes from the report's `summarise` dict (default
+    `METRICS` and `TIMING`), or "failed" with `error`; never raises an `Exception` (a worker
+    killed mid-run is Dask's to retry)."""
     start = time.perf_counter()
     try:
         from drake_auv.mission.config import mission_from_dict
@@ -56,8 +57,8 @@ def run_task(mission: dict) -> dict:
         spec = mission_from_dict(mission, "/", label=str(mission.get("name", "mission")))
         with warnings.catch_warnings():  # empty statistics of a short run are reported as null
             warnings.simplefilter("ignore", RuntimeWarning)
-            row = metrics_row(summarise(run_mission(spec, progress=False)))
-        return dict(status="ok", error="", **row)
+            metrics = row(summarise(run_mission(spec, progress=False)))
+        return dict(status="ok", error="", **metrics)
     except Exception as err:  # noqa: BLE001 - a failed run is a row, never a lost campaign
         return dict(status="failed", error=one_line(err),
                     wall_s=round(time.perf_counter() - start, 3))

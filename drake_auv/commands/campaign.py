@@ -50,12 +50,13 @@ def add_parser(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def _check_same_campaign(out: Path, meta: dict, write: bool = True) -> None:
-    """Checks that OUT holds no campaign or this one (the same base mission, fixed overrides
-    and varied keys; seeds and values may be added) and, when `write`, writes
-    OUT/campaign.json."""
+def check_same_campaign(out: Path, meta: dict, write: bool = True,
+                        fixed=("base_mission", "overrides", "vary_keys")) -> None:
+    """Checks that OUT holds no campaign or this one (the same `fixed` entries of `meta`: base
+    mission, fixed overrides and varied keys; seeds and values may be added) and, when
+    `write`, writes OUT/campaign.json."""
     path = out / CAMPAIGN_FILE
-    fixed = {k: meta[k] for k in ("base_mission", "overrides", "vary_keys")}
+    fixed = {k: meta[k] for k in fixed}
     if path.is_file():
         try:
             old = json.loads(path.read_text())
@@ -92,12 +93,12 @@ def run(args) -> int:
     meta = dict(mission=base["name"], seeds=args.seeds, vary=dict(vary),
                 vary_keys=keys, overrides=list(args.overrides), base_mission=base)
     check_output(out)
-    _check_same_campaign(out, meta, write=False)
+    check_same_campaign(out, meta, write=False)
     if args.scheduler is not None:
         probe_scheduler(args.scheduler)
     with locked(out):
         try:
-            _check_same_campaign(out, meta)  # again, now that no other campaign can write
+            check_same_campaign(out, meta)  # again, now that no other campaign can write
             results = ResultsFile(out / "results.csv", keys)
             retried = results.drop(results.failed() & {run.key for run in runs}) \
                 if args.retry_failed else 0

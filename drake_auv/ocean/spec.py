@@ -19,6 +19,7 @@ Each part's keys, ranges and defaults are its algorithm's parameter class (`Mean
 from __future__ import annotations
 
 import dataclasses
+import datetime
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -170,8 +171,17 @@ def ocean_from_raw(raw, base_dir=".", where: str = "ocean") -> OceanSpec | None:
             raise OceanSpecError(f"{where}.file", what.removeprefix("ocean.file: "),
                                  allowed or "a CF netCDF current") from None
     if raw.get("start_utc") is not None:
-        kwargs["start_utc"] = raw["start_utc"]
+        kwargs["start_utc"] = _utc_text(raw["start_utc"])
     return OceanSpec(**kwargs)
+
+
+def _utc_text(value):
+    """`start_utc` as text: YAML reads an unquoted `2024-03-01T06:00:00Z` (in a file or a
+    `--set`) as a UTC datetime, written back here as `YYYY-MM-DDTHH:MM:SSZ`; a time without a
+    zone stays a datetime and is refused."""
+    if isinstance(value, datetime.datetime) and value.utcoffset() == datetime.timedelta(0):
+        return value.strftime("%Y-%m-%dT%H:%M:%SZ")
+    return value
 
 
 def _path(value, base_dir, where: str, what: str) -> Path:
