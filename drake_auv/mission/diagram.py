@@ -44,6 +44,7 @@ from drake_auv.mission.plan import SENSOR_AZIMUTH, MissionPlan, plan_mission, te
 from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
 from drake_auv.following.controller import ProfileFollowingController
+from drake_auv.ocean.forecast import forecast
 from drake_auv.ocean.system import Ocean
 from drake_auv.random_streams import generator
 from drake_auv.replanning.replanner import Replanner
@@ -220,7 +221,8 @@ def add_behaviours(builder: DiagramBuilder, vehicle: VehicleSystems, profiler, m
                 spec.replanner.to_params(plan.omega, plan.method), speed=plan.survey_speed,
                 period=spec.replanner.period_s,
                 sensor_azimuth=SENSOR_AZIMUTH.get(spec.payload.multibeam_mount),
-                seed=spec.seed, legs=plan.replan_legs, optimizer=spec.replanner.optimizer))
+                seed=spec.seed, legs=plan.replan_legs, optimizer=spec.replanner.optimizer,
+                current=forecast(spec.ocean)))
         else:
             builder.AddSystem(replanner)
         for name, port in (("map", mapper.map_output), ("nominal", source.get_output_port())):
