@@ -246,7 +246,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
                   metrics_3d=True, max_items: int = 700, ardusub_frames: str = "terrain",
-                  heave_in_3d: bool = False) -> list[FilePath]:
+                  heave_in_3d: bool = False, current: dict | None = None) -> list[FilePath]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
@@ -263,6 +263,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
             computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
         heave_in_3d: the COLA2 vehicle interpolates depth along sections (its heave_in_3D);
             the report's `exports.cola2` gives the sections and their replay's figures.
+        current: `planning.current.current_report` of the path, added to report.json
+            (`current`) and report.md.
     """
     georeferenced = plan.bathy.crs is not None or origin_lonlat is not None
     if exports is None:
@@ -306,8 +308,14 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
         from drake_auv.planning.metrics3d import evaluate_plan_3d
 
         m3d = evaluate_plan_3d(plan)
-    write_text(outdir / "report.md", report_markdown(plan, m3d))
+    markdown = report_markdown(plan, m3d)
     rep = report_dict(plan, m3d)
+    if current is not None:
+        from drake_auv.planning.current import current_markdown
+
+        markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
+        rep["current"] = current
+    write_text(outdir / "report.md", markdown)
     if extras:
         rep["exports"] = extras
     write_json(outdir / "report.json", rep)
