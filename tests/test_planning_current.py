@@ -164,3 +164,20 @@ def test_plan_refuses_a_bad_current(tmp_path, small_tif, capsys, extra, message)
     assert main(["plan", str(small_tif), "--no-figures", "-o", str(tmp_path / "o"),
                  *extra]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_the_offer_of_aligned_lanes_states_their_thrust_against_the_plans():
+    from drake_auv.planning.current import summary_lines
+
+    path = _two_lanes()  # lanes east and north
+    report = current_report(path, PlanCurrent(0.6, 0.0), 0.5)  # towards north
+    along = report["aligned_lanes"]
+    # Along the axis: 1.1 m/s through the water into it, surge (two thrusters, 307.6 N).
+    assert along["thrust_share"] == pytest.approx(148.0 * 1.1 ** 2 / 307.6, abs=2e-3)
+    # The plan's: lane 1 has it across (sway, one thruster), lane 2 behind it.
+    assert report["lanes"]["thrust_share"] == pytest.approx(148.0 * 0.36 / 153.8, abs=2e-3)
+    lines = summary_lines(report, 0.0)
+    assert lines[-1].startswith("lanes along the current: --align-with-current (sweep angle "
+                                "90 deg instead of 0)")
+    assert "0.58 / 0.58 along it, 0.35 / 0.35 now" in lines[-1]
+    assert not any("align" in line for line in summary_lines(report, 90.0))

@@ -131,12 +131,13 @@ def _pieces(path: Path) -> list[tuple[str, int, int]]:
 
 def current_report(path: Path, current: PlanCurrent, speed: float,
                    params: Girona500Params | None = None,
-                   yaw_rate: float = np.radians(15.0)) -> dict:
+                   yaw_rate: float = np.radians(15.0), aligned: bool = True) -> dict:
     """Per lane, contour and transit of `path` flown at the ground `speed` (m/s) in `current`:
     length (m), the mean current along and across it (m/s, + with the motion, + to port), the
     thrust share and ground speed in the mean current and the envelope's worst, the axis that
     limits, flyable or not; the mission's duration at those ground speeds (s) against the
-    planned one; one warning line per piece that cannot be flown as planned."""
+    planned one; one warning line per piece that cannot be flown as planned; the worst of its
+    lanes (`lanes`) and, with `aligned`, of lanes along the current (`aligned_lanes`)."""
     if not (np.isfinite(speed) and speed > 0):
         raise ValueError(f"speed must be > 0 m/s, got {speed}")
     p = params if params is not None else Girona500Params()
@@ -229,7 +230,35 @@ def current_report(path: Path, current: PlanCurrent, speed: float,
                 duration_planned_s=round(float(planned), 1),
                 duration_s=_round(duration(ground[0])),
                 duration_worst_s=_round(duration(ground.min(axis=0))),
-                aligned_sweep_angle_deg=aligned_sweep_angle(current))
+                lanes=_worst([q for q in pieces if q["kind"] == "lane"]),
+                aligned_sweep_angle_deg=aligned_sweep_angle(current),
+                aligned_lanes=_worst(aligned_lanes(current, speed, p)) if aligned else None)
+
+
+def _worst(pieces) -> dict | None:
+    """The largest thrust share and least ground speed of `pieces` (dicts of
+    `current_report`), over the mean current and the envelope's worst; None without any."""
+    if not pieces:
+        return None
+    return dict(thrust_share=max(q["thrust_share"] for q in pieces),
+                thrust_share_worst=max(q["thrust_share_worst"] for q in pieces),
+                ground_speed_mps=min(q["ground_speed_mps"] for q in pieces),
+                ground_speed_worst_mps=min(q["ground_speed_worst_mps"] for q in pieces))
+
+
+def aligned_lanes(current: PlanCurrent, speed: float,
+                  params: Girona500Params | None = None) -> list[dict]:
+    """The figures of two level lanes along the current's axis, one each way, heading along
+    the motion (as the planner's lanes), at the ground `speed`: what `--align-with-current`
+    would give its lanes."""
+    angle = np.radians(aligned_sweep_angle(current))
+    out = []
+    for yaw in (angle, angle + np.pi):
+        points = np.outer(np.arange(3.0), [np.cos(yaw), np.sin(yaw), 0.0])
+        lane = Path(points, np.full(3, yaw), (0.0, 0.0, -1.0),
+                    np.array(["planar"] * 3, dtype=object))
+        out += [q for q in current_report(lane, current, speed, params, aligned=False)["pieces"]]
+    return out
 
 
 def _round(value):
@@ -250,7 +279,7 @@ def current_markdown(report: dict) -> str:
              f"{report['duration_planned_s']:.0f} s; at ground speed, mean current "
              f"{secs(report['duration_s'])}, the tide's worst {secs(report['duration_worst_s'])}. "
              f"Lanes along the current: sweep angle {report['aligned_sweep_angle_deg']:g} deg "
-             "(`--align-with-current`).", "",
+             "(`--align-with-current`)" + _aligned_text(report) + ".", "",
              "| piece | length (m) | current along / across (m/s) | thrust share: mean / worst "
              "| limiting axis (N of N) | ground speed: mean / worst (m/s) |",
              "|---|---|---|---|---|---|"]
@@ -264,10 +293,20 @@ def current_markdown(report: dict) -> str:
     return "\n".join(lines).rstrip() + "\n"
 
 
+def _aligned_text(report: dict) -> str:
+    along = report.get("aligned_lanes")
+    if along is None:
+        return ""
+    return (f", their largest thrust share {along['thrust_share']:.2f} in the mean current, "
+            f"{along['thrust_share_worst']:.2f} at the tide's worst")
+
+
 def summary_lines(report: dict, sweep_angle_deg: float | None = None) -> list[str]:
     """What `plan` prints: the durations at ground speed, one line per warning and, when the
     lanes (at `sweep_angle_deg`, degrees from +x) do not run along the current, the offer of
-    lanes that do."""
+    lanes that do, with their largest thrust share against the plan's lanes' (along the
+    current is not always the lighter: a head current adds to the speed through the water,
+    a cross current loads the weaker sway)."""
     def secs(value):
         return "cannot be flown" if value is None else f"{value:.0f} s"
 
@@ -281,6 +320,12 @@ def summary_lines(report: dict, sweep_angle_deg: float | None = None) -> list[st
     aligned = report["aligned_sweep_angle_deg"]
     if sweep_angle_deg is not None and c["speed_mps"] + c["tide_mps"] > 0 and abs(
             (sweep_angle_deg - aligned + 90.0) % 180.0 - 90.0) > 1.0:
-        lines.append(f"lanes along the current: --align-with-current (sweep angle {aligned:g} "
-                     f"deg instead of {sweep_angle_deg % 180.0:g})")
+        line = (f"lanes along the current: --align-with-current (sweep angle {aligned:g} "
+                f"deg instead of {sweep_angle_deg % 180.0:g})")
+        now, along = report.get("lanes"), report.get("aligned_lanes")
+        if now is not None and along is not None:
+            line += (f"; lanes' largest thrust share, mean current / the tide's worst: "
+                     f"{along['thrust_share']:.2f} / {along['thrust_share_worst']:.2f} along it"
+                     f", {now['thrust_share']:.2f} / {now['thrust_share_worst']:.2f} now")
+        lines.append(line)
     return lines
