@@ -90,6 +90,16 @@ def add_parser(subparsers) -> None:
                         help="QGC/ArduSub: terrain = frame 10 (altitude, needs a downward "
                              "rangefinder and ArduSub 4.5+) on lanes, depth = frame 3 "
                              "everywhere from the prior map (default terrain)")
+    parser.add_argument("--current", default=None, metavar="SPEED,TOWARDS_DEG",
+                        help="a mean current (m/s, degrees clockwise from north it flows "
+                             "towards): the report gains the ground speed and thrust per lane "
+                             "and contour against the vehicle's limits, warnings and the "
+                             "duration at ground speed")
+    parser.add_argument("--tide", type=float, default=None, metavar="AMPLITUDE",
+                        help="with --current: a tide flooding and ebbing along its axis, up to "
+                             "AMPLITUDE m/s; the worst case is reported too")
+    parser.add_argument("--align-with-current", action="store_true",
+                        help="with --current: lanes along the current (sets the sweep angle)")
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     parser.add_argument("--reference-table", action="store_true",
                         help="add the reference's Table 3 (the Santorini caldera ROI) to the "
@@ -113,6 +123,17 @@ def run(args) -> int:
     from drake_auv.terrain.roi import parse_roi
 
     exports = parse_exports(args.export) if args.export is not None else None
+    current = None
+    if args.current is not None:
+        from drake_auv.planning.current import aligned_sweep_angle, parse_current
+
+        current = parse_current(args.current, args.tide)
+        if args.align_with_current and args.sweep_angle is not None:
+            raise ValueError("give --sweep-angle or --align-with-current, not both")
+        if args.align_with_current:
+            args.sweep_angle = aligned_sweep_angle(current)
+    elif args.tide is not None or args.align_with_current:
+        raise ValueError("--tide and --align-with-current need --current SPEED,TOWARDS_DEG")
     origin = _lonlat(args.origin_lonlat) if args.origin_lonlat is not None else None
     if args.bathymetry == "caldera" and not FilePath("caldera").exists():
         from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
@@ -148,15 +169,25 @@ def run(args) -> int:
                          min_area=args.min_area, min_depth=args.min_depth, no_go=no_go,
                          order=args.order,
                          progress=True)
+    flow = None
+    if current is not None:
+        from drake_auv.planning.current import current_report
+
+        flow = current_report(plan.path, current, args.speed)
     files = write_outputs(plan, args.out, figures=not args.no_figures, progress=True,
                           exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
                           metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
                           ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d,
-                          reference_table=args.reference_table)
+                          reference_table=args.reference_table, current=flow)
     report = json.loads((FilePath(args.out) / "report.json").read_text())
     if plan.metrics is not None:
         print(table3_markdown(plan.metrics))
     print(mission_time_line(report["mission_time"]))
+    if flow is not None:
+        from drake_auv.planning.current import summary_lines
+
+        print("
+".join(summary_lines(flow, plan.parameters["sweep_angle_deg"])))
     upload = upload_line(report)
     if upload is not None:
         print(upload)

@@ -147,7 +147,8 @@ class ReplannerSpec:
             vehicle's position, flown unoptimised: the ablation baseline).
         params: the `ReplanningParameters` (their defaults), of which the file sets
             `R` (radius), `K` (max_waypoints), `clearance_m` (clearance), `rollouts` and
-            `iterations` (the STOMP ones); `omega` comes from the plan step.
+            `iterations` (the STOMP ones) and `current_aware` (the cost knows the forecast
+            current of the `ocean:` section); `omega` comes from the plan step.
         period_s: replanning period, s.
         voxel_m: edge of the on-line octree map's voxels, m.
         multibeam_stride: every n-th multibeam beam goes into the on-line map (the profiler's

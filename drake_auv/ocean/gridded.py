@@ -188,6 +188,14 @@ class GriddedCurrent:
         return velocity, rate
 
 
+def first_time_s(path) -> float:
+    """The first time of a CF current file's time axis, s since 1970 UTC (the dive's t = 0
+    when the mission states no `start_utc`), without reading the field."""
+    with _open(path) as (ds, label):
+        _, order, _ = _layout(ds, label)
+        return float(_axis(ds, "time", *order[0], label)[0][0])
+
+
 @contextmanager
 def _open(path):
     """(the open dataset, the label errors begin with)."""

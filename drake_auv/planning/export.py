@@ -393,7 +393,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
                   metrics_3d=True, max_items: int = 700, ardusub_frames: str = "terrain",
-                  heave_in_3d: bool = False, reference_table: bool = False) -> list[FilePath]:
+                  heave_in_3d: bool = False, reference_table: bool = False,
+                  current: dict | None = None) -> list[FilePath]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
@@ -413,6 +414,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
         heave_in_3d: the COLA2 vehicle interpolates depth along sections (its heave_in_3D);
             the report's `exports.cola2` gives the sections and their replay's figures.
         reference_table: add the reference's Table 3 (the Santorini caldera) to the reports.
+        current: `planning.current.current_report` of the path, added to report.json
+            (`current`) and report.md.
     """
     exports, geo = check_exports(plan.bathy, exports, origin_lonlat, max_items, ardusub_frames)
     mission_time(plan, surge_velocity)  # the speed, checked before any file is written
@@ -450,7 +453,13 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
 
         m3d = evaluate_plan_3d(plan)
     rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
-    write_text(outdir / "report.md", _markdown(plan, m3d, rep))
+    markdown = _markdown(plan, m3d, rep)
+    if current is not None:
+        from drake_auv.planning.current import current_markdown
+
+        markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
+        rep["current"] = current
+    write_text(outdir / "report.md", markdown)
     write_json(outdir / "report.json", rep)
     written += [outdir / "report.md", outdir / "report.json"]
     if figures:

@@ -36,6 +36,15 @@ class ReplanningCost:
       the trajectory neither bunches (hovers) nor folds back on itself;
     - terminal (last point only, times `terminal_weight`): its offset and progress terms
       again, the goal set of the free end.
+    With a forecast `current` (N, 3) (world, m/s, the water at the initial trajectory's points)
+    and the survey `speed` (m/s), two terms know the sea:
+    - effort: |v t_i - c_i|^2 / v^2 (0 at the first point), the squared speed through the
+      water the vehicle must make good to fly the step into point i at the survey speed v
+      along its direction t_i, over v^2 (1 in still water): a head current costs more;
+    - obstacle: the clearance inflated to clearance + tau max(0, c_i . n_i), n_i the unit
+      vector to the nearest counted voxel and tau `current_margin_s`: larger on the side the
+      current pushes towards.
+    Without a current both are as in still water, bit for bit (no effort term is added).
 
     `initial` (N, 3) is the initial trajectory (its depths are z_ref); `route` (M >= 2, 3)
     the nominal path from the vehicle's position; `goal` the arclength along it (m) that the
@@ -44,7 +53,8 @@ class ReplanningCost:
 
     def __init__(self, slice_map: SliceMap, route: np.ndarray, initial: np.ndarray,
                  params: ReplanningParameters, keep_offset: np.ndarray | None = None,
-                 goal: float | None = None):
+                 goal: float | None = None, current: np.ndarray | None = None,
+                 speed: float = 0.3):
         self.slice_map = slice_map
         self.route = route if isinstance(route, Polyline) else Polyline(route)
         initial = np.asarray(initial, dtype=float)
@@ -60,6 +70,17 @@ class ReplanningCost:
             depth[self.keep] = 0.0  # the offset along the normal sets the depth there
         self.depth_weight = depth
         self._depth_any = bool(depth.any())
+        self.current = None if current is None else np.asarray(current, dtype=float)
+        if self.current is not None:
+            if self.current.shape != (n, 3) or not np.isfinite(self.current).all():
+                raise ValueError(f"current must be finite of shape ({n}, 3) m/s, got "
+                                 f"{self.current.shape}")
+            if not (np.isfinite(speed) and speed > 0):
+                raise ValueError(f"speed must be > 0 m/s, got {speed}")
+            self._water = self.current[1:] / speed  # c_i / v, the effort's
+        self.max_clearance = params.clearance + (
+            0.0 if self.current is None
+            else params.current_margin_s * float(np.linalg.norm(self.current, axis=1).max()))
 
     def _offset(self, points: np.ndarray) -> np.ndarray:
         """The offset term of `points` (..., 3); 0 where nothing is mapped."""
@@ -87,8 +108,14 @@ class ReplanningCost:
         lag = self.s_ref - s
         np.maximum(lag, 0.0, out=lag)
         obstacle = None
-        if self.slice_map.within(trajectories, p.clearance):
-            obstacle = p.clearance - self.slice_map.clearance(trajectories, p.clearance)
+        if self.current is None:
+            if self.slice_map.within(trajectories, p.clearance):
+                obstacle = p.clearance - self.slice_map.clearance(trajectories, p.clearance)
+        elif self.slice_map.within(trajectories, self.max_clearance):
+            d, to = self.slice_map.clearance_towards(trajectories, self.max_clearance)
+            push = np.einsum("...k,...k->...", to, self.current)  # m/s towards the voxel
+            obstacle = p.clearance + p.current_margin_s * np.maximum(push, 0.0) - d
+        if obstacle is not None:
             np.maximum(obstacle, 0.0, out=obstacle)
             obstacle *= obstacle
         step = trajectories[..., 1:, :] - trajectories[..., :-1, :]
@@ -96,24 +123,30 @@ class ReplanningCost:
         spacing[..., 0] = 0.0
         gap = np.einsum("...k,...k->...", step, step)  # in place: (sqrt(gap) - spacing)^2
         np.sqrt(gap, out=gap)
+        effort = None
+        if self.current is not None:  # |t_i - c_i / v|^2, t_i the step's unit direction
+            relative = step / np.maximum(gap, 1e-9)[..., None] - self._water
+            effort = np.zeros(shape)
+            effort[..., 1:] = np.einsum("...k,...k->...", relative, relative)
         gap -= p.spacing
         np.square(gap, out=spacing[..., 1:])
         depth = None
         if self._depth_any or not weighted:
             depth = trajectories[..., 2] - self.z_ref
             depth *= depth
-        return offset, obstacle, depth, route, lag * lag, spacing
+        return offset, obstacle, depth, route, lag * lag, spacing, effort
 
     def terms(self, trajectories: np.ndarray) -> dict:
         """The unweighted per-point terms (K, N) of `trajectories` (K, N, 3)."""
-        terms = dict(zip(("offset", "obstacle", "depth", "route", "progress", "spacing"),
-                         self._terms(trajectories)))
+        terms = dict(zip(("offset", "obstacle", "depth", "route", "progress", "spacing",
+                          "effort"), self._terms(trajectories)))
         return {k: np.zeros(terms["offset"].shape) if v is None else v
                 for k, v in terms.items()}
 
     def __call__(self, trajectories: np.ndarray) -> np.ndarray:
         p = self.params
-        offset, obstacle, depth, route, progress, spacing = self._terms(trajectories, True)
+        offset, obstacle, depth, route, progress, spacing, effort = self._terms(trajectories,
+                                                                                 True)
         cost = p.offset_weight * offset
         if obstacle is not None:
             cost += p.obstacle_weight * obstacle
@@ -123,6 +156,8 @@ class ReplanningCost:
         cost += p.spacing_weight * spacing
         if route is not None:
             cost += p.route_weight * route
+        if effort is not None:
+            cost += p.current_weight * effort
         cost[..., -1] += p.terminal_weight * (p.offset_weight * offset[..., -1]
                                               + p.progress_weight * progress[..., -1])
         return cost

@@ -271,6 +271,20 @@ class SliceMap:
             d[near], _ = self.slab_tree_3d.query(flat[near], distance_upper_bound=upper_bound)
         return d.reshape(points.shape[:-1])
 
+    def clearance_towards(self, points: np.ndarray, upper_bound: float):
+        """`clearance` (..., ) and the unit vectors (..., 3) from each point to its nearest
+        counted voxel centre (0 beyond `upper_bound`, or on a centre)."""
+        flat = points.reshape(-1, 3)
+        d, to = np.full(len(flat), np.inf), np.zeros(flat.shape)
+        if self.within(flat, upper_bound):
+            near = np.flatnonzero(self._slab_field.lower_bound(flat) < upper_bound)
+            dist, index = self.slab_tree_3d.query(flat[near], distance_upper_bound=upper_bound)
+            d[near] = dist
+            found = np.isfinite(dist) & (dist > 0.0)
+            near, dist, index = near[found], dist[found], index[found]
+            to[near] = (self.slab_tree_3d.data[index] - flat[near]) / dist[:, None]
+        return d.reshape(points.shape[:-1]), to.reshape(points.shape)
+
     def offset(self, points: np.ndarray) -> np.ndarray:
         """Distance from `points` (..., 3) to the band's voxels (horizontal or 3D), m; inf
         where the band holds none."""

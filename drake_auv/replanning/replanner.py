@@ -78,12 +78,16 @@ class Replanner(Behaviour):
         legs: the mission legs this replanner flies (default: leg 0, so it runs unsupervised).
         optimizer: "stomp" (each section optimised against the map) or "none" (each
             section's initial trajectory, through the nominal waypoints, flown as it is).
+        current: the forecast current, `f(t, positions) -> (n, 3)` world m/s
+            (`drake_auv.ocean.forecast.forecast`), which each step's cost knows when
+            `params.current_aware` (`ReplanningCost`); None: still water.
     """
 
     def __init__(self, params: ReplanningParameters | None = None, speed: float = 0.3,
                  period: float = 1.0, sensor_azimuth: float | None = np.pi / 2,
                  heading_offset: float = 0.0, yaw_rate: float = np.radians(15.0),
-                 seed: int = 0, offset_labels=("slice",), legs=(0,), optimizer: str = "stomp"):
+                 seed: int = 0, offset_labels=("slice",), legs=(0,), optimizer: str = "stomp",
+                 current=None):
         super().__init__(dict.fromkeys(int(leg) for leg in legs))
         if optimizer not in OPTIMIZERS:
             raise ValueError(f"optimizer must be one of {OPTIMIZERS}, got {optimizer!r}")
@@ -100,6 +104,7 @@ class Replanner(Behaviour):
         self.heading_offset, self.yaw_rate = float(heading_offset), float(yaw_rate)
         self.seed = int(seed)
         self.offset_labels = tuple(offset_labels)
+        self.current = current if self.params.current_aware else None
         self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
         self.nominal_input = self.DeclareAbstractInputPort(
             "nominal", AbstractValue.Make(_placeholder_path()))
@@ -151,7 +156,9 @@ class Replanner(Behaviour):
                               keep_offset=keep_offset,
                               optimizer=self.optimizer,
                               previous=None if current.plan is None else current.plan.trajectory,
-                              tube=None if current.plan is None else current.plan.tube)
+                              tube=None if current.plan is None else current.plan.tube,
+                              current=None if self.current is None
+                              else lambda p: self.current(t, p), speed=self.speed)
         wall = time.perf_counter() - start
         if plan is None:  # every waypoint visited: hold the end of the last plan
             finished, next_index = 1.0, len(nominal.points)

@@ -67,6 +67,14 @@ class ReplanningParameters:
         huber: |d - Omega| beyond which the offset cost grows linearly, m (> 0).
         offset_weight, obstacle_weight, depth_weight, route_weight, progress_weight,
         terminal_weight, spacing_weight: cost weights (>= 0), per trajectory point.
+        current_aware: with a forecast current, the cost knows it (`ReplanningCost`: effort in
+            the velocity through the water, clearance inflated where the current pushes
+            towards the structure); False: the current-blind cost of still water.
+        current_weight: weight of the effort term (>= 0), per point.
+        current_margin_s: tau, the clearance grows by tau times the current's speed towards
+            the nearest voxel, s: the distance the water carries a vehicle that cannot answer
+            it (thrust spent, or a change of current the tracker's integral, 5.3 s time
+            constant, has not yet taken up) in that time (docs/replanning.md).
         stomp: `StompParameters` (rollouts, iterations, noise, smoothness weight).
     """
 
@@ -87,6 +95,9 @@ class ReplanningParameters:
     progress_weight: float = param(0.1, low=0.0)
     terminal_weight: float = param(3.0, low=0.0)
     spacing_weight: float = param(10.0, low=0.0)
+    current_aware: bool = param(True, kind="bool", key="current_aware")
+    current_weight: float = param(0.5, low=0.0)
+    current_margin_s: float = param(5.0, low=0.0, high=60.0, unit="s")
     stomp: StompParameters = nested(StompParameters, lambda: StompParameters(
         num_rollouts=10, max_iterations=40, noise_std=0.5, smoothness_weight=50.0,
         patience=8))
@@ -235,7 +246,8 @@ def replan_section(position, waypoints, next_index: int, occupied,
                    seed: int | np.random.SeedSequence = 0, keep_offset=None,
                    optimizer: str = "stomp",
                    log_odds=None, previous=None,
-                   tube: TubeNodes | None = None) -> SectionPlan | None:
+                   tube: TubeNodes | None = None, current=None,
+                   speed: float = 0.3) -> SectionPlan | None:
     """One replanning step: section, initial trajectory, STOMP against the on-line map.
 
     `occupied` is the on-line map (an `OctreeMap`, queried in the section's box only, with
@@ -248,7 +260,10 @@ def replan_section(position, waypoints, next_index: int, occupied,
     unoptimised; with "stomp", `previous` (the last step's optimised trajectory, (N', 3))
     warm-starts STOMP (`warm_start`), and `tube` (the last step's `SectionPlan.tube`) spares
     the offsets at the tube's nodes that the map's changes since left as they were (the same
-    numbers, `fields._TubeField3D`). Returns None when every waypoint was visited.
+    numbers, `fields._TubeField3D`). `current` (positions (n, 3) -> (n, 3), world, m/s:
+    the forecast water at the step's time, None: still water) with the survey `speed` (m/s)
+    gives the cost its current terms (`ReplanningCost`). Returns None when every waypoint
+    was visited.
     """
     if optimizer not in OPTIMIZERS:
         raise ValueError(f"optimizer must be one of {OPTIMIZERS}, got {optimizer!r}")
@@ -262,17 +277,21 @@ def replan_section(position, waypoints, next_index: int, occupied,
     pts = np.vstack([x, section])
     keep = (np.ones(len(waypoints), bool) if keep_offset is None
             else np.asarray(keep_offset, dtype=bool))[idx]
+    clearance = params.clearance  # inflated by the current where it pushes (the cost's)
+    if current is not None:
+        clearance += params.current_margin_s * float(
+            np.linalg.norm(current(pts), axis=1).max())
     # Within reach: where the trajectory may go (the points plus the margin), plus the
     # offset's range (Omega + 1 m) or the clearance, and the depths of the offset band and
     # of the clearance slab. A section without offset (lanes, transits) needs only the
     # clearance: on the boulder's lanes the offset's reach took in the seabed below.
     if keep.any():
-        reach = params.margin + max(params.omega + 1.0, params.clearance)
-        z_reach = max(params.depth_band, params.clearance + DEPTH_MARGIN)
+        reach = params.margin + max(params.omega + 1.0, clearance)
+        z_reach = max(params.depth_band, clearance + DEPTH_MARGIN)
         if params.offset_metric == "3d":
             z_reach = max(z_reach, reach)
     else:
-        reach, z_reach = params.margin + params.clearance, params.clearance + DEPTH_MARGIN
+        reach, z_reach = params.margin + clearance, clearance + DEPTH_MARGIN
     lo = pts.min(axis=0) - [reach, reach, z_reach]
     hi = pts.max(axis=0) + [reach, reach, z_reach]
     start = time.perf_counter()
@@ -288,7 +307,7 @@ def replan_section(position, waypoints, next_index: int, occupied,
             log_odds = np.asarray(log_odds, dtype=float)[inside]
     query_time = time.perf_counter() - start
     slice_map = SliceMap(local, (pts[:, 2].min(), pts[:, 2].max()), params.depth_band,
-                         params.clearance, metric=params.offset_metric, log_odds=log_odds,
+                         clearance, metric=params.offset_metric, log_odds=log_odds,
                          min_log_odds=params.min_log_odds, box=(lo, hi),
                          resolution=resolution)
     # The path of the progress and route terms: from the vehicle through the section and on
@@ -305,7 +324,8 @@ def replan_section(position, waypoints, next_index: int, occupied,
     keep_points = keep[np.minimum(np.searchsorted(waypoint_s, route.project(theta0)[0]),
                                   len(keep) - 1)]
     cost = ReplanningCost(slice_map, route, theta0, params, keep_points,
-                          goal=float(waypoint_s[-1]))
+                          goal=float(waypoint_s[-1]),
+                          current=None if current is None else current(theta0), speed=speed)
     nodes = None
     if optimizer == "stomp":
         if keep_points.any():  # the rollouts' reach: twice the largest per-point noise

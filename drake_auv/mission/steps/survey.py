@@ -70,6 +70,7 @@ class Survey(MissionStep):
 
     @classmethod
     def add_behaviour(cls, wiring, legs: dict):
+        from drake_auv.ocean.forecast import forecast
         from drake_auv.replanning.replanner import Replanner
 
         spec, plan = wiring.spec, wiring.plan
@@ -77,7 +78,8 @@ class Survey(MissionStep):
             spec.replanner.to_params(plan.omega, plan.method), speed=plan.survey_speed,
             period=spec.replanner.period_s,
             sensor_azimuth=SENSOR_AZIMUTH.get(spec.payload.multibeam_mount),
-            seed=spec.seed, legs=tuple(legs), optimizer=spec.replanner.optimizer))
+            seed=spec.seed, legs=tuple(legs), optimizer=spec.replanner.optimizer,
+            current=forecast(spec.ocean)))
         connect_replanner(wiring, replanner)
         return replanner
 
