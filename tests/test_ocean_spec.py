@@ -126,6 +126,12 @@ def test_missions_take_an_ocean_section_and_set_its_keys():
     assert spec.ocean.tides[0].phase_deg == 45.0 and spec.ocean.waves.hs_m == 1.0
     assert mission_from_dict(mission_to_dict(spec), "/", "x") == spec
     assert load_mission("boulder", overrides=["ocean=none"]).ocean is None
+    # YAML reads an unquoted UTC time as a datetime: taken back as the text; a zoneless one is
+    # refused.
+    timed = load_mission("boulder", overrides=["ocean.start_utc=2024-03-01T06:00:00Z"])
+    assert timed.ocean.start_utc == "2024-03-01T06:00:00Z"
+    with pytest.raises(MissionFileError, match="ocean.start_utc: .* is not a UTC time"):
+        load_mission("boulder", overrides=["ocean.start_utc=2024-03-01T06:00:00"])
     for sets, text in [
             (["ocean.current.speed_mps=6"], "boulder.yaml: ocean.current.speed_mps: 6.0 is out "
                                             "of range; allowed: [0, 5] m/s"),
