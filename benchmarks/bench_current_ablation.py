@@ -32,7 +32,7 @@ import numpy as np
 from _reference import machine
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.report import _scored_samples, summarise
-from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
+from drake_auv.mission.runner import run_mission
 
 ARMS = ("aware", "blind")
 

@@ -186,8 +186,7 @@ def run(args) -> int:
     if flow is not None:
         from drake_auv.planning.current import summary_lines
 
-        print("
-".join(summary_lines(flow, plan.parameters["sweep_angle_deg"])))
+        print("\n".join(summary_lines(flow, plan.parameters["sweep_angle_deg"])))
     upload = upload_line(report)
     if upload is not None:
         print(upload)
