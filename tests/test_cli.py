@@ -1,5 +1,6 @@
 """The command line's shared vocabulary: `--version` and `-o/--out` on every command."""
 
+import json
 import logging
 import re
 
@@ -48,3 +49,17 @@ def test_a_headless_scene_announces_no_url(caplog):
     with caplog.at_level(logging.INFO, logger="drake"):
         live = Scene(live=True)
     assert live.meshcat.web_url().startswith("http://localhost:")
+
+
+def test_no_reconstruction_skips_the_surface_but_keeps_the_points(tmp_path):
+    from drake_auv.cli import main
+
+    out = tmp_path / "out"
+    assert main(["run", "boulder", "-o", str(out), "--no-reconstruction", "--no-html", "--quiet",
+                 "--set", "limits.max_time_s=15", "--set", "ocean=none"]) == 0
+    report = json.loads((out / "report.json").read_text())
+    assert report["config"]["outputs"]["reconstruction"] is False
+    assert report["reconstruction"] == {"built": False, "reason": "switched off "
+                                        "(outputs.reconstruction: false, --no-reconstruction)"}
+    assert (out / "points.ply").stat().st_size > 0
+    assert not (out / "reconstruction.ply").exists()

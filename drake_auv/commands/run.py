@@ -57,6 +57,9 @@ def add_mission_options(parser) -> None:
                         help="with --meshcat, serve the live view on this port of localhost "
                              f"({MESHCAT_PORTS[0]}-{MESHCAT_PORTS[1]}; default: the first free "
                              "one from 7000)")
+    parser.add_argument("--no-reconstruction", action="store_true",
+                        help="skip the surface reconstruction after the dive (the mission key "
+                             "outputs.reconstruction: false); points.ply is still written")
     parser.add_argument("--mcap", action="store_true",
                         help="also write dive.mcap: the dive as ROS 2 messages (TF, odometry, "
                              "sonar point clouds, plan, map) for Foxglove and ros2 bag")
@@ -86,7 +89,7 @@ def check_live_options(meshcat: bool, realtime, port) -> float:
 def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         playback_speed: float = 20.0, progress: bool = True, meshcat: bool = False,
         realtime: float | None = None, meshcat_port: int | None = None,
-        mcap: bool = False) -> dict:
+        mcap: bool = False, reconstruction: bool = True) -> dict:
     """Loads, flies and reports `mission` into `out`; returns the report's summary. The
     mission and its site are checked before the simulation's modules (Drake, matplotlib) are
     imported, so a bad file is reported at once. With `meshcat` the scene is served on
@@ -99,10 +102,12 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     from drake_auv.mission.config import load_mission
     from drake_auv.mission.site import check_against_site, load_site
 
+    overrides = [*overrides, *([] if reconstruction else ["outputs.reconstruction=false"])]
     spec = load_mission(mission, seed=seed, overrides=overrides)
     site = load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
-    _note_missing_reconstruction()
+    if spec.outputs.reconstruction:
+        _note_missing_reconstruction()
     from drake_auv.mission.plan import plan_mission
     from drake_auv.mission.recording import finish_recording, prepare_scene
     from drake_auv.mission.report import write_outputs
@@ -143,7 +148,7 @@ def run(args) -> int:
     output_folder(args.out, "-o", RUN_NEEDS_BYTES)
     summary = fly(args.mission, args.out, args.seed, args.overrides, not args.no_html,
                   args.playback_speed, not args.quiet, args.meshcat, args.realtime,
-                  args.meshcat_port, args.mcap)
+                  args.meshcat_port, args.mcap, not args.no_reconstruction)
     c = summary["coverage"]
     print(f"{summary['mission']['name']}: multibeam coverage {100 * c['multibeam']:.1f} %, "
           f"camera {100 * c['camera']:.1f} %, minimum clearance "

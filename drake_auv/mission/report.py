@@ -479,7 +479,8 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
     out.mkdir(parents=True, exist_ok=True)
     summary = summarise(result)
     products = time.perf_counter()
-    summary["reconstruction"] = _rounded(write_products(result, out, dpi))
+    summary["reconstruction"] = _rounded(write_products(
+        result, out, dpi, surface=result.spec.outputs.reconstruction))
     reconstruction_s = time.perf_counter() - products
     figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result),
                "coverage_vs_time.png": fig_coverage_vs_time(result, summary["coverage_vs_time"])}

@@ -208,9 +208,12 @@ class LimitsSpec:
 @dataclass(frozen=True)
 class OutputsSpec:
     """Attributes: mcap: `drake-auv run` and `demo` write `dive.mcap`, the dive as ROS 2
-    messages (`drake_auv.rosio`), as it flies (a campaign's runs write none)."""
+    messages (`drake_auv.rosio`), as it flies (a campaign's runs write none);
+    reconstruction: build the surface of the dive's returns (`reconstruction.ply`, its figure
+    and report section) after the dive; off, `points.ply` is still written."""
 
     mcap: bool = param(False, kind="bool")
+    reconstruction: bool = param(True, kind="bool")
 
     def __post_init__(self):
         validate(self)

@@ -103,14 +103,17 @@ def error_colours(errors: np.ndarray, vmax: float) -> np.ndarray:
     return colormaps["inferno"](np.clip(np.asarray(errors) / vmax, 0.0, 1.0))
 
 
-def write_products(result, outdir, dpi: int = 110) -> dict:
+def write_products(result, outdir, dpi: int = 110, surface: bool = True) -> dict:
     """Writes points.ply and, when a surface was built, reconstruction.ply and
     reconstruction.png into `outdir`; returns the report's `reconstruction` section (with
-    `built` False and the `reason` when none was)."""
+    `built` False and the `reason` when none was). `surface` False: points.ply alone."""
     from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
 
     out = FilePath(outdir)
     write_points(result, out / "points.ply")
+    if not surface:
+        return dict(built=False, reason="switched off (outputs.reconstruction: false, "
+                                        "--no-reconstruction)")
     surface = mission_surface(result)
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
         if open3d_error() is not None and target_returns(result, dive_cloud(result)) \
