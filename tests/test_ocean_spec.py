@@ -116,8 +116,9 @@ def test_missions_take_an_ocean_section_and_set_its_keys():
     from drake_auv.mission.config import (MissionFileError, load_mission, mission_from_dict,
                                           mission_to_dict)
 
-    still = load_mission("boulder")
+    still = load_mission("pool")  # an indoor pool: still water, left out of the written file
     assert still.ocean is None and "ocean" not in mission_to_dict(still)
+    assert load_mission("boulder").ocean.waves.hs_m == 1.0  # the demo's default sea
     spec = load_mission("boulder", overrides=[
         "ocean.current.speed_mps=0.4", "ocean.current.towards_deg=270",
         "ocean.tides=[{name: M2, amplitude_mps: 0.2}]", "ocean.tides.0.phase_deg=45",
