@@ -114,6 +114,9 @@ def main() -> None:
     parser.add_argument("--towards", type=float, default=0.0,
                         help="current direction, deg clockwise from north (towards)")
     parser.add_argument("--jobs", type=int, default=2, help="dives at once")
+    parser.add_argument("--arms", default="aware,blind",
+                        help="the arms flown, of aware,blind (one alone, e.g. with --speed 0: "
+                             "still water, where both are the same dive)")
     parser.add_argument("--rows", default="current_ablation_rows.jsonl",
                         help="JSON lines, one row per dive, appended as dives end")
     parser.add_argument("--json", help="write all rows to this file")
@@ -129,8 +132,9 @@ def main() -> None:
             if line.strip()] if rows_path.is_file() else []
     rows = [r for r in rows if r["speed_mps"] == args.speed and r["towards_deg"] == args.towards]
     done = {(r["seed"], r["arm"]) for r in rows}
+    arms = [a for a in ARMS if a in args.arms.split(",")]
     tasks = [(seed, arm, args.speed, args.towards, tuple(args.set)) for seed in seeds
-             for arm in ARMS if (seed, arm) not in done]
+             for arm in arms if (seed, arm) not in done]
     start = time.perf_counter()
     with multiprocessing.get_context("spawn").Pool(args.jobs) as pool:
         for row in pool.imap_unordered(run_arm, tasks, chunksize=1):
@@ -143,7 +147,17 @@ def main() -> None:
     print(f"{len(tasks)} dives in {time.perf_counter() - start:.0f} s, "
           f"{args.jobs} at once\n")
     rows.sort(key=lambda r: (r["seed"], ARMS.index(r["arm"])))
-    table = markdown(rows)
+    if len(arms) == 1:  # one arm: its contacts and means, no comparison
+        mine = [r for r in rows if r["arm"] == arms[0] and r["seed"] in seeds]
+        table = (f"{arms[0]}, {args.speed:g} m/s: {sum(r['contact'] for r in mine)} contacts "
+                 f"in {len(mine)} dives (seeds "
+                 f"{', '.join(str(r['seed']) for r in mine if r['contact']) or 'none'}); "
+                 f"least clearance mean {np.mean([r['min_clearance_m'] for r in mine]):.2f} m; "
+                 f"multibeam {np.mean([r['multibeam'] for r in mine]):.3f}, camera "
+                 f"{np.mean([r['camera'] for r in mine]):.3f}; dive "
+                 f"{np.mean([r['duration_s'] for r in mine]):.0f} s")
+    else:
+        table = markdown(rows)
     print(table)
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1) + "\n")
