@@ -17,6 +17,8 @@ again, so an interrupted run resumes; `--json` writes them all, `--markdown` the
     .venv/bin/python benchmarks/bench_current_ablation.py --seeds 0:4 [--jobs 2]
         [--speed 0.4] [--towards 0] [--rows FILE.jsonl] [--json docs/current_ablation.json]
         [--markdown FILE.md] [--set KEY=VALUE ...]
+    .venv/bin/python benchmarks/bench_current_ablation.py --seeds 0:50 --speed 0 --arms aware
+        (still water: one arm, the current's terms off)
 """
 
 from __future__ import annotations
