@@ -35,6 +35,14 @@ def add_parser(subparsers) -> None:
                         help="a dotted key of the mission file and its values (repeatable: "
                              "the runs cover every combination), e.g. "
                              "site.prior_error_m=0,2.5,5")
+    add_runs_options(parser, "results.csv")
+    parser.set_defaults(func=run)
+
+
+def add_runs_options(parser, rows: str) -> None:
+    """The options of a command that flies a grid of runs on Dask into OUT/`rows`: `--set`,
+    `--workers` or `--scheduler`, `-o/--out`, `--retry-failed` and `--quiet` (shared with
+    `drake-auv envelope`)."""
     parser.add_argument("--set", dest="overrides", action="append", default=[],
                         metavar="KEY=VALUE", help="a fixed override for every run (repeatable)")
     where = parser.add_mutually_exclusive_group()
@@ -44,10 +52,9 @@ def add_parser(subparsers) -> None:
                        help="address of a running Dask scheduler, e.g. tcp://HOST:8786")
     parser.add_argument("-o", "--out", required=True, help="output folder")
     parser.add_argument("--retry-failed", action="store_true",
-                        help="run again the runs whose row in OUT/results.csv failed (their "
-                             "rows are replaced)")
+                        help=f"run again the runs whose row in OUT/{rows} failed (their rows "
+                             "are replaced)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    parser.set_defaults(func=run)
 
 
 def check_same_campaign(out: Path, meta: dict, write: bool = True,

@@ -14,6 +14,8 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+from drake_auv.commands.campaign import add_runs_options
+
 OUTPUTS = ("campaign.json", "envelope.csv", "envelope.png", "envelope.md", "envelope.json",
            ".lock")
 
@@ -35,17 +37,7 @@ def add_parser(subparsers) -> None:
                              "clockwise from north (towards 0, 360/N, ... deg)")
     parser.add_argument("--seeds", required=True,
                         help="A:B runs seeds A, A+1, ..., B-1 (or one seed)")
-    parser.add_argument("--set", dest="overrides", action="append", default=[],
-                        metavar="KEY=VALUE", help="a fixed override for every run (repeatable)")
-    where = parser.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, default=None,
-                       help="local worker processes (default: this machine's cores)")
-    where.add_argument("--scheduler", default=None,
-                       help="address of a running Dask scheduler, e.g. tcp://HOST:8786")
-    parser.add_argument("-o", "--out", required=True, help="output folder")
-    parser.add_argument("--retry-failed", action="store_true",
-                        help="run again the runs whose row in OUT/envelope.csv failed")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_runs_options(parser, "envelope.csv")
     parser.set_defaults(func=run)
 
 
