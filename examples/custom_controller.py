@@ -185,7 +185,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if args.max_time is not None and not (np.isfinite(args.max_time) and args.max_time > 0):
         raise SystemExit(f"--max-time must be > 0 s, got {args.max_time}")
-    spec = load_mission("boulder", seed=args.seed)
+    # still water: this Diagram adds no Ocean, so its replanner must not plan for the sea
+    spec = load_mission("boulder", seed=args.seed, overrides=["ocean=none"])
     spec = dataclasses.replace(spec, steps=tuple(step for step in spec.steps
                                                  if not isinstance(step, FollowStep)))
     site = load_site(spec.site, spec.seed, label=spec.name)

@@ -62,3 +62,16 @@ def test_a_hover_mission_holds_the_point_for_its_duration(tmp_path):
     error = np.linalg.norm(estimated.position - [-2.0, 1.0, -3.0], axis=1)
     assert error.max() < 0.5, error.max()  # arrived within 1.5 m, then holding
     assert np.abs(np.angle(np.exp(1j * (estimated.yaw - np.pi / 2)))).max() < 0.1
+
+
+def test_a_hover_point_inside_the_world_or_above_the_surface_is_refused(tmp_path):
+    from drake_auv.mission.plan import plan_mission
+    from drake_auv.mission.site import load_site
+
+    for at, problem in (([-2.0, 1.0, -300.0], "inside the world"), ([-2.0, 1.0, 2.0], "above")):
+        spec = mission_from_dict({"name": "hover", "site": {"scenario": "pool"}, "steps": [
+            {"hover": {"duration_s": 5}}, {"hover": {"at": at, "duration_s": 5}}]},
+            tmp_path, "hover.yaml")
+        with pytest.raises(MissionFileError, match=r"steps\[1\]\.hover\.at: the point held: .*"
+                                                   + problem):
+            plan_mission(spec, load_site(spec.site, spec.seed))

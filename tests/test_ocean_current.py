@@ -98,6 +98,8 @@ def test_tidal_series_from_csv_is_linear_in_time(tmp_path):
     np.testing.assert_allclose(rate, [0.2 / 3600.0, 0.4 / 3600.0])
     with pytest.raises(ValueError, match="not the dive's"):
         series.check_span(t0, t0 + 3 * 3600.0)
+    with pytest.raises(ValueError, match="not the dive's"):  # never extrapolated
+        series.velocity(t0 + 3 * 3600.0)
     bad = tmp_path / "bad.csv"
     bad.write_text("time,speed\n2024-03-01T00:00:00Z,0.1\n")
     with pytest.raises(ValueError, match="lacks") as err:

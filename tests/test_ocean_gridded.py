@@ -192,8 +192,11 @@ def test_coverage_of_the_site_and_the_dive_is_checked(tmp_path):
         with pytest.raises(ValueError, match=match) as err:
             field.check_coverage(box, deepest, *span)
         assert "\n" not in str(err.value)
+    with pytest.raises(ValueError, match="no water velocity at 2024-02-29T23:59:00Z, outside the "
+                                         "file's 2024-03-01T00:00:00Z to 2024-03-01T03:00:00Z"):
+        field.water(T0 - 60.0, [[0.0, 0.0, -5.0]])  # refused before any interpolation
     with pytest.raises(ValueError, match="outside the grid or a masked cell"):
-        field.water(T0 - 60.0, [[0.0, 0.0, -5.0]])
+        field.water(T0 + 60.0, [[1e7, 0.0, -5.0]])
 
 
 def test_masked_cells_are_refused_where_asked(tmp_path):

@@ -79,12 +79,52 @@ def check_same_campaign(out: Path, meta: dict, write: bool = True,
         write_json(path, meta)
 
 
-def run(args) -> int:
-    from drake_auv.campaign import (CampaignError, ResultsFile, connect, expand_runs,
-                                    parse_seeds, parse_vary, run_campaign, write_summary)
-    from drake_auv.campaign.engine import check_workers, probe_scheduler
+def fly_runs(args, out: Path, meta: dict, runs, rows_file: str, keys, finish,
+             fixed=("base_mission", "overrides", "vary_keys"), outputs=None, header=None,
+             task=None, desc: str = "campaign", products: str = "the summary"):
+    """Flies `runs` on Dask into OUT/`rows_file` (rows with `keys`, `header` columns), OUT
+    checked (its `outputs`), held by no other campaign (`fixed` entries of `meta`) and locked
+    for the whole flight; `finish(results)` writes the products while it is still locked and
+    returns what this returns with (counts, runs retried); `products` names them in an error.
+    `task`: the task function (default `run_task`); `desc`: the progress bar's label."""
+    from drake_auv.campaign import CampaignError, ResultsFile, connect, run_campaign, run_task
+    from drake_auv.campaign.engine import probe_scheduler
     from drake_auv.campaign.folder import check_output, locked
     from drake_auv.campaign.task import one_line
+
+    check_output(out, *(() if outputs is None else (outputs,)))
+    check_same_campaign(out, meta, write=False, fixed=fixed)
+    if args.scheduler is not None:
+        probe_scheduler(args.scheduler)
+    with locked(out):
+        try:
+            check_same_campaign(out, meta, fixed=fixed)  # again: no other campaign can write
+            results = ResultsFile(out / rows_file, keys, header=header)
+            retried = results.drop(results.failed() & {run.key for run in runs}) \
+                if args.retry_failed else 0
+        except OSError as err:
+            raise CampaignError(f"-o {out}: cannot write there ({one_line(err)}); allowed: a "
+                                "writable folder") from None
+        client, cluster = connect(args.workers, args.scheduler)
+        try:
+            counts = run_campaign(runs, results, client, progress=not args.quiet,
+                                  task=task or run_task, desc=desc)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        try:
+            products = finish(results)
+        except OSError as err:
+            raise CampaignError(f"-o {out}: cannot write {products} ({one_line(err)}); the "
+                                f"rows are in {results.path}; allowed: a writable folder"
+                                ) from None
+    return products, counts, retried
+
+
+def run(args) -> int:
+    from drake_auv.campaign import expand_runs, parse_seeds, parse_vary, write_summary
+    from drake_auv.campaign.engine import check_workers
     from drake_auv.mission.config import load_mission, mission_to_dict
 
     # Everything that can refuse the command, before anything is written.
@@ -95,40 +135,19 @@ def run(args) -> int:
     base = mission_to_dict(load_mission(args.mission, overrides=args.overrides))
     base.pop("seed")
     runs = expand_runs(args.mission, seeds, vary, args.overrides)
-    out = Path(args.out)
     keys = [k for k, _ in vary]
     meta = dict(mission=base["name"], seeds=args.seeds, vary=dict(vary),
                 vary_keys=keys, overrides=list(args.overrides), base_mission=base)
-    check_output(out)
-    check_same_campaign(out, meta, write=False)
-    if args.scheduler is not None:
-        probe_scheduler(args.scheduler)
-    with locked(out):
-        try:
-            check_same_campaign(out, meta)  # again, now that no other campaign can write
-            results = ResultsFile(out / "results.csv", keys)
-            retried = results.drop(results.failed() & {run.key for run in runs}) \
-                if args.retry_failed else 0
-        except OSError as err:
-            raise CampaignError(f"-o {out}: cannot write there ({one_line(err)}); allowed: a "
-                                "writable folder") from None
-        client, cluster = connect(args.workers, args.scheduler)
-        try:
-            counts = run_campaign(runs, results, client, progress=not args.quiet)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+
+    def finish(results):
         rows = results.rows()  # this command's and earlier ones' (more seeds, more values)
         seeds_done = sorted({int(r["seed"]) for r in rows})
         meta.pop("base_mission")
         meta["seeds"] = f"{seeds_done[0]}..{seeds_done[-1]} ({len(seeds_done)} seeds)"
-        try:
-            summary = write_summary(rows, keys, out, meta)
-        except OSError as err:
-            raise CampaignError(f"-o {out}: cannot write the summary ({one_line(err)}); the "
-                                f"rows are in {results.path}; allowed: a writable folder"
-                                ) from None
+        return write_summary(rows, keys, out, meta)
+
+    out = Path(args.out)
+    summary, counts, retried = fly_runs(args, out, meta, runs, "results.csv", keys, finish)
     overall = summary["overall"]
     print(f"campaign {base['name']}: {counts['total']} runs ({counts['skipped']} already in "
           f"results.csv, {retried} failed ones run again, {counts['ok']} ok, "

@@ -42,14 +42,11 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    from drake_auv.campaign import (CampaignError, ResultsFile, connect, parse_seeds,
-                                    run_campaign, run_task)
-    from drake_auv.campaign.engine import check_workers, probe_scheduler
+    from drake_auv.campaign import parse_seeds, run_task
+    from drake_auv.campaign.engine import check_workers
     from drake_auv.campaign.envelope import (COLUMNS, KEYS, envelope_row, envelope_runs,
                                              parse_directions, parse_speeds, write_envelope)
-    from drake_auv.campaign.folder import check_output, locked
-    from drake_auv.campaign.task import one_line
-    from drake_auv.commands.campaign import check_same_campaign
+    from drake_auv.commands.campaign import fly_runs
     from drake_auv.mission.config import load_mission, mission_to_dict
 
     # Everything that can refuse the command, before anything is written.
@@ -66,35 +63,15 @@ def run(args) -> int:
                 seeds=args.seeds, vary_keys=list(KEYS), overrides=list(args.overrides),
                 base_mission=base)
     fixed = ("base_mission", "overrides", "vary_keys", "directions")
-    check_output(out, OUTPUTS)
-    check_same_campaign(out, meta, write=False, fixed=fixed)
-    if args.scheduler is not None:
-        probe_scheduler(args.scheduler)
-    with locked(out):
-        try:
-            check_same_campaign(out, meta, fixed=fixed)
-            results = ResultsFile(out / "envelope.csv", KEYS, header=COLUMNS)
-            retried = results.drop(results.failed() & {run.key for run in runs}) \
-                if args.retry_failed else 0
-        except OSError as err:
-            raise CampaignError(f"-o {out}: cannot write there ({one_line(err)}); allowed: a "
-                                "writable folder") from None
-        client, cluster = connect(args.workers, args.scheduler)
-        try:
-            counts = run_campaign(runs, results, client, progress=not args.quiet,
-                                  task=functools.partial(run_task, row=envelope_row),
-                                  desc="envelope")
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+
+    def finish(results):
         meta.pop("base_mission")
-        try:
-            _, line = write_envelope(results.rows(), out, base["name"], meta)
-        except OSError as err:
-            raise CampaignError(f"-o {out}: cannot write the envelope ({one_line(err)}); the "
-                                f"rows are in {results.path}; allowed: a writable folder"
-                                ) from None
+        return write_envelope(results.rows(), out, base["name"], meta)[1]
+
+    line, counts, retried = fly_runs(
+        args, out, meta, runs, "envelope.csv", KEYS, finish, fixed=fixed, outputs=OUTPUTS,
+        header=COLUMNS, task=functools.partial(run_task, row=envelope_row), desc="envelope",
+        products="the envelope")
     print(f"envelope {base['name']}: {counts['total']} runs ({counts['skipped']} already in "
           f"envelope.csv, {retried} failed ones run again, {counts['ok']} ok, "
           f"{counts['failed']} failed now); plot in {out / 'envelope.png'}")

@@ -277,7 +277,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     Exported outputs: `state` (true), `estimated_state`, `map`, `leg`.
     """
     plan = plan if plan is not None else plan_mission(spec, site)
-    caster = caster if caster is not None else RayCaster(site.world)
+    caster = caster if caster is not None else site.clearance.caster  # built once per site
     max_range = site.max_range
     builder = DiagramBuilder()
     vehicle = add_girona500(builder, navigation=replace(spec.navigation, seed=spec.seed),

@@ -164,6 +164,10 @@ class GriddedCurrent:
         A point outside the grid or in a masked cell raises a ValueError."""
         positions = np.atleast_2d(np.asarray(positions, dtype=float))
         n = positions.shape[0]
+        if not self.clock_s[0] <= clock_s <= self.clock_s[-1]:
+            raise ValueError(f"{self.label}: no water velocity at {format_utc(clock_s)}, outside "
+                             f"the file's {format_utc(self.clock_s[0])} to "
+                             f"{format_utc(self.clock_s[-1])}; must stay within its times")
         k = int(np.clip(np.searchsorted(self.clock_s, clock_s, side="right") - 1, 0,
                         self.clock_s.size - 2))
         t0, t1 = self.clock_s[k], self.clock_s[k + 1]
@@ -175,9 +179,8 @@ class GriddedCurrent:
         both = self._interpolator(points)
         before, after = both[:n], both[n:]
         bad = ~np.all(np.isfinite(before) & np.isfinite(after), axis=1)
-        if bad.any() or not (self.clock_s[0] <= clock_s <= self.clock_s[-1]):
-            i = int(np.argmax(bad)) if bad.any() else 0
-            x, y, z = positions[i]
+        if bad.any():
+            x, y, z = positions[int(np.argmax(bad))]
             raise ValueError(f"{self.label}: no water velocity at local ({x:.1f}, {y:.1f}, "
                              f"{z:.1f}) m, {format_utc(clock_s)} (outside the grid or a masked "
                              "cell); must stay within the grid's water cells and times")

@@ -35,10 +35,10 @@ TURBULENCE_PERIOD_S = 0.1  # s, the turbulence's update period
 DRAW_BLOCK = 1024  # turbulence updates per child stream
 
 
-@functools.cache
+@functools.lru_cache(maxsize=4)  # a dive reads its blocks in order
 def _normals(seed: int, block: int) -> np.ndarray:
     """The standard normal draws (DRAW_BLOCK, 2) of turbulence updates block * DRAW_BLOCK ...:
-    a pure function of its arguments (cached, so a dive draws each block once)."""
+    a pure function of its arguments (the blocks in use cached, so a dive draws each once)."""
     return generator(seed, "ocean.turbulence", block + 1).standard_normal(
         (DRAW_BLOCK, TURBULENCE_SIZE))
 

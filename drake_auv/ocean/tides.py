@@ -81,10 +81,6 @@ class TidalHarmonics:
         self._flood = towards_unit(np.array([c.flood_towards_deg for c in self.constituents]))
         self._ebb = towards_unit(np.array([c.ebb_deg() for c in self.constituents]))
 
-    def peak_speed(self) -> float:
-        """An upper bound of the tidal speed (the amplitudes' sum), m/s."""
-        return float(self._amplitude.sum())
-
     def velocity(self, clock_s: float) -> tuple[np.ndarray, np.ndarray]:
         """World-frame horizontal velocity (2,) m/s and its time derivative (2,) m/s^2 at
         `clock_s` (s since 1970 UTC)."""
@@ -140,9 +136,6 @@ class TidalSeries:
                              f"{MAX_CURRENT_MPS:g} m/s; must be in [0, {MAX_CURRENT_MPS:g}] m/s")
         return cls(clock, velocity, label)
 
-    def peak_speed(self) -> float:
-        return float(np.hypot(*self.velocity_table.T).max())
-
     def check_span(self, start_s: float, end_s: float) -> None:
         """Refuses a dive [start_s, end_s] (s since 1970 UTC) outside the series."""
         if start_s < self.clock_s[0] or end_s > self.clock_s[-1]:
@@ -151,7 +144,10 @@ class TidalSeries:
                              f"{format_utc(start_s)} to {format_utc(end_s)}")
 
     def velocity(self, clock_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """World-frame horizontal velocity (2,) m/s and its time derivative (2,) m/s^2."""
+        """World-frame horizontal velocity (2,) m/s and its time derivative (2,) m/s^2;
+        ValueError outside the series (it is not extrapolated)."""
+        if not self.clock_s[0] <= clock_s <= self.clock_s[-1]:
+            self.check_span(clock_s, clock_s)
         k = int(np.clip(np.searchsorted(self.clock_s, clock_s, side="right") - 1, 0,
                         self.clock_s.size - 2))
         span = self.clock_s[k + 1] - self.clock_s[k]

@@ -13,7 +13,6 @@ has none, as a vehicle's own log).
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path as FilePath
 
@@ -22,6 +21,7 @@ import trimesh
 
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mapping.scan_log import ScanLog
+from drake_auv.output_files import replacing, write_json, write_text
 from drake_auv.rosio.reader import LogIndex, iter_batches
 
 CATCH_UP = 64  # batches between the octree's catch-ups (the log's store keeps 64 in memory)
@@ -121,9 +121,10 @@ def write_replay_outputs(index: LogIndex, replayed: Replayed, settings: dict, ou
     else:
         write_points(replayed, out / "points.ply")
         summary["reconstruction"] = unscored_surface(replayed, out)
-    replayed.online_map.map.write(out / "map.bt")
-    (out / "report.json").write_text(json.dumps(summary, indent=2, default=float) + "\n")
-    (out / "report.md").write_text(replay_markdown(summary))
+    with replacing(out / "map.bt") as temporary:
+        replayed.online_map.map.write(temporary)
+    write_json(out / "report.json", summary, default=float)
+    write_text(out / "report.md", replay_markdown(summary))
     return summary
 
 
@@ -138,8 +139,9 @@ def unscored_surface(replayed: Replayed, out: FilePath) -> dict:
     if open3d_error() is not None:
         return dict(built=False, reason=open3d_error())
     surface = reconstruct(cloud, progress=False)
-    trimesh.Trimesh(replayed.site.to_site(surface.mesh.vertices), surface.mesh.faces,
-                    process=False).export(out / "reconstruction.ply")
+    with replacing(out / "reconstruction.ply") as temporary:
+        trimesh.Trimesh(replayed.site.to_site(surface.mesh.vertices), surface.mesh.faces,
+                        process=False).export(temporary)
     return dict(built=True, scored=False, thin_voxel_m=THIN_VOXEL,
                 vertices=int(len(surface.mesh.vertices)), faces=int(len(surface.mesh.faces)),
                 support_median_m=float(np.median(surface.support_m)))

@@ -62,6 +62,8 @@ class Girona500Dynamics(LeafSystem):
         context.SetDiscreteState(self._state, _checked_state(state))
         context.SetDiscreteState(self._thrust, np.zeros(NUM_THRUSTERS))
         context.SetDiscreteState(self._water, np.full(3, np.nan))
+        context.SetDiscreteState(self._saturation,
+                                 np.zeros(context.get_discrete_state(self._saturation).size()))
 
     def _update_state(self, context, discrete_state):
         x = np.concatenate([context.get_discrete_state(self._state).get_value(),

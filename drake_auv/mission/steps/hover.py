@@ -147,7 +147,11 @@ class Hover(MissionStep):
         yaw = None if step.heading_deg is None else float(np.radians(step.heading_deg))
         point = None
         if step.at != "start":
+            from drake_auv.mission.site import check_in_water
+
             point = tuple(planning.site.to_local(np.asarray(step.at, dtype=float)))
+            check_in_water(planning.site, point, planning.label, f"steps[{k}].hover.at",
+                           "the point held")
             planning.add_transit(k, point, yaw, TRANSIT_SPEED)
         planning.add(Leg("hover", k, "hover", "finished",
                          planning.margin * step.duration_s + TIME_SLACK),
