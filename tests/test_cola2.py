@@ -172,7 +172,6 @@ def monterey_plans():
     return get
 
 
-@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("heave_in_3d", [False, True], ids=["final-depth", "heave-in-3d"])
 @pytest.mark.parametrize("omega", [10.0, 20.0])
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
@@ -202,7 +201,6 @@ def waypoint_sections(plan) -> Cola2Sections:
                          np.zeros(k))
 
 
-@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 def test_the_former_waypoint_export_fails_the_replay(monterey_plans, tmp_path):
     plan = monterey_plans(MONTEREY[0], 20.0)  # the seabed rises to -13 m: the ceiling holds
     geo = GeoFrame(plan.bathy)

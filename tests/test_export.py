@@ -138,7 +138,6 @@ def test_exports_need_a_georeference(tmp_path):
         "path.csv", "report.md", "report.json"]
 
 
-@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
 def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
     code = main(["plan", str(tile), "--omega", "20", "--export", "cola2,qgc,geojson",

@@ -20,7 +20,6 @@ from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.site_files import write_site_files
 
 TILE = DATA_DIR / "monterey" / "MontereyBay.R_-121.815_-121.805_36.790_36.800.epsg3857.tif"
-pytestmark = pytest.mark.skipif(not TILE.exists(), reason="the shipped Monterey tile is missing")
 ROI = (150.0, 840.0, 190.0, 880.0)  # 40 m x 40 m of the canyon wall, tile's world frame
 SITE = {"world": "world.ply", "target": "target.ply", "prior": "prior.tif", "prior_error_m": 2.0}
 COMMON = dict(seed=0, site=SITE, payload={"multibeam_mount": "down"},

@@ -200,7 +200,6 @@ def test_random_seabeds_are_covered_safely(seed, relief, smoothness, omega, hole
     assert np.all(np.isfinite(plan.path.points))
 
 
-@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
 def test_monterey_tiles(tile):
     bathy = read_bathymetry(tile)

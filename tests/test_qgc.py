@@ -182,7 +182,6 @@ def monterey_plans():
             for t in MONTEREY for omega in (10.0, 20.0)}
 
 
-@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("frames", ["terrain", "depth"])
 def test_monterey_missions_fit_and_fly_safe(tmp_path, monterey_plans, frames, mavsdk_importer):
     for (tile, omega), plan in monterey_plans.items():

@@ -11,12 +11,14 @@ from drake_auv.mission.site import load_site
 from drake_auv.scenarios import DATA_DIR, MONTEREY_TILE, get_scenario, list_scenarios
 
 NAMES = [name for name, _ in list_scenarios()]
-HAS_MONTEREY = (DATA_DIR / "monterey" / MONTEREY_TILE).exists()
 
 
-def _needs_data(name):
-    if name == "monterey" and not HAS_MONTEREY:
-        pytest.skip(f"the Monterey tiles are missing from {DATA_DIR}")
+def test_monterey_tiles_ship_with_the_package():
+    """The four public-domain Monterey tiles (and their attribution) are package data."""
+    tiles = sorted((DATA_DIR / "monterey").glob("*.tif"))
+    assert len(tiles) == 4 and (DATA_DIR / "monterey" / MONTEREY_TILE) in tiles
+    attribution = " ".join((DATA_DIR / "README.md").read_text().split())
+    assert "public domain" in attribution and "NOAA" in attribution
 
 
 def _prior(name, error_m=0.0, seed=0, spacing=None):
@@ -49,7 +51,6 @@ def test_list_has_every_site_with_one_line():
 
 @pytest.mark.parametrize("name", NAMES)
 def test_site_is_consistent_and_start_is_in_open_water(name):
-    _needs_data(name)
     sc = get_scenario(name)
     assert sc.target_faces.shape == (len(sc.world.faces),) and sc.target_faces.any()
     assert sc.target_area > 0
@@ -176,7 +177,6 @@ def test_caldera_world_matches_the_synthetic_grid():
 
 
 def test_monterey_is_the_real_tile():
-    _needs_data("monterey")
     from drake_auv.terrain.readers import read_bathymetry
     sc = get_scenario("monterey")
     grid = read_bathymetry(DATA_DIR / "monterey" / MONTEREY_TILE)

@@ -131,7 +131,6 @@ def test_missing_and_unreadable_files(tmp_path):
         read_bathymetry(nodata)
 
 
-@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
 def test_monterey_tile_quirks(tile):
     bathy = read_bathymetry(tile)

@@ -55,7 +55,6 @@ def test_roi_all_no_data():
         crop_to_roi(Bathymetry(z, (1.0, 1.0), (100.0, 50.0)), (100.0, 50.0, 105.0, 55.0))
 
 
-@pytest.mark.skipif(not MONTEREY, reason="the shipped Monterey tiles are missing")
 def test_monterey_roi_in_pseudo_mercator():
     bathy = read_bathymetry(MONTEREY[0])
     corner = bathy.world_to_crs([[0.0, 0.0]])[0]
