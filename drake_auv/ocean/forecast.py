@@ -13,10 +13,8 @@ from typing import Callable
 
 import numpy as np
 
-from drake_auv.ocean.clock import TIDE_EPOCH_UTC, parse_utc
 from drake_auv.ocean.model import OceanModel
 from drake_auv.ocean.spec import OceanSpec
-from drake_auv.ocean.tides import TidalHarmonics, TidalSeries
 
 Forecast = Callable[[float, np.ndarray], np.ndarray]
 
@@ -30,14 +28,12 @@ def forecast(spec: OceanSpec | None) -> Forecast | None:
     if spec is None or (spec.current.speed_mps == 0.0 and not spec.tides
                         and spec.tides_file is None):
         return None
-    tides = (TidalSeries.from_csv(spec.tides_file) if spec.tides_file is not None
-             else TidalHarmonics(spec.tides, parse_utc(TIDE_EPOCH_UTC)) if spec.tides
-             else None)
-    start_s = spec.start_s()
+    file_first_s = None
     if spec.file is not None and spec.start_utc is None:
         from drake_auv.ocean.gridded import first_time_s  # netCDF4 only when used
-        start_s = first_time_s(spec.file)
-    model = OceanModel(spec.current, spec.profile, tides, start_s=start_s)
+        file_first_s = first_time_s(spec.file)
+    model = OceanModel(spec.current, spec.profile, spec.tidal(),
+                       start_s=spec.start_s(file_first_s))
 
     def water(t: float, positions) -> np.ndarray:
         return model.water(t, positions)[0]

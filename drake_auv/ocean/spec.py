@@ -75,11 +75,18 @@ class OceanSpec:
                                  f"reach {peak:g} m/s", f"a current of at most "
                                  f"{MAX_CURRENT_MPS:g} m/s (speed_mps + sum of amplitude_mps)")
 
-    def start_s(self, gridded=None) -> float:
-        """UTC seconds since 1970 of the dive's t = 0."""
+    def start_s(self, file_first_s: float | None = None) -> float:
+        """UTC seconds since 1970 of the dive's t = 0: `start_utc`, else the gridded file's
+        first time `file_first_s` (UTC s), else the tides' epoch."""
         if self.start_utc is not None:
             return parse_utc(self.start_utc)
-        return gridded.first_time_s if gridded is not None else parse_utc(TIDE_EPOCH_UTC)
+        return file_first_s if file_first_s is not None else parse_utc(TIDE_EPOCH_UTC)
+
+    def tidal(self) -> TidalSeries | TidalHarmonics | None:
+        """The tides: the CSV series, the harmonics on the tides' epoch, or None."""
+        if self.tides_file is not None:
+            return TidalSeries.from_csv(self.tides_file)
+        return TidalHarmonics(self.tides, parse_utc(TIDE_EPOCH_UTC)) if self.tides else None
 
     def model(self, wave_rng: np.random.Generator, crs=None, origin=(0.0, 0.0)) -> OceanModel:
         """The `OceanModel` of this sea in a site's local frame (`crs`, `origin`: see
@@ -88,13 +95,10 @@ class OceanSpec:
         if self.file is not None:
             from drake_auv.ocean.gridded import GriddedCurrent  # netCDF4 only when used
             gridded = GriddedCurrent.from_netcdf(self.file, crs, origin)
-        tides = (TidalSeries.from_csv(self.tides_file) if self.tides_file is not None
-                 else TidalHarmonics(self.tides, parse_utc(TIDE_EPOCH_UTC)) if self.tides
-                 else None)
         waves = (WaveField(self.waves, wave_rng)
                  if self.waves is not None and self.waves.hs_m > 0.0 else None)
-        return OceanModel(self.current, self.profile, tides, self.turbulence, waves, gridded,
-                          self.start_s(gridded))
+        return OceanModel(self.current, self.profile, self.tidal(), self.turbulence, waves,
+                          gridded, self.start_s(gridded.first_time_s if gridded else None))
 
 
 def _coerce(check, value):
