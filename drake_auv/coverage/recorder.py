@@ -25,7 +25,8 @@ from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.geometry.visibility import FaceVisibility, angle_histogram, coverage_share
 from drake_auv.signals import VehicleState
 from drake_auv.sonar.beams import AxisHits, SonarMount, fan_angles
-from drake_auv.sonar.range_sonar import STATE_SIZE, as_caster
+from drake_auv.sonar.range_sonar import as_caster
+from drake_auv.vehicle.model import STATE_SIZE
 
 
 class CoverageRecorder(LeafSystem):

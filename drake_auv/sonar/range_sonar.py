@@ -22,8 +22,7 @@ from drake_auv.random_streams import generator, stream as random_stream
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.sonar.beams import (AxisHits, BeamGeometry, SonarModel, beam_geometry,
                                    scan_with_hits)
-
-STATE_SIZE = 12
+from drake_auv.vehicle.model import STATE_SIZE
 
 
 def as_caster(world) -> RayCaster:
