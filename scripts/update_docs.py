@@ -24,7 +24,9 @@ suite builds both (tests/test_api_docs.py, tests/test_notebook.py).
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
+import pkgutil
 import re
 import shutil
 import warnings
@@ -78,20 +80,46 @@ def rewrite(text: str, report: dict) -> str:
 
 
 def build_api(out: Path, modules=("drake_auv",)) -> Path:
-    """Writes the HTML API reference of `modules` (and their submodules) into `out` with
-    pdoc, docstrings read as Google style; returns its index.html. RuntimeError listing every
-    warning raised while the modules are imported and documented."""
+    """Writes the HTML API reference of `modules` and every public module under them into
+    `out` with pdoc, docstrings read as Google style; returns its index.html. RuntimeError
+    listing every warning raised while the modules are imported and documented."""
     import pdoc
+    import pdoc.extract
     import pdoc.render
 
     pdoc.render.configure(docformat="google", search=True, show_source=False)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        pdoc.pdoc(*modules, output_directory=Path(out))
+        specs, covered = [], set()  # each module once: a spec adds what pdoc walks under it
+        for module in _public_modules(modules):
+            if module.__name__ not in covered:
+                specs.append(module.__name__)
+                covered.update(pdoc.extract.walk_specs([module.__name__]))
+        pdoc.pdoc(*specs, output_directory=Path(out))
     if caught:
         raise RuntimeError(f"the API reference has {len(caught)} warning(s):\n" + "\n".join(
             f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}" for w in caught))
     return Path(out) / "index.html"
+
+
+def _public_modules(names) -> list:
+    """The modules `names` and every module under them whose name has no part starting with
+    "_", imported. pdoc is given them all, since it leaves out of a package with `__all__` the
+    submodules not listed there. A package's names that it loads on first use (a module
+    `__getattr__`) are set in it, so that pdoc, which reads a module's `__dict__`, documents
+    them where they are exported."""
+    modules = []
+    for name in names:
+        package = importlib.import_module(name)
+        modules.append(package)
+        for info in pkgutil.walk_packages(getattr(package, "__path__", []), name + "."):
+            if not any(part.startswith("_") for part in info.name.split(".")):
+                modules.append(importlib.import_module(info.name))
+    for module in modules:
+        if "__getattr__" in vars(module):
+            for export in getattr(module, "__all__", ()):
+                setattr(module, export, getattr(module, export))
+    return modules
 
 
 def execute_notebook(notebook: Path, workdir: Path, timeout_s: float = TUTORIAL_TIMEOUT_S):
