@@ -18,14 +18,15 @@ $(PY):
 	@test -n "$(PYTHON)" || { echo "no Python $(SUPPORTED) found that runs; set PYTHON=..."; exit 1; }
 	$(PYTHON) -m venv $(VENV)
 
+# The version is read from drake_auv/__init__.py: a new one reinstalls.
 # Everything: the tests (their extra brings the campaign and docs extras) and the reconstruction.
-$(STAMP): $(PY) pyproject.toml
+$(STAMP): $(PY) pyproject.toml drake_auv/__init__.py
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[test,reconstruct]"
 	touch $(STAMP)
 
 # Only what the demo uses: the core (run, plan) and the reconstruction of its surface.
-$(DEMO_STAMP): $(PY) pyproject.toml
+$(DEMO_STAMP): $(PY) pyproject.toml drake_auv/__init__.py
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[reconstruct]"
 	touch $(DEMO_STAMP)
