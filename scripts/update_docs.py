@@ -29,6 +29,7 @@ import json
 import pkgutil
 import re
 import shutil
+import tempfile
 import warnings
 from pathlib import Path
 
@@ -123,17 +124,24 @@ def _public_modules(names) -> list:
 
 
 def execute_notebook(notebook: Path, workdir: Path, timeout_s: float = TUTORIAL_TIMEOUT_S):
-    """Executes `notebook` with the current interpreter's kernel, `workdir` its working
-    folder (created), and writes the executed copy there; returns it. A cell's error raises
-    `nbclient.exceptions.CellExecutionError` naming the cell; a cell running longer than
-    `timeout_s` s raises `CellTimeoutError`."""
+    """Executes `notebook` in a kernel of this interpreter (whatever other kernels are
+    installed), `workdir` its working folder (created), and writes the executed copy there;
+    returns it. A cell's error raises `nbclient.exceptions.CellExecutionError` naming the
+    cell; a cell running longer than `timeout_s` s raises `CellTimeoutError`."""
     import nbformat
+    from ipykernel.kernelspec import write_kernel_spec
+    from jupyter_client.kernelspec import KernelSpecManager
+    from jupyter_client.manager import KernelManager
     from nbclient import NotebookClient
 
     workdir.mkdir(parents=True, exist_ok=True)
     nb = nbformat.read(notebook, as_version=4)
-    NotebookClient(nb, timeout=timeout_s, kernel_name="python3",
-                   resources={"metadata": {"path": str(workdir)}}).execute()
+    with tempfile.TemporaryDirectory() as kernels:
+        write_kernel_spec(Path(kernels) / "python3")  # this interpreter's python -m ipykernel
+        km = KernelManager(kernel_name="python3",
+                           kernel_spec_manager=KernelSpecManager(kernel_dirs=[kernels]))
+        NotebookClient(nb, km=km, timeout=timeout_s,
+                       resources={"metadata": {"path": str(workdir)}}).execute()
     nbformat.write(nb, workdir / notebook.name)
     return nb
 
