@@ -10,6 +10,7 @@ PYTHON ?= $(firstword $(PYTHONS))
 VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+DEMO_STAMP := $(VENV)/.installed-demo
 
 .PHONY: demo docs test bench pythons clean
 
@@ -17,14 +18,23 @@ $(PY):
 	@test -n "$(PYTHON)" || { echo "no Python $(SUPPORTED) found that runs; set PYTHON=..."; exit 1; }
 	$(PYTHON) -m venv $(VENV)
 
-$(STAMP): $(PY) pyproject.toml
+# The version is read from drake_auv/__init__.py: a new one reinstalls.
+# Everything: the tests (their extra brings the campaign and docs extras) and the reconstruction.
+$(STAMP): $(PY) pyproject.toml drake_auv/__init__.py
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[test,reconstruct]"
 	touch $(STAMP)
 
-demo: $(STAMP)
+# Only what the demo uses: the core (run, plan) and the reconstruction of its surface.
+$(DEMO_STAMP): $(PY) pyproject.toml drake_auv/__init__.py
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[reconstruct]"
+	touch $(DEMO_STAMP)
+
+demo: $(DEMO_STAMP)
 	MPLBACKEND=Agg $(VENV)/bin/drake-auv demo --out out/demo
 
+# the demo's figures and numbers, the API reference (out/docs/api) and the tutorial executed
 docs: $(STAMP)
 	MPLBACKEND=Agg $(PY) scripts/update_docs.py --out out/docs
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 import time
 
@@ -200,3 +201,17 @@ def test_cli_bad_input_one_line_nonzero(argv, message, tmp_path, capsys, monkeyp
     assert main(["campaign", *argv, "-o", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("command", [
+    ["campaign", "breakwater", "--seeds", "0:2"],
+    ["envelope", "breakwater", "--speeds", "0:0.2:0.1", "--directions", "2", "--seeds", "0:1"],
+])
+def test_without_dask_one_line_naming_the_extra_and_nothing_written(command, tmp_path, capsys,
+                                                                    monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # its import raises ImportError
+    out = tmp_path / "out"
+    assert main([*command, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "drake_auv[campaign]" in err and len(err.splitlines()) == 1, err
+    assert not out.exists()

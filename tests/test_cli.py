@@ -17,6 +17,15 @@ def test_version_prints_the_package_version(capsys):
     assert capsys.readouterr().out.strip() == f"drake-auv {drake_auv.__version__}"
 
 
+def test_installed_and_cited_versions_are_the_package_version():
+    from importlib.metadata import version
+    from pathlib import Path
+
+    assert version("drake_auv") == drake_auv.__version__  # pyproject reads it (dynamic)
+    citation = (Path(__file__).resolve().parents[1] / "CITATION.cff").read_text()
+    assert re.search(r"^version: (\S+)$", citation, re.M)[1] == drake_auv.__version__
+
+
 @pytest.mark.parametrize("command", [c for c in COMMANDS if c != "scenarios"])
 def test_every_command_writing_files_takes_o_and_out(command):
     subparser = build_parser()._subparsers._group_actions[0].choices[command]

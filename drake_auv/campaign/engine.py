@@ -31,6 +31,17 @@ class CampaignError(ValueError):
     """A campaign that cannot start (an unreachable scheduler, a bad worker count)."""
 
 
+def require_dask() -> None:
+    """CampaignError (one line: the import's own error) when Dask's `distributed` does not
+    load: it comes with the `campaign` extra, not with the core install."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError as err:
+        raise CampaignError(f"campaigns run on Dask, which does not load ({one_line(err)}); "
+                            "allowed: an install with the campaign extra, "
+                            "pip install 'drake_auv[campaign]'") from None
+
+
 def usable_cores() -> int:
     """The cores this process may run on (its CPU affinity, else the machine's count)."""
     try:

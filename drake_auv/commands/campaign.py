@@ -88,10 +88,11 @@ def fly_runs(args, out: Path, meta: dict, runs, rows_file: str, keys, finish,
     returns what this returns with (counts, runs retried); `products` names them in an error.
     `task`: the task function (default `run_task`); `desc`: the progress bar's label."""
     from drake_auv.campaign import CampaignError, ResultsFile, connect, run_campaign, run_task
-    from drake_auv.campaign.engine import probe_scheduler
+    from drake_auv.campaign.engine import probe_scheduler, require_dask
     from drake_auv.campaign.folder import check_output, locked
     from drake_auv.campaign.task import one_line
 
+    require_dask()
     check_output(out, *(() if outputs is None else (outputs,)))
     check_same_campaign(out, meta, write=False, fixed=fixed)
     if args.scheduler is not None:

@@ -6,9 +6,8 @@ mesh's bounding box first (georeferenced worlds have coordinates of 1e5-1e6 m): 
 then about 1e-7 of the mesh size. Ranges and points are returned in the caller's frame, float64.
 """
 
-from __future__ import annotations
-
-from typing import NamedTuple
+from typing import NamedTuple  # RayHits' fields are evaluated (its generated __new__ cannot
+# resolve postponed annotations: no `from __future__ import annotations` here)
 
 import numpy as np
 import trimesh
