@@ -48,7 +48,7 @@ def test_infinite_geotiff_cells_are_refused_like_bathymetry_refuses_them(tmp_pat
         ds.write(data, 1)
     with pytest.raises(ValueError, match=r"1 infinite cell\(s\) .* at row 4, column 7"):
         read_bathymetry(path)
-    with pytest.raises(ValueError, match="infinite value"):
+    with pytest.raises(ValueError, match="infinite cell"):
         Bathymetry(np.where(z < -22.0, bad, z), (1.0, 1.0), (0.0, 0.0))
 
 

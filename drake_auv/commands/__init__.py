@@ -1,6 +1,25 @@
 """Subcommands of the `drake-auv` console script: each module has `add_parser(subparsers)`
 that registers its arguments and sets `func` to the function that runs it."""
 
+import argparse
+
+
+def whole_number(text: str) -> int:
+    """An integer option's value: digits, or a whole number written with an exponent or a
+    point ("1e9", "4.0"), so that a count out of range reaches its range check (which states
+    the range) instead of a type error."""
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value.is_integer():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number")
+    return int(value)
+
 
 def add_recording_options(parser, playback_speed: float, realtime: bool = True) -> None:
     """The options every simulating command shares: the recording's playback speed,

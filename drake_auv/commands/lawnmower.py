@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_auv.commands import add_recording_options
+from drake_auv.commands import add_recording_options, whole_number
 
 DEFAULT_OUT = "out/lawnmower"
 
@@ -72,7 +72,7 @@ def add_parser(subparsers) -> None:
                     "recording) and tracking_error.png.")
     parser.add_argument("-o", "--out", default=DEFAULT_OUT,
                         help=f"output folder (default {DEFAULT_OUT})")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic seabed")
+    parser.add_argument("--seed", type=whole_number, default=0, help="seed of the synthetic seabed")
     parser.add_argument("--speed", type=float, default=0.5, help="survey speed, m/s (default 0.5)")
     parser.add_argument("--extent", type=float, nargs=2, default=(50.0, 30.0),
                         metavar=("WIDTH", "LENGTH"),

@@ -20,6 +20,8 @@ import json
 import sys
 from pathlib import Path as FilePath
 
+from drake_auv.commands import whole_number
+
 
 def _lonlat(text: str) -> tuple[float, float]:
     try:
@@ -55,7 +57,7 @@ def add_parser(subparsers) -> None:
                         help="lane direction, degrees from +x (default: fewest lanes)")
     parser.add_argument("--slice-spacing", type=float, default=None,
                         help="vertical spacing of the slicing planes, m (default: footprint)")
-    parser.add_argument("--slice-count", type=int, default=None,
+    parser.add_argument("--slice-count", type=whole_number, default=None,
                         help="slicing planes per high-slope region, centred on it (default: "
                              "as many as cover it)")
     parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
@@ -82,7 +84,7 @@ def add_parser(subparsers) -> None:
                              "along each section): write the sections it flies that way")
     parser.add_argument("--speed", type=float, default=0.5,
                         help="mission surge speed, m/s, > 0 (default 0.5)")
-    parser.add_argument("--max-items", type=int, default=700,
+    parser.add_argument("--max-items", type=whole_number, default=700,
                         help="QGC/ArduSub: mission items a board stores per file, home and "
                              "DO_CHANGE_SPEED included, >= 4; longer missions are split into "
                              "mission_1.plan, mission_2.plan, ... (default 700)")

@@ -13,7 +13,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
-from drake_auv.commands import add_recording_options
+from drake_auv.commands import add_recording_options, whole_number
 from drake_auv.output_files import replacing
 from drake_auv.signals import Reference, VehicleState
 
@@ -213,6 +213,6 @@ def add_parser(subparsers) -> None:
                         help="compass bias of the dead-reckoning navigation, degrees (default 0)")
     parser.add_argument("--random-walk", type=float, default=0.0,
                         help="navigation drift random walk, m per sqrt(m travelled) (default 0)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the navigation noise")
+    parser.add_argument("--seed", type=whole_number, default=0, help="seed of the navigation noise")
     add_recording_options(parser, playback_speed=10.0)
     parser.set_defaults(func=run)
