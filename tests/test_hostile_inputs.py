@@ -154,7 +154,8 @@ def plan_200000_squared_raster(tmp_path):
 
     path = tmp_path / "huge.tif"
     with rasterio.open(path, "w", driver="GTiff", width=200_000, height=200_000, count=1,
-                       dtype="float32", crs="EPSG:32631", transform=Affine(1.0, 0.0, 0.0, 0.0, -1.0, 2e5),
+                       dtype="float32", crs="EPSG:32631",
+                       transform=Affine(1.0, 0.0, 0.0, 0.0, -1.0, 2e5),
                        tiled=True, blockxsize=512, blockysize=512, compress="deflate",
                        sparse_ok=True, BIGTIFF="YES"):
         pass
@@ -249,11 +250,26 @@ def corrupt_mcap(tmp_path):
     return ["replay", _garbage(tmp_path, "noise.mcap"), "-o", tmp_path / "o"], ["noise.mcap"]
 
 
-def output_under_a_file(tmp_path):
+def corrupt_ply(tmp_path):
+    return ["reconstruct", _garbage(tmp_path, "noise.ply"), "-o", tmp_path / "o" / "s.ply"], \
+        ["noise.ply"]
+
+
+def corrupt_netcdf(tmp_path):
+    return ["run", "boulder", "-o", tmp_path / "o", "--set",
+            f"ocean.file={_garbage(tmp_path, 'noise.nc')}"], ["ocean.file", "noise.nc"]
+
+
+def plan_output_under_a_file(tmp_path):
     (tmp_path / "file.txt").write_text("a file, not a folder\n")
     grid = tmp_path / "g.npz"
     np.savez(grid, z=_slope_grid(), spacing=[1.0, 1.0])
-    return ["plan", grid, "-o", tmp_path / "file.txt" / "o"], ["file.txt"]
+    return ["plan", grid, "-o", tmp_path / "file.txt" / "o"], ["-o", "file.txt/o"]
+
+
+def run_output_under_a_file(tmp_path):
+    (tmp_path / "file.txt").write_text("a file, not a folder\n")
+    return ["run", "boulder", "-o", tmp_path / "file.txt" / "o"], ["-o", "file.txt/o"]
 
 
 def output_in_a_read_only_folder(tmp_path):
@@ -318,7 +334,10 @@ CASES = {
     "corrupt-yaml": corrupt_yaml,
     "corrupt-plan": corrupt_plan,
     "corrupt-mcap": corrupt_mcap,
-    "output-under-a-file": output_under_a_file,
+    "corrupt-ply": corrupt_ply,
+    "corrupt-netcdf": corrupt_netcdf,
+    "plan-output-under-a-file": plan_output_under_a_file,
+    "run-output-under-a-file": run_output_under_a_file,
     "output-read-only": output_in_a_read_only_folder,
     "negative-hs": negative_hs,
     "current-6-mps": current_6_mps,
@@ -333,3 +352,22 @@ def test_a_hostile_input_is_refused_in_one_line_at_once(tmp_path, capsys, case):
     for text in expected:
         assert text in line, (text, line)
     assert not (tmp_path / "o" / "report.json").exists()
+
+
+def test_a_refused_campaign_ends_its_process_with_status_2(tmp_path):
+    """`--workers 1000` once leaked semaphores and never ended: the real console entry point,
+    in its own process, guarded by a timeout, ends with status 2 and one line."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": f"{root}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
+           "MPLBACKEND": "Agg"}
+    done = subprocess.run([sys.executable, "-m", "drake_auv.cli", "campaign", "boulder",
+                           "--seeds", "0:2", "--workers", "1e3", "-o", str(tmp_path / "o")],
+                          capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr[-2000:]
+    assert "--workers 1000" in lines[0] and "Traceback" not in done.stderr
+    assert not (tmp_path / "o" / "results.csv").exists()
