@@ -14,10 +14,11 @@ import pytest
 import yaml
 
 from drake_auv.cli import main
-from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.bathymetry import ELEVATION_RANGE_M, Bathymetry
 from drake_auv.terrain.readers import write_geotiff
 
 REFUSAL_S = 15.0  # s, the contract's bound from the call to the refusal
+LOW, HIGH = ELEVATION_RANGE_M
 
 
 def refuse(argv, capsys) -> str:
@@ -72,7 +73,8 @@ def _qgc_mission(tmp_path, waypoints) -> "os.PathLike":
 
     mission = write_utm_site(tmp_path)
     to_wgs84 = Transformer.from_crs(CRS, "EPSG:4326", always_xy=True)
-    items = [{"type": "SimpleItem", "command": 178, "frame": 2, "params": [1, 0.5, -1, 0, 0, 0, 0]}]
+    items = [{"type": "SimpleItem", "command": 178, "frame": 2,
+              "params": [1, 0.5, -1, 0, 0, 0, 0]}]  # DO_CHANGE_SPEED 0.5 m/s
     for east, north, frame, alt, hold in waypoints:
         lon, lat = to_wgs84.transform(east, north)
         items.append({"type": "SimpleItem", "command": 16, "frame": frame,
@@ -87,18 +89,24 @@ def _qgc_mission(tmp_path, waypoints) -> "os.PathLike":
 
 
 def fly_500_m_deep(tmp_path):
+    """Item 2 500 m deep (frame 3) where the seabed is 20 m deep."""
+    from sites import SEABED_Z
+
     mission = _qgc_mission(tmp_path, [(499985.0, 4599985.0, 3, -5.0, 0),
                                       (499990.0, 4599985.0, 3, -500.0, 0)])
-    return ["run", mission, "-o", tmp_path / "o"], ["steps[0].fly.file", "hostile.plan: item 2",
-                                              "depth 500 m is 479.80 m inside the world",
-                                              "depth in [0, 20.0) m"]
+    return ["run", mission, "-o", tmp_path / "o"], [
+        "steps[0].fly.file", "hostile.plan: item 2", "depth 500 m is", "inside the world",
+        f"its top surface there: {-SEABED_Z:.1f} m deep", f"depth in [0, {-SEABED_Z:.1f}) m"]
 
 
 def fly_1000_m_altitude(tmp_path):
+    """1000 m above the seabed (frame 10), 20 m deep: 980 m above the surface."""
+    from sites import SEABED_Z
+
     mission = _qgc_mission(tmp_path, [(499985.0, 4599985.0, 10, 1000.0, 0)])
-    return ["run", mission, "-o", tmp_path / "o"], ["steps[0].fly.file", "hostile.plan: item 1",
-                                              "980.00 m above the sea surface",
-                                              "depth in [0, 20.0) m"]
+    return ["run", mission, "-o", tmp_path / "o"], [
+        "steps[0].fly.file", "hostile.plan: item 1",
+        f"{1000.0 + SEABED_Z:.2f} m above the sea surface", f"depth in [0, {-SEABED_Z:.1f}) m"]
 
 
 def fly_hold_1e9_s(tmp_path):
@@ -122,18 +130,20 @@ def plan_minus_1e30(tmp_path):
     """Every cell -1e30 m: a no-data value the file does not declare."""
     path = _set_cells(_tif(tmp_path, _slope_grid()), -1e30, (slice(None), slice(None)))
     return ["plan", path, "-o", tmp_path / "o"], \
-        ["grid.tif", "1200 cell(s) outside [-11500, 9000] m", "-1e+30 at row 0, column 0"]
+        ["grid.tif", f"{_slope_grid().size} cell(s) outside [{LOW:g}, {HIGH:g}] m",
+         "-1e+30 at row 0, column 0"]
 
 
 def plan_plus_inf_cells(tmp_path):
     path = _set_cells(_tif(tmp_path, _slope_grid()), np.inf)
     return ["plan", path, "-o", tmp_path / "o"], ["grid.tif", "4 infinite cell(s)",
-                                                  "row 4, column 7", "[-11500, 9000]"]
+                                                  "row 4, column 7", f"[{LOW:g}, {HIGH:g}]"]
 
 
 def plan_nan_cells(tmp_path):
+    """Every cell NaN (some NaN cells are no-data, stated: `test_no_data_cells_are_stated`)."""
     path = _set_cells(_tif(tmp_path, _slope_grid()), np.nan, (slice(None), slice(None)))
-    return ["plan", path, "-o", tmp_path / "o"], ["grid.tif", "no-data"]
+    return ["plan", path, "-o", tmp_path / "o"], ["grid.tif", "all no-data"]
 
 
 def plan_no_go_projected_without_crs(tmp_path):
@@ -352,6 +362,20 @@ def test_a_hostile_input_is_refused_in_one_line_at_once(tmp_path, capsys, case):
     for text in expected:
         assert text in line, (text, line)
     assert not (tmp_path / "o" / "report.json").exists()
+
+
+def test_no_data_cells_are_stated(tmp_path, capsys):
+    """A few NaN cells are the file's no-data, planned around (no-go), and said so."""
+    z = _slope_grid()
+    path = _set_cells(_tif(tmp_path, z), np.nan)
+    assert main(["plan", str(path), "--no-figures", "--no-3d-metrics", "-o",
+                 str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    assert f"grid.tif: 4 of {z.size} cells are no-data" in out and "no-go" in out, out
+    clean = _tif(tmp_path, z, name="clean.tif")
+    assert main(["plan", str(clean), "--no-figures", "--no-3d-metrics", "-o",
+                 str(tmp_path / "o")]) == 0
+    assert "no-data" not in capsys.readouterr().out
 
 
 def test_a_refused_campaign_ends_its_process_with_status_2(tmp_path):

@@ -115,6 +115,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    import numpy as np
+
     from drake_auv.commands.outputs import MiB, output_folder
 
     output_folder(args.out, "-o", 20 * MiB)  # path.csv, reports, figures, exports
@@ -150,6 +152,10 @@ def run(args) -> int:
         if origin is not None and bathy.crs is not None:
             raise ValueError(f"--origin-lonlat: {args.bathymetry} is georeferenced ({bathy.crs}"
                              "), which places it; the option is for grids without a CRS")
+        no_data = int(np.isnan(bathy.z).sum())
+        if no_data:  # stated, never silent
+            print(f"{args.bathymetry}: {no_data} of {bathy.z.size} cells are no-data (its nodata "
+                  "value, mask or NaN): no-go for coverage")
     check_exports(bathy, exports, origin, args.max_items, args.ardusub_frames)  # before planning
     if args.roi and args.roi_file:
         raise ValueError("give --roi or --roi-file, not both")
