@@ -115,13 +115,17 @@ def fly_hold_1e9_s(tmp_path):
                                                     "[0, 3600"]
 
 
-def simulate_above_the_surface(tmp_path):
+def _path_csv(tmp_path, depths=(-5.0, -5.0, -5.0)):
     path = tmp_path / "path.csv"
     rows = ["x,y,z,heading,sensor_x,sensor_y,sensor_z,label"]
-    rows += [f"{x},0,{z},0,0,0,-1,0" for x, z in ((0, -5), (10, 50), (20, -5))]
+    rows += [f"{10 * k},0,{z},0,0,0,-1,0" for k, z in enumerate(depths)]
     path.write_text("\n".join(rows) + "\n")
-    return ["simulate", path, "-o", tmp_path / "o", "--no-html", "--quiet"], \
-        ["path.csv:3", "50.00 m above the sea surface", "z <= 0 m"]
+    return path
+
+
+def simulate_above_the_surface(tmp_path):
+    return ["simulate", _path_csv(tmp_path, (-5.0, 50.0, -5.0)), "-o", tmp_path / "o",
+            "--no-html", "--quiet"], ["path.csv:3", "50.00 m above the sea surface", "z <= 0 m"]
 
 
 # --- bathymetry rasters ---
@@ -209,6 +213,24 @@ def campaign_1000_workers(tmp_path):
             tmp_path / "o", "--quiet"], ["--workers 1000", "[1, "]
 
 
+def campaign_a_billion_seeds(tmp_path):
+    return ["campaign", "boulder", "--seeds", "0:1000000000", "--workers", "1", "-o",
+            tmp_path / "o", "--quiet"], ["--seeds 0:1000000000", "1000000000 runs",
+                                         "at most 100000 runs"]
+
+
+def envelope_too_many_runs(tmp_path):
+    """(50 x 360 + 1) currents x 100 seeds: 1,800,100 runs."""
+    return ["envelope", "boulder", "--speeds", "0:5:0.1", "--directions", "360", "--seeds",
+            "0:100", "--workers", "1", "-o", tmp_path / "o", "--quiet"], \
+        ["--speeds x --directions x --seeds", "1800100 runs", "at most 100000 runs"]
+
+
+def lawnmower_altitude_1e_6(tmp_path):
+    return ["lawnmower", "--altitude", "1e-6", "-o", tmp_path / "o", "--no-html", "--quiet"], \
+        ["--altitude 1e-06", "[0.5, 100] m"]
+
+
 ALIAS_BOMB = ("a: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
     f"{b}: &{b} [{', '.join([f'*{a}'] * 10)}]\n" for a, b in zip("abcdefgh", "bcdefghi")))
 
@@ -270,16 +292,13 @@ def corrupt_netcdf(tmp_path):
             f"ocean.file={_garbage(tmp_path, 'noise.nc')}"], ["ocean.file", "noise.nc"]
 
 
-def plan_output_under_a_file(tmp_path):
-    (tmp_path / "file.txt").write_text("a file, not a folder\n")
-    grid = tmp_path / "g.npz"
-    np.savez(grid, z=_slope_grid(), spacing=[1.0, 1.0])
-    return ["plan", grid, "-o", tmp_path / "file.txt" / "o"], ["-o", "file.txt/o"]
-
-
-def run_output_under_a_file(tmp_path):
-    (tmp_path / "file.txt").write_text("a file, not a folder\n")
-    return ["run", "boulder", "-o", tmp_path / "file.txt" / "o"], ["-o", "file.txt/o"]
+def _output_under_a_file(*argv):
+    """`argv` with `-o` under a file ("path.csv" in it: a good path CSV)."""
+    def case(tmp_path):
+        (tmp_path / "file.txt").write_text("a file, not a folder\n")
+        given = [_path_csv(tmp_path) if a == "path.csv" else a for a in argv]
+        return [*given, "-o", tmp_path / "file.txt" / "o"], ["-o", "file.txt/o"]
+    return case
 
 
 def output_in_a_read_only_folder(tmp_path):
@@ -337,6 +356,9 @@ CASES = {
     "explore-region-1e6-m": explore_region_1e6_m,
     "reconstruct-500-identical-points": reconstruct_identical_points,
     "campaign-1000-workers": campaign_1000_workers,
+    "campaign-a-billion-seeds": campaign_a_billion_seeds,
+    "envelope-1800100-runs": envelope_too_many_runs,
+    "lawnmower-altitude-1e-6": lawnmower_altitude_1e_6,
     "mission-alias-bomb": mission_alias_bomb,
     "mission-max-time-minus-1e9": mission_max_time_negative_1e9,
     "missing-file": missing_file,
@@ -346,8 +368,10 @@ CASES = {
     "corrupt-mcap": corrupt_mcap,
     "corrupt-ply": corrupt_ply,
     "corrupt-netcdf": corrupt_netcdf,
-    "plan-output-under-a-file": plan_output_under_a_file,
-    "run-output-under-a-file": run_output_under_a_file,
+    "plan-output-under-a-file": _output_under_a_file("plan", "caldera"),
+    "run-output-under-a-file": _output_under_a_file("run", "boulder"),
+    "simulate-output-under-a-file": _output_under_a_file("simulate", "path.csv", "--no-html"),
+    "lawnmower-output-under-a-file": _output_under_a_file("lawnmower", "--no-html"),
     "output-read-only": output_in_a_read_only_folder,
     "negative-hs": negative_hs,
     "current-6-mps": current_6_mps,

@@ -30,9 +30,32 @@ def first_turn_index(path, angle_deg: float = 45.0) -> int:
     return int(np.argmax(turned)) if turned.any() else len(path) - 1
 
 
+MAX_RELIEF_M = 40.0  # m: the synthetic seabed lies 50 m deep, its top at most 10 m deep
+
+
+def check_options(args) -> None:
+    """ValueError naming the option and its range, before any work: the altitude, aperture and
+    overlap in the mission plan step's ranges (`PlanStep`: omega, aperture_deg, overlap), the
+    relief in [0, MAX_RELIEF_M] m."""
+    from drake_auv.mission.steps.plan import PlanStep
+    from drake_auv.params import checks
+
+    for option, value, name in (("--altitude", args.altitude, "omega"),
+                                ("--aperture-deg", args.aperture_deg, "aperture_deg"),
+                                ("--overlap", args.overlap, "overlap")):
+        check = checks(PlanStep)[name]
+        what = check.problem(value)
+        if what is not None:
+            raise ValueError(f"{option} {value:g} {what}; allowed: {check.allowed()}")
+    if not 0.0 <= args.relief <= MAX_RELIEF_M:
+        raise ValueError(f"--relief {args.relief:g} is out of range; allowed: [0, "
+                         f"{MAX_RELIEF_M:g}] m (the seabed lies 50 m deep)")
+
+
 def run(args) -> int:
     from pathlib import Path as FilePath
 
+    from drake_auv.commands.outputs import MiB, output_folder
     from drake_auv.commands.simulate import fly_path, report
     from drake_auv.planning.lawnmower import lane_spacing, plan_lawnmower
     from drake_auv.terrain.synthetic import random_seabed
@@ -41,6 +64,8 @@ def run(args) -> int:
     width, length = args.extent
     if not (5.0 <= width <= 2000.0 and 5.0 <= length <= 2000.0):
         raise ValueError(f"--extent must be two sizes in [5, 2000] m, got {args.extent}")
+    check_options(args)
+    output_folder(args.out, "-o", 20 * MiB)  # mission.html, tracking_error.png, the CSVs
     cell = 1.0
     shape = (int(round(length / cell)) + 1, int(round(width / cell)) + 1)
     seabed = random_seabed(seed=args.seed, shape=shape, cell=cell, relief=args.relief)

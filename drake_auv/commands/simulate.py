@@ -185,12 +185,14 @@ def report(result: FlightResult, out_dir) -> None:
 
 
 def run(args) -> int:
+    from drake_auv.commands.outputs import MiB, output_folder
     from drake_auv.vehicle.navigation import NavigationParams
     from drake_auv.planning.path import Path
     from drake_auv.visualization import Scene
 
     path = Path.from_csv(args.path_csv)
     check_below_surface(path, args.path_csv, first_row=2)  # row 1: the header
+    output_folder(args.out, "-o", 20 * MiB)  # mission.html, tracking_error.png, state.csv
     navigation = NavigationParams(heading_bias=np.radians(args.heading_bias_deg),
                                   random_walk=args.random_walk, seed=args.seed)
     scene = None if args.no_html else Scene()
