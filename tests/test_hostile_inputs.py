@@ -180,12 +180,15 @@ def plan_200000_squared_raster(tmp_path):
 
 # --- plan options ---
 
-def _plan_with(options, expected):
+def _plan_with(options, expected, before_planning=False):
+    """`plan` of a small wall with `options`; `before_planning`: refused before
+    `plan_coverage` is called (the others: inside it, before any route is built)."""
     def case(tmp_path):
         grid = tmp_path / "wall.npz"
         np.savez(grid, z=_slope_grid(), spacing=[1.0, 1.0])
         return ["plan", grid, "--no-figures", "--no-3d-metrics", *options, "-o",
                 tmp_path / "o"], expected
+    case.before_planning = before_planning
     return case
 
 
@@ -350,15 +353,18 @@ CASES = {
         ["--slice-count", "1e9"], ["slice_count", "[1, 1000], got 1000000000"]),
     "plan-origin-lonlat-500-100": _plan_with(
         ["--export", "qgc", "--origin-lonlat", "500,100"],
-        ["origin_lonlat", "lon in [-180, 180], lat in (-90, 90)", "(500.0, 100.0)"]),
+        ["origin_lonlat", "lon in [-180, 180], lat in (-90, 90)", "(500.0, 100.0)"], True),
     "plan-max-items-0": _plan_with(["--export", "qgc", "--origin-lonlat", "3,42",
-                                    "--max-items", "0"], ["--max-items", ">= 4", "got 0"]),
+                                    "--max-items", "0"], ["--max-items", ">= 4", "got 0"], True),
     "explore-region-1e6-m": explore_region_1e6_m,
     "reconstruct-500-identical-points": reconstruct_identical_points,
     "campaign-1000-workers": campaign_1000_workers,
     "campaign-a-billion-seeds": campaign_a_billion_seeds,
     "envelope-1800100-runs": envelope_too_many_runs,
     "lawnmower-altitude-1e-6": lawnmower_altitude_1e_6,
+    "plan-overlap-0.999999": _plan_with(["--overlap", "0.999999"],
+                                        ["--overlap 0.999999", "[0, 0.9]"], True),
+    "plan-speed-0": _plan_with(["--speed", "0"], ["--speed 0", "[0.05, 1.4] m/s"], True),
     "mission-alias-bomb": mission_alias_bomb,
     "mission-max-time-minus-1e9": mission_max_time_negative_1e9,
     "missing-file": missing_file,
@@ -380,7 +386,14 @@ CASES = {
 
 
 @pytest.mark.parametrize("case", CASES.values(), ids=CASES.keys())
-def test_a_hostile_input_is_refused_in_one_line_at_once(tmp_path, capsys, case):
+def test_a_hostile_input_is_refused_in_one_line_at_once(tmp_path, capsys, monkeypatch, case):
+    if getattr(case, "before_planning", False):
+        from drake_auv.planning import coverage_plan
+
+        def never(*args, **kwargs):
+            raise AssertionError("planned before the options were checked")
+
+        monkeypatch.setattr(coverage_plan, "plan_coverage", never)
     argv, expected = case(tmp_path)
     line = refuse(argv, capsys)
     for text in expected:

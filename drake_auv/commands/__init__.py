@@ -21,6 +21,20 @@ def whole_number(text: str) -> int:
     return int(value)
 
 
+def check_plan_options(options) -> None:
+    """ValueError naming the option, its value and what is allowed for the first (option,
+    value, field) of `options` out of the mission plan step's range for `field` (`PlanStep`:
+    one source of truth for the command line and the mission file), before any work."""
+    from drake_auv.mission.steps.plan import PlanStep
+    from drake_auv.params import checks
+
+    for option, value, field in options:
+        check = checks(PlanStep)[field]
+        what = check.problem(value)
+        if what is not None:
+            raise ValueError(f"{option} {value:g} {what}; allowed: {check.allowed()}")
+
+
 def add_recording_options(parser, playback_speed: float, realtime: bool = True) -> None:
     """The options every simulating command shares: the recording's playback speed,
     `--no-html`, `--quiet` and, with `realtime`, pacing the simulation to watch it live."""
