@@ -14,8 +14,17 @@ COMMANDS = ("plan", "scenarios", "simulate", "lawnmower", "run", "demo", "recons
             "campaign", "envelope", "replay")
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """A usage error as every other refusal: one line naming the option, exit 2 (the usage
+    itself is in `--help`). Subcommands' parsers are of the same class."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} "
+                     "--help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="drake-auv",
         description="3D coverage planning and simulated inspection for a hovering AUV.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")

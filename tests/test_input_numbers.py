@@ -48,7 +48,7 @@ def test_infinite_geotiff_cells_are_refused_like_bathymetry_refuses_them(tmp_pat
         ds.write(data, 1)
     with pytest.raises(ValueError, match=r"1 infinite cell\(s\) .* at row 4, column 7"):
         read_bathymetry(path)
-    with pytest.raises(ValueError, match="infinite value"):
+    with pytest.raises(ValueError, match="infinite cell"):
         Bathymetry(np.where(z < -22.0, bad, z), (1.0, 1.0), (0.0, 0.0))
 
 
@@ -107,9 +107,7 @@ def test_yaml_bombs_are_refused_at_once_in_one_line(tmp_path, text, message):
     assert "\n" not in str(info.value)
 
 
-@pytest.mark.parametrize("extra, message", [
-    (["--origin-lonlat", "500,100"], "origin_lonlat must be lon in [-180, 180]"),
-    (["--export", "qgc", "--origin-lonlat", "3,42", "--max-items", "0"], "--max-items"),
+@pytest.mark.parametrize("extra, message", [  # more: tests/test_hostile_inputs.py
     (["--export", "cola2"], "the grid has no CRS")])
 def test_export_options_are_refused_before_planning(tmp_path, capsys, monkeypatch, extra,
                                                     message):
@@ -141,54 +139,13 @@ def test_a_raster_larger_than_the_memory_is_refused_before_it_is_read(tmp_path, 
         read_bathymetry(path)
 
 
-@pytest.mark.parametrize("extra, message", [
-    (["--omega", "1e-6"], "omega 1e-06 m: the terrain's distance samples every 2.5e-07 m needs"),
-    (["--slice-count", "1000000000"], "slice_count must be a whole number in [1, 1000]"),
-    (["--slice-spacing", "1e-9"], "gives 1.2e+10 slicing planes over a high-slope region 12.0 m "
-                                  "high; allowed: at most 1000 planes")])
-def test_plans_that_would_not_fit_are_refused_at_once(tmp_path, capsys, extra, message):
-    import time
-
-    yy, xx = np.mgrid[0:60, 0:50] * 1.0
-    grid = tmp_path / "wall.npz"
-    np.savez(grid, z=-40.0 + 0.05 * yy + np.clip(xx - 20.0, 0.0, 12.0) * 0.9,
-             spacing=[1.0, 1.0])
-    start = time.perf_counter()
-    assert main(["plan", str(grid), "--no-figures", "--no-3d-metrics", *extra,
-                 "-o", str(tmp_path / "o")]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and message in err[0], err
-    assert time.perf_counter() - start < 15.0
-
-
-def test_an_explore_region_larger_than_the_memory_is_refused_at_load(tmp_path, capsys):
+def test_an_explore_region_larger_than_the_memory_is_refused_at_load():
     from drake_auv.exploration.planner import ExploreParameters
 
     assert ExploreParameters(region=(-13.0, -11.0, -40.5, 16.0, 11.0, -26.0)).cell_m == 1.0
     with pytest.raises(ValueError, match=r"\(1e\+18 planning cells\) needs .* GiB of memory, "
                                          "more than the"):
         ExploreParameters(region=(0.0, 0.0, -1e6, 1e6, 1e6, -5.0))
-    assert main(["run", "boulder_explore", "-o", str(tmp_path / "o"), "--set",
-                 "steps.0.explore.region=[0, 0, -1000000, 1000000, 1000000, -5]"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "planning cells) needs" in err[0], err
-
-
-def test_a_geojson_in_projected_metres_without_crs_is_refused_in_one_line(tmp_path, capsys):
-    yy, xx = np.mgrid[0:40, 0:30] * 1.0
-    grid = tmp_path / "utm.tif"
-    write_geotiff(Bathymetry(-40.0 + 0.05 * yy + np.clip(xx - 12.0, 0.0, 8.0) * 0.9, (1.0, 1.0),
-                             (500000.0, 4000000.0), "EPSG:32631"), grid)
-    ring = [[500005, 4000005], [500015, 4000005], [500015, 4000015], [500005, 4000015],
-            [500005, 4000005]]
-    zone = tmp_path / "zone.geojson"
-    zone.write_text(json.dumps({"type": "FeatureCollection", "features": [
-        {"type": "Feature", "properties": {},
-         "geometry": {"type": "Polygon", "coordinates": [ring]}}]}))
-    assert main(["plan", str(grid), "--no-go", str(zone), "--no-figures", "--no-3d-metrics",
-                 "-o", str(tmp_path / "o")]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "are not longitudes and latitudes" in err[0], err
 
 
 def test_a_hold_longer_than_an_hour_in_a_flown_file_is_refused_naming_the_item(tmp_path):

@@ -179,7 +179,7 @@ def test_what_does_not_apply_is_left_out_of_the_report():
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--omega", "0"], "omega"), (["--aperture", "190"], "aperture_deg"),
+    (["--omega", "0"], "omega"), (["--aperture", "190"], "--aperture 190 is out of range; allowed: [5, 170] deg"),
     (["--slope-threshold", "-1"], "slope_threshold"), (["--roi", "0,0,10,10"], "outside the grid"),
     (["--speed", "0"], "--speed")])
 def test_plan_reports_bad_input(tmp_path, small_tif, capsys, extra, message):

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from drake_auv.campaign.grid import CampaignRun, expand_runs
+from drake_auv.campaign.grid import CampaignRun, check_run_count, expand_runs
 from drake_auv.campaign.task import TIMING, metrics_row
 from drake_auv.mission.config import MissionFileError
 from drake_auv.ocean.current import MAX_CURRENT_MPS
@@ -77,6 +77,7 @@ def envelope_runs(mission, speeds, directions, seeds, overrides=()) -> list[Camp
                          "--speeds and --directions (--set any other key)")
     cells = [(speed, towards) for speed in speeds
              for towards in (["0"] if float(speed) == 0 else directions)]
+    check_run_count(len(cells) * len(seeds), "--speeds x --directions x --seeds")
     runs = []
     for speed, towards in cells:
         vary = [(SPEED_KEY, [speed]), (TOWARDS_KEY, [towards])]

@@ -9,9 +9,20 @@ A run's key is its seed and the varied values as typed (`results.csv` holds them
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 
 from drake_auv.mission.config import MissionFileError, load_mission, mission_to_dict
+
+MAX_RUNS = 100_000  # runs of one campaign or envelope: a year of dives on one core
+
+
+def check_run_count(count: int, what: str) -> None:
+    """ValueError (one line) when `what` gives more than `MAX_RUNS` runs, before any is built
+    (`--seeds 0:1000000000` once listed a billion runs and never started)."""
+    if count > MAX_RUNS:
+        raise ValueError(f"{what} gives {count} runs; allowed: at most {MAX_RUNS} runs in one "
+                         "campaign")
 
 
 @dataclass(frozen=True)
@@ -42,6 +53,7 @@ def parse_seeds(text: str) -> list[int]:
         raise ValueError(f"--seeds: {text!r} is not A:B; allowed: {allowed}") from None
     if not 0 <= a < b:
         raise ValueError(f"--seeds: {text!r} is empty or negative; allowed: {allowed}")
+    check_run_count(b - a, f"--seeds {text}")
     return list(range(a, b))
 
 
@@ -91,6 +103,8 @@ def expand_runs(mission, seeds, vary, overrides=()) -> list[CampaignRun]:
     """Every (seed, variant) run of `mission` (a file or built-in name) with the fixed
     `overrides` and the `vary` lists of `parse_vary`; raises `MissionFileError` naming the
     first bad key or value."""
+    check_run_count(len(seeds) * math.prod(len(texts) for _, texts in vary),
+                    "--seeds x --vary")
     runs = []
     for combo in itertools.product(*(texts for _, texts in vary)):
         values = tuple((key, text) for (key, _), text in zip(vary, combo))

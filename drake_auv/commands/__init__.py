@@ -1,6 +1,39 @@
 """Subcommands of the `drake-auv` console script: each module has `add_parser(subparsers)`
 that registers its arguments and sets `func` to the function that runs it."""
 
+import argparse
+
+
+def whole_number(text: str) -> int:
+    """An integer option's value: digits, or a whole number written with an exponent or a
+    point ("1e9", "4.0"), so that a count out of range reaches its range check (which states
+    the range) instead of a type error."""
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value.is_integer():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number")
+    return int(value)
+
+
+def check_plan_options(options) -> None:
+    """ValueError naming the option, its value and what is allowed for the first (option,
+    value, field) of `options` out of the mission plan step's range for `field` (`PlanStep`:
+    one source of truth for the command line and the mission file), before any work."""
+    from drake_auv.mission.steps.plan import PlanStep
+    from drake_auv.params import checks
+
+    for option, value, field in options:
+        check = checks(PlanStep)[field]
+        what = check.problem(value)
+        if what is not None:
+            raise ValueError(f"{option} {value:g} {what}; allowed: {check.allowed()}")
+
 
 def add_recording_options(parser, playback_speed: float, realtime: bool = True) -> None:
     """The options every simulating command shares: the recording's playback speed,

@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from drake_auv.commands import whole_number
 from drake_auv.output_files import write_json
 
 CAMPAIGN_FILE = "campaign.json"
@@ -46,7 +47,7 @@ def add_runs_options(parser, rows: str) -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=[],
                         metavar="KEY=VALUE", help="a fixed override for every run (repeatable)")
     where = parser.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, default=None,
+    where.add_argument("--workers", type=whole_number, default=None,
                        help="local worker processes (default: this machine's cores)")
     where.add_argument("--scheduler", default=None,
                        help="address of a running Dask scheduler, e.g. tcp://HOST:8786")

@@ -14,6 +14,7 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+from drake_auv.commands import whole_number
 from drake_auv.commands.campaign import add_runs_options
 
 OUTPUTS = ("campaign.json", "envelope.csv", "envelope.png", "envelope.md", "envelope.json",
@@ -32,7 +33,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("mission", help="a mission YAML file or a built-in mission's name")
     parser.add_argument("--speeds", required=True, metavar="A:B:STEP",
                         help="mean current speeds A, A+STEP, ..., B in m/s (within [0, 5])")
-    parser.add_argument("--directions", required=True, type=int, metavar="N",
+    parser.add_argument("--directions", required=True, type=whole_number, metavar="N",
                         help="N directions the current flows towards, evenly spaced "
                              "clockwise from north (towards 0, 360/N, ... deg)")
     parser.add_argument("--seeds", required=True,

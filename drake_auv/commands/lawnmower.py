@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_auv.commands import add_recording_options
+from drake_auv.commands import add_recording_options, check_plan_options, whole_number
 
 DEFAULT_OUT = "out/lawnmower"
 
@@ -30,9 +30,24 @@ def first_turn_index(path, angle_deg: float = 45.0) -> int:
     return int(np.argmax(turned)) if turned.any() else len(path) - 1
 
 
+MAX_RELIEF_M = 40.0  # m: the synthetic seabed lies 50 m deep, its top at most 10 m deep
+
+
+def check_options(args) -> None:
+    """ValueError naming the option and its range, before any work: the altitude, aperture,
+    overlap and speed in the mission plan step's ranges, the relief in [0, MAX_RELIEF_M] m."""
+    check_plan_options([("--altitude", args.altitude, "omega"),
+                        ("--aperture-deg", args.aperture_deg, "aperture_deg"),
+                        ("--overlap", args.overlap, "overlap"), ("--speed", args.speed, "speed")])
+    if not 0.0 <= args.relief <= MAX_RELIEF_M:
+        raise ValueError(f"--relief {args.relief:g} is out of range; allowed: [0, "
+                         f"{MAX_RELIEF_M:g}] m (the seabed lies 50 m deep)")
+
+
 def run(args) -> int:
     from pathlib import Path as FilePath
 
+    from drake_auv.commands.outputs import MiB, output_folder
     from drake_auv.commands.simulate import fly_path, report
     from drake_auv.planning.lawnmower import lane_spacing, plan_lawnmower
     from drake_auv.terrain.synthetic import random_seabed
@@ -41,6 +56,8 @@ def run(args) -> int:
     width, length = args.extent
     if not (5.0 <= width <= 2000.0 and 5.0 <= length <= 2000.0):
         raise ValueError(f"--extent must be two sizes in [5, 2000] m, got {args.extent}")
+    check_options(args)
+    output_folder(args.out, "-o", 20 * MiB)  # mission.html, tracking_error.png, the CSVs
     cell = 1.0
     shape = (int(round(length / cell)) + 1, int(round(width / cell)) + 1)
     seabed = random_seabed(seed=args.seed, shape=shape, cell=cell, relief=args.relief)
@@ -72,18 +89,19 @@ def add_parser(subparsers) -> None:
                     "recording) and tracking_error.png.")
     parser.add_argument("-o", "--out", default=DEFAULT_OUT,
                         help=f"output folder (default {DEFAULT_OUT})")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic seabed")
-    parser.add_argument("--speed", type=float, default=0.5, help="survey speed, m/s (default 0.5)")
+    parser.add_argument("--seed", type=whole_number, default=0, help="seed of the synthetic seabed")
+    parser.add_argument("--speed", type=float, default=0.5, help="survey speed, m/s, in [0.05, 1.4] (default 0.5)")
     parser.add_argument("--extent", type=float, nargs=2, default=(50.0, 30.0),
                         metavar=("WIDTH", "LENGTH"),
                         help="seabed size along x and y, m (default 50 30)")
     parser.add_argument("--altitude", type=float, default=5.0,
-                        help="survey altitude Omega above the seabed, m (default 5: 5.2 m lanes)")
+                        help="survey altitude Omega above the seabed, m, in [0.5, 100] (default 5: "
+                             "5.2 m lanes)")
     parser.add_argument("--aperture-deg", type=float, default=60.0,
-                        help="down-looking sensor aperture, degrees (default 60)")
+                        help="down-looking sensor aperture, degrees in [5, 170] (default 60)")
     parser.add_argument("--overlap", type=float, default=0.1,
-                        help="lane overlap fraction (default 0.1)")
+                        help="lane overlap fraction, in [0, 0.9] (default 0.1)")
     parser.add_argument("--relief", type=float, default=4.0,
-                        help="seabed relief peak to peak, m (default 4)")
+                        help="seabed relief peak to peak, m, in [0, 40] (default 4)")
     add_recording_options(parser, playback_speed=10.0)
     parser.set_defaults(func=run)

@@ -1,9 +1,9 @@
 """Output locations checked before any work.
 
-`drake-auv run`, `plan` and `reconstruct` call `output_folder` / `output_file` at the top of
-their `run`, so a file in the way, a folder that cannot be created or written, or a disk
-without room ends the command with one line (a ValueError naming the option and the path)
-before a dive is flown, a plan computed or a surface built. The check writes and removes one
+`drake-auv run`, `plan`, `reconstruct`, `replay`, `simulate` and `lawnmower` call
+`output_folder` / `output_file` before their work, so a file in the way, a folder that cannot
+be created or written, or a disk without room ends the command with one line (a ValueError
+naming the option and the path) before a dive is flown, a plan computed or a surface built. The check writes and removes one
 empty probe file, so it sees what the process can really do (read-only mounts, permissions,
 root included); nothing already in the folder is touched.
 """

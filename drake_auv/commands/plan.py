@@ -20,6 +20,8 @@ import json
 import sys
 from pathlib import Path as FilePath
 
+from drake_auv.commands import check_plan_options, whole_number
+
 
 def _lonlat(text: str) -> tuple[float, float]:
     try:
@@ -48,14 +50,14 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--slope-threshold", type=float, default=0.5,
                         help="delta_s, slope above which terrain is high-slope, > 0 (default 0.5)")
     parser.add_argument("--aperture", type=float, default=60.0,
-                        help="sensor aperture, degrees in (0, 180) (default 60)")
+                        help="sensor aperture, degrees in [5, 170] (default 60)")
     parser.add_argument("--overlap", type=float, default=0.1,
-                        help="overlap of neighbouring lanes, in [0, 1) (default 0.1)")
+                        help="overlap of neighbouring lanes, in [0, 0.9] (default 0.1)")
     parser.add_argument("--sweep-angle", type=float, default=None,
                         help="lane direction, degrees from +x (default: fewest lanes)")
     parser.add_argument("--slice-spacing", type=float, default=None,
                         help="vertical spacing of the slicing planes, m (default: footprint)")
-    parser.add_argument("--slice-count", type=int, default=None,
+    parser.add_argument("--slice-count", type=whole_number, default=None,
                         help="slicing planes per high-slope region, centred on it (default: "
                              "as many as cover it)")
     parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
@@ -81,8 +83,8 @@ def add_parser(subparsers) -> None:
                         help="COLA2 vehicle configured with heave_in_3D (depth interpolated "
                              "along each section): write the sections it flies that way")
     parser.add_argument("--speed", type=float, default=0.5,
-                        help="mission surge speed, m/s, > 0 (default 0.5)")
-    parser.add_argument("--max-items", type=int, default=700,
+                        help="mission surge speed, m/s, in [0.05, 1.4] (default 0.5)")
+    parser.add_argument("--max-items", type=whole_number, default=700,
                         help="QGC/ArduSub: mission items a board stores per file, home and "
                              "DO_CHANGE_SPEED included, >= 4; longer missions are split into "
                              "mission_1.plan, mission_2.plan, ... (default 700)")
@@ -113,9 +115,13 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
+    import numpy as np
+
     from drake_auv.commands.outputs import MiB, output_folder
 
     output_folder(args.out, "-o", 20 * MiB)  # path.csv, reports, figures, exports
+    check_plan_options([("--aperture", args.aperture, "aperture_deg"),
+                        ("--overlap", args.overlap, "overlap"), ("--speed", args.speed, "speed")])
     from drake_auv.planning.coverage_plan import plan_coverage
     from drake_auv.planning.export import (check_exports, export_warnings, mission_time_line,
                                            parse_exports, table3_markdown, upload_line,
@@ -148,6 +154,10 @@ def run(args) -> int:
         if origin is not None and bathy.crs is not None:
             raise ValueError(f"--origin-lonlat: {args.bathymetry} is georeferenced ({bathy.crs}"
                              "), which places it; the option is for grids without a CRS")
+        no_data = int(np.isnan(bathy.z).sum())
+        if no_data:  # stated, never silent
+            print(f"{args.bathymetry}: {no_data} of {bathy.z.size} cells are no-data (its nodata "
+                  "value, mask or NaN): no-go for coverage")
     check_exports(bathy, exports, origin, args.max_items, args.ardusub_frames)  # before planning
     if args.roi and args.roi_file:
         raise ValueError("give --roi or --roi-file, not both")

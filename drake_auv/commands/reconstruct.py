@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path as FilePath
 
+from drake_auv.commands import whole_number
 from drake_auv.output_files import replacing
 from drake_auv.reconstruction.surface import (DEPTH_RANGE, K_RANGE, OUTLIERS, OUTLIERS_RANGE,
                                               SUPPORT, SUPPORT_RANGE, TRIM_RANGE)
@@ -33,13 +34,13 @@ def add_parser(subparsers) -> None:
     parser.add_argument("points", help="point cloud: .ply (x, y, z; origin_x/y/z, time, source "
                                        "when present), .las or .laz")
     parser.add_argument("-o", "--out", required=True, help="output mesh (.ply, .obj, .stl)")
-    parser.add_argument("--depth", type=int, default=9,
+    parser.add_argument("--depth", type=whole_number, default=9,
                         help=f"Poisson octree depth, {DEPTH_RANGE[0]} to {DEPTH_RANGE[1]} "
                              "(default 9)")
     parser.add_argument("--trim", type=float, default=0.05,
                         help=f"share of the lowest-density vertices removed, in "
                              f"[{TRIM_RANGE[0]:g}, {TRIM_RANGE[1]:g}) (default 0.05)")
-    parser.add_argument("--k", type=int, default=200,
+    parser.add_argument("--k", type=whole_number, default=200,
                         help=f"neighbours per normal, {K_RANGE[0]} to {K_RANGE[1]} (default 200, "
                              "as the reference)")
     parser.add_argument("--support", type=float, default=SUPPORT,
@@ -78,7 +79,8 @@ def run(args) -> int:
     from drake_auv.reconstruction.figures import colour_scale
     from drake_auv.reconstruction.products import SUPPORT_LABEL, error_colours
     from drake_auv.reconstruction.scoring import score
-    from drake_auv.reconstruction.surface import check_parameters, load_open3d, reconstruct
+    from drake_auv.reconstruction.surface import (check_parameters, check_spread, load_open3d,
+                                                  reconstruct)
 
     output_file(args.out, "-o", MESH_SUFFIXES, 100 * MiB)  # the demo's depth-9 mesh: 52 MB
     if args.figure:
@@ -94,7 +96,11 @@ def run(args) -> int:
     world = load_mesh(FilePath(args.world), "--world", "reconstruct") if args.world else None
     if args.crop is not None:
         cloud = cloud.crop(*target.bounds, args.crop)
-    check_parameters(len(cloud), args.depth, args.k, args.trim)
+    try:  # what the cloud itself allows, named by its file
+        check_parameters(len(cloud), args.depth, args.k, args.trim)
+        check_spread(cloud.points)
+    except ValueError as err:
+        raise ValueError(f"{args.points}: {err}") from None
     load_open3d()  # its real import error, before any work
     surface = reconstruct(cloud, depth=args.depth, trim=args.trim, k=args.k,
                           support=args.support, progress=not args.quiet,

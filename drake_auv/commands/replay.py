@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from pathlib import Path as FilePath
 
+from drake_auv.commands import whole_number
+
 
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -37,7 +39,7 @@ def add_parser(subparsers) -> None:
                                          "completeness and coverage")
     parser.add_argument("--voxel", type=float, default=None,
                         help="octree voxel, m, in (0.01, 10] (default: the log's, else 0.5)")
-    parser.add_argument("--multibeam-stride", type=int, default=None,
+    parser.add_argument("--multibeam-stride", type=whole_number, default=None,
                         help="map every n-th multibeam beam (default: the log's, else 1)")
     parser.add_argument("--max-range", type=float, default=None,
                         help="the sonars' range, m (default: the log's, a LaserScan's "

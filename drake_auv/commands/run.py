@@ -16,7 +16,7 @@ import math
 import time
 from pathlib import Path as FilePath
 
-from drake_auv.commands import add_recording_options
+from drake_auv.commands import add_recording_options, whole_number
 from drake_auv.commands.outputs import MiB, output_folder
 from drake_auv.mission.config import builtin_missions
 
@@ -39,7 +39,7 @@ def add_parser(subparsers) -> None:
 def add_mission_options(parser) -> None:
     """`--seed`, `--set`, `--meshcat`, `--realtime` and `--mcap`, shared with `drake-auv
     demo`."""
-    parser.add_argument("--seed", type=int, default=None,
+    parser.add_argument("--seed", type=whole_number, default=None,
                         help="seed of the prior-map error, navigation drift, sonar noise and "
                              "STOMP (default: the file's)")
     parser.add_argument("--set", dest="overrides", action="append", default=[],
@@ -53,7 +53,7 @@ def add_mission_options(parser) -> None:
     parser.add_argument("--realtime", type=float, default=None, metavar="R",
                         help="with --meshcat, fly at R times real time (default 1; 0 = as fast "
                              "as possible)")
-    parser.add_argument("--meshcat-port", type=int, default=None, metavar="PORT",
+    parser.add_argument("--meshcat-port", type=whole_number, default=None, metavar="PORT",
                         help="with --meshcat, serve the live view on this port of localhost "
                              f"({MESHCAT_PORTS[0]}-{MESHCAT_PORTS[1]}; default: the first free "
                              "one from 7000)")

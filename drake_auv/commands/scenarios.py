@@ -12,6 +12,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
+from drake_auv.commands import whole_number
 from drake_auv.output_files import open_replacing, replacing
 
 
@@ -24,7 +25,7 @@ def add_parser(subparsers) -> None:
                              "GeoTIFF is re-based to its corner when read back")
     parser.add_argument("--error", type=float, default=0.0,
                         help="horizontal prior-map error, m, in [0, 5] (default 0)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the error's direction")
+    parser.add_argument("--seed", type=whole_number, default=0, help="seed of the error's direction")
     parser.add_argument("--world", metavar="FILE",
                         help="write the true world mesh (.ply, .stl, .obj, .glb)")
     parser.set_defaults(func=run)

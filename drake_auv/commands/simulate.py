@@ -13,7 +13,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
-from drake_auv.commands import add_recording_options
+from drake_auv.commands import add_recording_options, whole_number
 from drake_auv.output_files import replacing
 from drake_auv.signals import Reference, VehicleState
 
@@ -185,12 +185,14 @@ def report(result: FlightResult, out_dir) -> None:
 
 
 def run(args) -> int:
+    from drake_auv.commands.outputs import MiB, output_folder
     from drake_auv.vehicle.navigation import NavigationParams
     from drake_auv.planning.path import Path
     from drake_auv.visualization import Scene
 
     path = Path.from_csv(args.path_csv)
     check_below_surface(path, args.path_csv, first_row=2)  # row 1: the header
+    output_folder(args.out, "-o", 20 * MiB)  # mission.html, tracking_error.png, state.csv
     navigation = NavigationParams(heading_bias=np.radians(args.heading_bias_deg),
                                   random_walk=args.random_walk, seed=args.seed)
     scene = None if args.no_html else Scene()
@@ -213,6 +215,6 @@ def add_parser(subparsers) -> None:
                         help="compass bias of the dead-reckoning navigation, degrees (default 0)")
     parser.add_argument("--random-walk", type=float, default=0.0,
                         help="navigation drift random walk, m per sqrt(m travelled) (default 0)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the navigation noise")
+    parser.add_argument("--seed", type=whole_number, default=0, help="seed of the navigation noise")
     add_recording_options(parser, playback_speed=10.0)
     parser.set_defaults(func=run)

@@ -189,11 +189,14 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     nogo = None
     if no_go is not None:
         bathy, nogo = _apply_no_go(bathy, no_go, omega)
-    bar = tqdm(total=6, desc="plan", disable=not progress, leave=False)
     labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
-    bar.update()
     surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0))
     spacing = lane_spacing(omega, aperture_deg, overlap) / (1.0 if survey is None else survey.coverage)
+    # every high-slope region's slicing planes, refused (too many) before any route is built
+    levels = {r: slice_levels(surface, labels.regions == r, labels.slope, spacing,
+                              slice_spacing, slice_count)
+              for r in range(1, labels.n_regions + 1)}
+    bar = tqdm(total=6, initial=1, desc="plan", disable=not progress, leave=False)
     planar = labels.planar
     if planar.any():
         angle = (best_sweep_angle(bathy, planar, spacing) if sweep_angle_deg is None
@@ -234,9 +237,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         r = node - n_cells + 1
         visit.append(("region", r))
         mask = labels.regions == r
-        levels = slice_levels(surface, mask, labels.slope, spacing, slice_spacing, slice_count)
         depression = fixed_depression(labels.slope[mask]) if slice_sensor == "fixed-tilt" else None
-        per_level = slice_region(surface, mask, r, levels, omega, ds, min_length=spacing,
+        per_level = slice_region(surface, mask, r, levels[r], omega, ds, min_length=spacing,
                                  depression=depression)
         start = here if here is not None else np.append(positions[node], surface.z[mask].min())
         for c in order_contours(per_level, start):

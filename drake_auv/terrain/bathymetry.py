@@ -13,6 +13,28 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
+# m: the Earth's elevations, from below its deepest trench to above its highest peak
+ELEVATION_RANGE_M = (-11_500.0, 9_000.0)
+
+
+def elevation_problem(z: np.ndarray, of: str = "") -> str | None:
+    """None when every cell of `z` is NaN (no-data) or a finite elevation in ELEVATION_RANGE_M;
+    else one line naming the bad cells, the first one's value and (row, column) `of` the grid,
+    and the allowed range. An undeclared no-data value (-1e30, -3.4e38) lands here instead of
+    being planned on as a seabed."""
+    lo, hi = ELEVATION_RANGE_M
+    with np.errstate(invalid="ignore"):
+        infinite, outside = np.isinf(z), (z < lo) | (z > hi)
+    bad = infinite if infinite.any() else outside
+    if not bad.any():
+        return None
+    i, j = np.argwhere(bad)[0]
+    what = "infinite cell(s)" if infinite.any() else f"cell(s) outside [{lo:g}, {hi:g}] m"
+    return (f"{int(bad.sum())} {what} (first {z[i, j]:g} at row {i}, column {j}{of}); "
+            f"elevations must be finite metres in [{lo:g}, {hi:g}] (z up), no-data cells NaN "
+            "or the file's nodata value")
+
+
 @dataclass(frozen=True)
 class Bathymetry:
     """Elevation grid in metres, NaN for no-data.
@@ -38,11 +60,9 @@ class Bathymetry:
             raise ValueError(f"Bathymetry.z must be a 2D grid, got shape {z.shape}")
         if z.shape[0] < 3 or z.shape[1] < 3:
             raise ValueError(f"Bathymetry grid must be at least 3 x 3 cells, got {z.shape}")
-        if np.isinf(z).any():
-            i, j = np.argwhere(np.isinf(z))[0]
-            raise ValueError(f"Bathymetry.z holds {int(np.isinf(z).sum())} infinite value(s) "
-                             f"(first {z[i, j]} at row {i}, column {j}); elevations must be "
-                             "finite metres, NaN for no-data")
+        problem = elevation_problem(z)
+        if problem is not None:
+            raise ValueError(f"Bathymetry.z holds {problem}")
         if np.isnan(z).all():
             raise ValueError("Bathymetry.z is all no-data (NaN)")
         spacing = tuple(float(s) for s in self.spacing)

@@ -20,7 +20,7 @@ import numpy as np
 
 from drake_auv.output_files import replacing
 from drake_auv.resources import check_memory
-from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.bathymetry import Bathymetry, elevation_problem
 
 _EARTH_RADIUS = 6378137.0  # WGS 84 semi-major axis, m (the sphere of Pseudo-Mercator)
 _MERCATOR_EPSG = {3857, 3395, 900913, 3785, 54004}
@@ -125,11 +125,9 @@ def _read_raster(path: FilePath) -> Bathymetry:
     except RasterioIOError as err:
         raise ValueError(f"{path}: not a raster GDAL can read ({err})") from None
     z = np.ma.filled(band, np.nan)
-    if np.isinf(z).any():  # refused as `Bathymetry` refuses it, not read as no-data
-        i, j = np.argwhere(np.isinf(z))[0]
-        raise ValueError(f"{path}: {int(np.isinf(z).sum())} infinite cell(s) (first {z[i, j]} "
-                         f"at row {i}, column {j} of the file); elevations must be finite "
-                         "metres, no-data cells the file's nodata value or NaN")
+    problem = elevation_problem(z, " of the file")  # as `Bathymetry` does, in the file's rows
+    if problem is not None:
+        raise ValueError(f"{path}: {problem}")
     ny, nx = z.shape
     a, b, c, d, e, f = transform.a, transform.b, transform.c, transform.d, transform.e, transform.f
     jac = np.array([[a, b], [d, e]])  # map units per (column, row) step
