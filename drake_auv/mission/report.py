@@ -39,6 +39,8 @@ from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.ocean_summary import ocean_markdown, ocean_summary
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
 from drake_auv.output_files import open_replacing, replacing, write_json, write_text
+from drake_auv.planning.figures import fig_path3d
+from drake_auv.progress import RunProgress
 from drake_auv.reconstruction.products import products_markdown, write_products
 from drake_auv.signals import ReplanningStep, VehicleState, Water
 
@@ -465,43 +467,54 @@ def peak_rss_mb() -> float:
 
 
 def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float | None = None,
-                  finish=None) -> dict:
+                  finish=None, progress: RunProgress | None = None) -> dict:
     """Writes report.json, report.md, coverage.png, coverage_vs_time.png, distance.png, plan.png
-    (coverage plans),
-    trajectory.csv, diagram.dot and the data products (points.ply; reconstruction.ply and .png
-    with Open3D, `reconstruction.products`) into `outdir`; returns the summary.
+    (coverage plans), trajectory.csv, diagram.dot and the data products (points.ply;
+    reconstruction.ply and .png with Open3D, `reconstruction.products`) into `outdir`; returns
+    the summary.
 
     `finish(outdir)` (the Meshcat recording, which reads the products) runs after the other
     files and before the report, so that `timing.outputs_s` counts it; `setup_s` is the
-    caller's wall time before the simulation (see the module for the `timing` keys)."""
+    caller's wall time before the simulation (see the module for the `timing` keys).
+    `progress`: the run's display, whose `outputs` phase this runs, a step per file (or group
+    of files) written."""
     start = time.perf_counter()
     out = FilePath(outdir)
     out.mkdir(parents=True, exist_ok=True)
-    summary = summarise(result)
+    names = ["coverage.png", "distance.png", "coverage_vs_time.png",
+             *(["plan.png"] if result.plan.coverage is not None else [])]
+    files = [*names, "trajectory.csv", "diagram.dot", *(["mission.html"] if finish else [])]
+    progress = progress if progress is not None else RunProgress.off()
+    progress.start("outputs", total=len(files) + 3 + result.spec.outputs.reconstruction,
+                   note="summary")
+    with progress.step("summary"):
+        summary = summarise(result)
     products = time.perf_counter()
     summary["reconstruction"] = _rounded(write_products(
-        result, out, dpi, surface=result.spec.outputs.reconstruction))
+        result, out, dpi, surface=result.spec.outputs.reconstruction, progress=progress))
     reconstruction_s = time.perf_counter() - products
-    figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result),
-               "coverage_vs_time.png": fig_coverage_vs_time(result, summary["coverage_vs_time"])}
-    if result.plan.coverage is not None:
-        from drake_auv.planning.figures import fig_path3d
-
-        figures["plan.png"] = fig_path3d(result.plan.coverage)
-    for name, fig in figures.items():
-        with replacing(out / name) as temporary:
-            fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
-    write_trajectory(result, out / "trajectory.csv")
-    write_text(out / "diagram.dot", result.diagram_dot)
-    files = [*figures, "trajectory.csv", "diagram.dot"]
+    makers = {"coverage.png": lambda: fig_coverage(result),
+              "distance.png": lambda: fig_distance(result),
+              "coverage_vs_time.png": lambda: fig_coverage_vs_time(
+                  result, summary["coverage_vs_time"]),
+              "plan.png": lambda: fig_path3d(result.plan.coverage)}
+    for name in names:
+        with progress.step(name), replacing(out / name) as temporary:
+            makers[name]().savefig(temporary, dpi=dpi, bbox_inches="tight")
+    with progress.step("trajectory.csv"):
+        write_trajectory(result, out / "trajectory.csv")
+    with progress.step("diagram.dot"):
+        write_text(out / "diagram.dot", result.diagram_dot)
     if finish is not None:
-        finish(out)
-        files.append("mission.html")
-    outputs_s = time.perf_counter() - start
-    summary["timing"].update(_rounded(dict(
-        setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
-        total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
-    write_json(out / "report.json", summary)
-    write_text(out / "report.md",
-               report_markdown(summary, files) + products_markdown(summary["reconstruction"]))
+        with progress.step("mission.html"):
+            finish(out)
+    with progress.step("report"):
+        outputs_s = time.perf_counter() - start
+        summary["timing"].update(_rounded(dict(
+            setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
+            total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
+        write_json(out / "report.json", summary)
+        write_text(out / "report.md",
+                   report_markdown(summary, files) + products_markdown(summary["reconstruction"]))
+    progress.finish(note=f"written to {out}")
     return summary

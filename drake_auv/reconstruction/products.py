@@ -25,6 +25,7 @@ import trimesh
 
 from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.output_files import replacing
+from drake_auv.progress import RunProgress
 from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply_chunks
 from drake_auv.reconstruction.scoring import score
 from drake_auv.reconstruction.surface import (OUTLIERS, SUPPORT, Reconstruction,
@@ -103,17 +104,28 @@ def error_colours(errors: np.ndarray, vmax: float) -> np.ndarray:
     return colormaps["inferno"](np.clip(np.asarray(errors) / vmax, 0.0, 1.0))
 
 
-def write_products(result, outdir, dpi: int = 110, surface: bool = True) -> dict:
+def write_products(result, outdir, dpi: int = 110, surface: bool = True,
+                   progress: RunProgress | None = None) -> dict:
     """Writes points.ply and, when a surface was built, reconstruction.ply and
     reconstruction.png into `outdir`; returns the report's `reconstruction` section (with
-    `built` False and the `reason` when none was). `surface` False: points.ply alone."""
-    from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
-
+    `built` False and the `reason` when none was). `surface` False: points.ply alone.
+    `progress`: the run's display, one step for the points and (with `surface`) one for the
+    reconstruction."""
+    progress = progress if progress is not None else RunProgress.off()
     out = FilePath(outdir)
-    write_points(result, out / "points.ply")
+    with progress.step("points.ply"):
+        write_points(result, out / "points.ply")
     if not surface:
         return dict(built=False, reason="switched off (outputs.reconstruction: false, "
                                         "--no-reconstruction)")
+    with progress.step("reconstruction"):
+        return _write_surface(result, out, dpi)
+
+
+def _write_surface(result, out: FilePath, dpi: int) -> dict:
+    """The reconstruction part of `write_products`."""
+    from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
+
     surface = mission_surface(result)
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
         if open3d_error() is not None and target_returns(result, dive_cloud(result)) \
