@@ -68,6 +68,8 @@ class MissionSupervisor(LeafSystem):
         if not (np.isfinite(period) and 0 < period <= 5.0):
             raise ValueError(f"MissionSupervisor period must be in (0, 5] s, got {period}")
         self.legs = tuple(legs)
+        # the legs' time budgets summed before each leg, and all of them
+        self._budgets = np.r_[0.0, np.cumsum([leg.max_duration for leg in self.legs])]
         self.behaviour_ports = dict(behaviour_ports)
         self.rules = rules if rules is not None else SafetyRules()
         self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
@@ -257,8 +259,10 @@ class MissionSupervisor(LeafSystem):
 
     def flown_share(self, context, behaviour_share: float | None = None) -> float:
         """How much of the mission is flown, in [0, 1], from this system's `context`: the legs
-        ended and the flying leg's share (`legs.leg_share`; `behaviour_share`: its behaviour's
-        own, used while its status reports this leg), over the number of legs; 1 once done."""
+        ended and the flying leg's share of it (`legs.leg_share`; `behaviour_share`: its
+        behaviour's own, used while its status reports this leg), each leg weighing its time
+        budget (which is its nominal duration times `limits.time_margin`, plus a slack); 1
+        once done."""
         leg = self.flying(context)
         if leg is None:
             return 1.0
@@ -270,7 +274,7 @@ class MissionSupervisor(LeafSystem):
                           self.state_input.Eval(context),
                           context.get_discrete_state(self._progress).get_value(),
                           behaviour_share)
-        return (index + share) / len(self.legs)
+        return (self._budgets[index] + share * leg.max_duration) / self._budgets[-1]
 
     def outcomes(self, context) -> list[str]:
         """Per leg, how it ended (`OUTCOMES`), from this system's `context`."""
