@@ -269,7 +269,7 @@ def _distance_line(d: dict) -> str:
     parts = [] if d["mean_m"] is None else [
         f"over {d['samples']} survey samples{near}: mean {d['mean_m']:.2f} m, sd "
         f"{d['sd_m']:.2f} m"]
-    line = "- True distance to the target " + "; ".join(
+    line = "- True distance to the target: " + "; ".join(
         parts + [f"minimum over the dive {d['min_m']:.2f} m"]) + "."
     if d["map_mean_m"] is not None:
         line += f" Against the on-line map: mean {d['map_mean_m']:.2f} m, sd {d['map_sd_m']:.2f} m."
