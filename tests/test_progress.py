@@ -151,4 +151,4 @@ def test_a_run_shows_its_phases_and_its_report_names_only_files_it_wrote(tmp_pat
     assert {"coverage.png", "trajectory.csv", "points.ply"} <= named
     assert "plan.png" not in named
     assert all((out / name).stat().st_size > 0 for name in named), sorted(named)
-    assert "n/a" not in text
+    assert "n/a" not in text and "- Exploration (next views by gain): " in text

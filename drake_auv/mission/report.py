@@ -276,6 +276,18 @@ def _distance_line(d: dict) -> str:
     return line
 
 
+def exploration_markdown(section: dict | None) -> list[str]:
+    """The report's line on an exploration (`exploration_summary`); none without one."""
+    if section is None:
+        return []
+    stopped = ("nothing more worth seeing" if section["stopped"] == "gain"
+               else "its time ran out")
+    return [f"- Exploration (next views by {section['strategy']}): "
+            f"{section['viewpoints']} viewpoints; the planner believed "
+            f"{100 * section['believed_coverage']:.1f} % of the mapped surface covered when "
+            f"it stopped ({stopped})."]
+
+
 def report_markdown(summary: dict, files=()) -> str:
     """The report as Markdown; `files`: the names of the files written beside it, listed at the
     end. Quantities that do not apply (no survey sample, nothing seen) are left out."""
@@ -327,6 +339,7 @@ def report_markdown(summary: dict, files=()) -> str:
               f"of the water): {summary['min_clearance_m']:.2f} m: "
               + ("**contact**." if summary["contact"] else "no contact.")
               + f" Largest navigation error: {summary['navigation_error_max_m']:.2f} m.",
+              *exploration_markdown(summary.get("exploration")),
               *ocean_markdown(summary.get("ocean")),
               "", "## Timing (wall clock: varies with the machine and its load)", ""]
     t = summary["timing"]
@@ -515,6 +528,7 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
             total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
         write_json(out / "report.json", summary)
         write_text(out / "report.md",
-                   report_markdown(summary, files) + products_markdown(summary["reconstruction"]))
+                   report_markdown(summary, files) + "\n"
+                   + products_markdown(summary["reconstruction"]))
     progress.finish(note=f"written to {out}")
     return summary
