@@ -1,9 +1,9 @@
 """One progress display for a whole run: its phases in order, each from 0 to 100 %.
 
-`RunProgress(RUN_PHASES)` (setup, dive, outputs) draws `[2/3] dive  61 % t = 523 s` on standard
-error. On a terminal it is one line rewritten in place (at most every `REDRAW_S`); elsewhere
-(a CI log, a pipe) a line at each phase's start, at every `LOG_STEP` of it and at its end, so a
-log stays short; disabled (`--quiet`), it prints nothing. A phase's share only grows: an
+`RunProgress(RUN_PHASES)` (setup, dive, results, outputs) draws `[2/4] dive  61 % t = 523 s`
+on standard error. On a terminal it is one line rewritten in place (at most every
+`REDRAW_S`); elsewhere (a CI log, a pipe) a line at each phase's start, at every `LOG_STEP` of
+it and at its end, so a log stays short; disabled (`--quiet`), it prints nothing. A phase's share only grows: an
 estimate that falls back is held. Starting the next phase, or `close`, ends the current one at
 100 %, so the display reaches 100 % exactly when the work ends.
 """
@@ -16,7 +16,8 @@ from contextlib import contextmanager
 
 REDRAW_S = 0.1  # s of wall time between two redraws of the terminal's line
 LOG_STEP = 0.1  # share of a phase between two lines of a log
-RUN_PHASES = ("setup", "dive", "outputs")  # a mission run's (`drake-auv run`)
+# a mission run's (`drake-auv run`): load and plan, fly, read the dive back, write the files
+RUN_PHASES = ("setup", "dive", "results", "outputs")
 HELD = 0.999  # the most a phase shows before it ends (drawn as 99 %)
 
 

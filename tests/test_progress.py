@@ -17,12 +17,12 @@ from drake_auv.mission.runner import dive_share
 from drake_auv.mission.site import load_site
 from drake_auv.progress import RUN_PHASES, RunProgress
 
-LINE = re.compile(r"^\[(\d)/3\] (\w+) +(\d+) %")
+LINE = re.compile(r"^\[(\d)/(\d)\] (\w+) +(\d+) %")
 
 
 def shown(text: str) -> list[tuple[str, int]]:
     """(phase, percent) of each line of a log's display."""
-    return [(m[2], int(m[3])) for m in map(LINE.match, text.splitlines()) if m]
+    return [(m[3], int(m[4])) for m in map(LINE.match, text.splitlines()) if m]
 
 
 def test_a_log_shows_each_phase_in_order_monotone_and_ending_at_100():
@@ -39,6 +39,8 @@ def test_a_log_shows_each_phase_in_order_monotone_and_ending_at_100():
         display.update(done)
     display.update(0.2)  # an estimate that falls back is held
     assert display.share == pytest.approx(0.999)
+    display.start("results")
+    display.update(0.5)
     display.start("outputs", total=3)
     for name in ("points.ply", "figures", "report"):
         with display.step(name):
@@ -132,7 +134,7 @@ def test_the_dive_share_follows_the_legs_not_their_budgets(tmp_path):
 
 def test_a_run_shows_its_phases_and_its_report_names_only_files_it_wrote(tmp_path, capsys):
     """A capped exploration (no off-line plan, so no plan.png): the log's display goes
-    setup, dive, outputs, ending at 100 %; every file report.md names exists."""
+    setup, dive, results, outputs, each ending at 100 %; every file report.md names exists."""
     out = tmp_path / "explore"
     assert main(["run", "boulder_explore", "-o", str(out), "--no-html",
                  "--set", "limits.max_time_s=20"]) == 0
@@ -145,10 +147,10 @@ def test_a_run_shows_its_phases_and_its_report_names_only_files_it_wrote(tmp_pat
         percents = [v for p, v in lines if p == phase]
         assert percents == sorted(percents) and percents[-1] == 100
     assert lines[-1] == ("outputs", 100) and err.rstrip().splitlines()[-1].startswith(
-        "[3/3] outputs 100 %")
+        "[4/4] outputs 100 %")
     text = (out / "report.md").read_text()
     named = set(re.findall(r"`([\w.-]+\.(?:png|ply|csv|dot|html|json|md|mcap|bt))`", text))
     assert {"coverage.png", "trajectory.csv", "points.ply"} <= named
-    assert "plan.png" not in named
+    assert "plan.png" not in named and not (out / "plan.png").exists()
     assert all((out / name).stat().st_size > 0 for name in named), sorted(named)
     assert "n/a" not in text and "- Exploration (next views by gain): " in text

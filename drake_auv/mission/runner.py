@@ -163,10 +163,10 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
     an `rosio.McapLog` the dive is written into (closed, into place, when the dive ends).
 
     `progress`: a `RunProgress` in its `setup` phase (this call's last step of it is the
-    Diagram's build; it then runs the `dive` phase and ends it at 100 % when the dive ends),
-    or whether to show one of its own (setup and dive)."""
+    Diagram's build; it then runs the `dive` phase, ended at 100 % when the dive ends, and the
+    `results` phase, reading the dive back), or whether to show one of its own."""
     own = not isinstance(progress, RunProgress)
-    display = RunProgress(("setup", "dive"), enabled=progress) if own else progress
+    display = RunProgress(("setup", "dive", "results"), enabled=progress) if own else progress
     if own:
         display.start("setup", total=1 + (site is None) + (plan is None),
                       note="site" if site is None else "plan" if plan is None else "Diagram")
@@ -203,20 +203,28 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
         wall = time.perf_counter() - wall
         display.finish(note=f"mission {spec.name}, t = {context.get_time():.0f} s")
         completed = status.reason() == SimulatorStatus.ReturnReason.kReachedTerminationCondition
-        logs = {name: spool.read(name, context) for name in handles.logs}
+        display.start("results", total=COLLECT_STEPS + 1, note="logs")
+        with display.step("logs"):
+            logs = {name: spool.read(name, context) for name in handles.logs}
     finally:
         spool.close()
         if mcap is not None:
             mcap.close()
-    result = _collect(spec, site, plan, diagram, handles, context, completed, wall, logs)
+    result = _collect(spec, site, plan, diagram, handles, context, completed, wall, logs,
+                      display)
+    display.finish()
     if own:
         display.close()
     return result
 
 
+COLLECT_STEPS = 3  # the display's steps of `_collect`
+
+
 def _collect(spec, site, plan, diagram, handles: MissionHandles, context, completed: bool,
-             wall: float, logs: dict) -> MissionResult:
-    """`logs`: each of `handles.logs`' samples over the whole dive (`LogSpool.read`)."""
+             wall: float, logs: dict, progress: RunProgress) -> MissionResult:
+    """`logs`: each of `handles.logs`' samples over the whole dive (`LogSpool.read`);
+    `progress`: the display, `COLLECT_STEPS` steps of its phase."""
     times = logs["state"].sample_times()
     state = logs["state"].data().T.copy()
     estimated = logs["estimated_state"].data().T.copy()
@@ -224,35 +232,39 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
     phases, begun, starts = _phases(logs["leg"], plan.legs, end)
     leg_at = begun[np.maximum(np.searchsorted(starts, times, side="right") - 1, 0)]
     position = VehicleState(state).position
-    distance = mesh_distance(site.target_mesh, position)
-    clearance = site.clearance.signed(position)
-    replanning = np.zeros((0, ReplanningStep.size()))
-    if "replanning" in logs:
-        table = logs["replanning"].data().T
-        steps = ReplanningStep(table)
-        # one row per step: the log samples the last step at every period
-        replanning = table[np.r_[True, np.diff(steps.time) != 0] & (steps.planned > 0)]
-    mapper_context = handles.mapper.GetMyContextFromRoot(context)
-    profile = np.full((len(times), Profile.size()), np.nan)
-    if "profile" in logs:
-        profile = logs["profile"].data().T[:len(times)]
-    water = np.zeros((len(times), Water.size()))
-    if "water" in logs:
-        water = logs["water"].data().T[:len(times)].copy()
-    vehicle = handles.vehicle
-    saturation = vehicle.dynamics.thrust_saturation_output.Eval(
-        vehicle.dynamics.GetMyContextFromRoot(context)).copy()
-    current_drift = vehicle.navigation.current_drift_output.Eval(
-        vehicle.navigation.GetMyContextFromRoot(context)).copy()
-    return MissionResult(
-        spec, site, plan, times, state, estimated, distance, clearance, leg_at, phases,
-        handles.supervisor.outcomes(handles.supervisor.GetMyContextFromRoot(context)),
-        handles.camera_coverage.best_angles(handles.camera_coverage.GetMyContextFromRoot(context)),
-        handles.multibeam_coverage.best_angles(
-            handles.multibeam_coverage.GetMyContextFromRoot(context)),
-        replanning, handles.mapper.scan_log(mapper_context),
-        handles.mapper.map_output.Eval(mapper_context), completed, profile,
-        logs["reference"].data().T[:len(times)].copy(), wall,
-        annotate_graphviz(diagram, diagram.GetGraphvizString()),
-        diagram, handles, context, responses_from_log(logs["response"]), water, saturation,
-        current_drift)
+    with progress.step("distance to the target"):
+        distance = mesh_distance(site.target_mesh, position)
+    with progress.step("clearance"):
+        clearance = site.clearance.signed(position)
+    with progress.step("the systems' state"):
+        replanning = np.zeros((0, ReplanningStep.size()))
+        if "replanning" in logs:
+            table = logs["replanning"].data().T
+            steps = ReplanningStep(table)
+            # one row per step: the log samples the last step at every period
+            replanning = table[np.r_[True, np.diff(steps.time) != 0] & (steps.planned > 0)]
+        mapper_context = handles.mapper.GetMyContextFromRoot(context)
+        profile = np.full((len(times), Profile.size()), np.nan)
+        if "profile" in logs:
+            profile = logs["profile"].data().T[:len(times)]
+        water = np.zeros((len(times), Water.size()))
+        if "water" in logs:
+            water = logs["water"].data().T[:len(times)].copy()
+        vehicle = handles.vehicle
+        saturation = vehicle.dynamics.thrust_saturation_output.Eval(
+            vehicle.dynamics.GetMyContextFromRoot(context)).copy()
+        current_drift = vehicle.navigation.current_drift_output.Eval(
+            vehicle.navigation.GetMyContextFromRoot(context)).copy()
+        return MissionResult(
+            spec, site, plan, times, state, estimated, distance, clearance, leg_at, phases,
+            handles.supervisor.outcomes(handles.supervisor.GetMyContextFromRoot(context)),
+            handles.camera_coverage.best_angles(
+                handles.camera_coverage.GetMyContextFromRoot(context)),
+            handles.multibeam_coverage.best_angles(
+                handles.multibeam_coverage.GetMyContextFromRoot(context)),
+            replanning, handles.mapper.scan_log(mapper_context),
+            handles.mapper.map_output.Eval(mapper_context), completed, profile,
+            logs["reference"].data().T[:len(times)].copy(), wall,
+            annotate_graphviz(diagram, diagram.GetGraphvizString()),
+            diagram, handles, context, responses_from_log(logs["response"]), water, saturation,
+            current_drift)
