@@ -7,7 +7,8 @@ sections (`--set replanner.optimizer=none`, `--set sonar_noise=clean`,
 mission flies (the leg, the replanner's section and the reference drawn as they change), paced
 by `--realtime R` (1 = real time, 0 = as fast as possible); the outputs are the same.
 `--mcap` (or the mission key `outputs.mcap`) also writes `dive.mcap`, the dive as ROS 2
-messages (`drake_auv.rosio`, docs/ros.md), as it flies.
+messages (`drake_auv.rosio`, docs/ros.md), as it flies. One display on standard error shows the
+run's phases (`drake_auv.progress`: setup, dive, results, outputs); `--quiet` hides it.
 """
 
 from __future__ import annotations

@@ -212,7 +212,7 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
             mcap.close()
     result = _collect(spec, site, plan, diagram, handles, context, completed, wall, logs,
                       display)
-    display.finish()
+    display.finish(note=f"{len(result.times)} samples")
     if own:
         display.close()
     return result
