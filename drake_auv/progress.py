@@ -3,9 +3,10 @@
 `RunProgress(RUN_PHASES)` (setup, dive, results, outputs) draws `[2/4] dive  61 % t = 523 s`
 on standard error. On a terminal it is one line rewritten in place (at most every
 `REDRAW_S`); elsewhere (a CI log, a pipe) a line at each phase's start, at every `LOG_STEP` of
-it and at its end, so a log stays short; disabled (`--quiet`), it prints nothing. A phase's share only grows: an
-estimate that falls back is held. Starting the next phase, or `close`, ends the current one at
-100 %, so the display reaches 100 % exactly when the work ends.
+it and at its end, so a log stays short; disabled (`--quiet`), it prints nothing. A phase's
+share only grows (an estimate that falls back is held) and stays below 100 % until the phase
+ends: starting the next phase, `finish` or `close` ends it at 100 %, so the display reaches
+100 % exactly when the work ends.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from contextlib import contextmanager
 
 REDRAW_S = 0.1  # s of wall time between two redraws of the terminal's line
 LOG_STEP = 0.1  # share of a phase between two lines of a log
+LOG_POLL_S = 1.0  # s of wall time between two estimates when the display is a log
 # a mission run's (`drake-auv run`): load and plan, fly, read the dive back, write the files
 RUN_PHASES = ("setup", "dive", "results", "outputs")
 HELD = 0.999  # the most a phase shows before it ends (drawn as 99 %)
@@ -69,7 +71,7 @@ class RunProgress:
         """Whether an `update` now would be drawn: a caller whose estimate costs something
         computes it only then."""
         return self.enabled and time.perf_counter() - self._drawn_at >= (
-            REDRAW_S if self.tty else 1.0)
+            REDRAW_S if self.tty else LOG_POLL_S)
 
     def update(self, done: float, note: str | None = None) -> None:
         """The current phase has `done` of its `total` units done (held below 100 % until the
