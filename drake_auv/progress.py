@@ -26,7 +26,7 @@ HELD = 0.999  # the most a phase shows before it ends (drawn as 99 %)
 class RunProgress:
     """The display of a run's `phases` (names, in the order they run) on `stream` (default
     standard error); `enabled` False prints nothing; `tty` None: whether `stream` is a
-    terminal."""
+    terminal. `done`: the units of the current phase done."""
 
     def __init__(self, phases, stream=None, enabled: bool = True, tty: bool | None = None):
         self.phases = tuple(phases)
@@ -39,7 +39,7 @@ class RunProgress:
         self.share = 0.0
         self.note = ""
         self._total = 1.0
-        self._done = 0.0
+        self.done = 0.0
         self._drawn_at = -float("inf")
         self._logged = -1
         self._width = 0
@@ -63,7 +63,7 @@ class RunProgress:
             self.finish()
         if not total > 0:
             raise ValueError(f"a phase's total must be > 0, got {total}")
-        self.phase, self._total, self._done, self.share = phase, float(total), 0.0, 0.0
+        self.phase, self._total, self.done, self.share = phase, float(total), 0.0, 0.0
         self.note, self._logged = note, -1
         self._draw(force=True)
 
@@ -76,15 +76,15 @@ class RunProgress:
     def update(self, done: float, note: str | None = None) -> None:
         """The current phase has `done` of its `total` units done (held below 100 % until the
         phase ends, and never lowered); `note`: what it is doing."""
-        self._done = max(self._done, min(float(done), self._total))
-        self.share = max(self.share, min(self._done / self._total, HELD))
+        self.done = max(self.done, min(float(done), self._total))
+        self.share = max(self.share, min(self.done / self._total, HELD))
         if note is not None:
             self.note = note
         self._draw(force=False)
 
     def advance(self, units: float = 1.0, note: str | None = None) -> None:
         """`units` more of the current phase done."""
-        self.update(self._done + units, note)
+        self.update(self.done + units, note)
 
     @contextmanager
     def step(self, note: str):
@@ -93,8 +93,8 @@ class RunProgress:
         self.note = note
         self._draw(force=True)
         yield
-        self._done = min(self._done + 1.0, self._total)
-        self.share = max(self.share, min(self._done / self._total, HELD))
+        self.done = min(self.done + 1.0, self._total)
+        self.share = max(self.share, min(self.done / self._total, HELD))
         if self.tty:
             self._draw(force=False)
 
@@ -111,7 +111,7 @@ class RunProgress:
     def finish(self, note: str | None = None) -> None:
         """Ends the current phase at 100 % (its work is over); `note`: what it did."""
         if self.phase is not None and self.share < 1.0:
-            self._done, self.share = self._total, 1.0
+            self.done, self.share = self._total, 1.0
             if note is not None:
                 self.note = note
             self._draw(force=True)

@@ -41,7 +41,8 @@ from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
 from drake_auv.output_files import open_replacing, replacing, write_json, write_text
 from drake_auv.planning.figures import fig_path3d
 from drake_auv.progress import RunProgress
-from drake_auv.reconstruction.products import products_markdown, write_products
+from drake_auv.reconstruction.products import (SURFACE_STAGES, products_markdown,
+                                               write_products)
 from drake_auv.signals import ReplanningStep, VehicleState, Water
 
 PHASE_COLOURS = {"transit": "0.45", "follow": "tab:green", "survey": "tab:blue"}
@@ -498,8 +499,8 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
              *(["plan.png"] if result.plan.coverage is not None else [])]
     files = [*names, "trajectory.csv", "diagram.dot", *(["mission.html"] if finish else [])]
     progress = progress if progress is not None else RunProgress.off()
-    progress.start("outputs", total=len(files) + 3 + result.spec.outputs.reconstruction,
-                   note="summary")
+    surface = len(SURFACE_STAGES) + 1 if result.spec.outputs.reconstruction else 0
+    progress.start("outputs", total=len(files) + 3 + surface, note="summary")
     with progress.step("summary"):
         summary = summarise(result)
     products = time.perf_counter()
