@@ -138,7 +138,7 @@ def _write_surface(result, out: FilePath, dpi: int, stage) -> dict:
     from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
 
     surface = mission_surface(result, stage=stage)
-    stage("reconstruction.ply and .png")
+    stage("its files (.ply, .png)")
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
         if open3d_error() is not None and target_returns(result, dive_cloud(result)) \
                 >= MIN_POINTS:
