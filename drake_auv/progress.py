@@ -11,6 +11,7 @@ ends: starting the next phase, `finish` or `close` ends it at 100 %, so the disp
 
 from __future__ import annotations
 
+import shutil
 import sys
 import time
 from contextlib import contextmanager
@@ -116,15 +117,23 @@ class RunProgress:
                 self.note = note
             self._draw(force=True)
 
-    def close(self) -> None:
-        """Ends the current phase at 100 % and the display (the run's work is over)."""
+    def close(self, completed: bool = True) -> None:
+        """Ends the display: the current phase at 100 % when the run's work is over
+        (`completed`), else where it stopped (an error, an interrupt)."""
         if self.phase is None:
             return
-        self.finish()
+        if completed:
+            self.finish()
         if self.enabled and self.tty:
             self.stream.write("\n")
             self.stream.flush()
         self.phase = None
+
+    def __enter__(self) -> RunProgress:
+        return self
+
+    def __exit__(self, kind, error, traceback) -> None:
+        self.close(completed=kind is None)
 
     def text(self) -> str:
         """The display's line: the phase, its number, its share and its note."""
@@ -139,7 +148,7 @@ class RunProgress:
         if self.tty:
             if not (force or self.share >= 1.0 or now - self._drawn_at >= REDRAW_S):
                 return
-            line = self.text()
+            line = self.text()[:shutil.get_terminal_size().columns - 1]  # never wraps
             self.stream.write("\r" + line + " " * max(self._width - len(line), 0))
             self._width = len(line)
         else:

@@ -69,7 +69,17 @@ def test_a_terminal_gets_one_line_redrawn_in_place_and_quiet_gets_nothing():
     display.close()
     text = stream.getvalue()
     assert text.count("\n") == 1 and text.endswith("\n") and "\r" in text
+    display = RunProgress(("dive",), stream=io.StringIO(), tty=True)
+    display.start("dive", note="x" * 1000)  # a line wider than the terminal is cut
+    assert len(display.stream.getvalue()) < 1000
     assert text.rsplit("\r", 1)[1].startswith("[2/2] dive 100 %")
+    stopped = io.StringIO()
+    with pytest.raises(KeyboardInterrupt), RunProgress(("dive",), stream=stopped,
+                                                       tty=True) as display:
+        display.start("dive")
+        display.update(0.4)
+        raise KeyboardInterrupt  # the line ends where the work stopped, not at 100 %
+    assert stopped.getvalue().endswith("\n") and "100 %" not in stopped.getvalue()
     quiet = io.StringIO()
     display = RunProgress(("setup",), stream=quiet, enabled=False)
     display.start("setup")

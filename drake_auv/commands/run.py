@@ -109,49 +109,47 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         _note_missing_reconstruction()
     from drake_auv.progress import RUN_PHASES, RunProgress
 
-    display = RunProgress(RUN_PHASES, enabled=progress)
-    log_file = mcap or spec.outputs.mcap
-    # the site, the modules, the plan, the scene, the MCAP log and run_mission's Diagram
-    display.start("setup", total=4 + bool(html or meshcat) + bool(log_file), note="site")
-    with display.step("site"):
-        site = load_site(spec.site, spec.seed, label=spec.name)
-        check_against_site(spec, site)
-    with display.step("modules"):
-        from drake_auv.mission.plan import plan_mission
-        from drake_auv.mission.recording import finish_recording, prepare_scene
-        from drake_auv.mission.report import write_outputs
-        from drake_auv.mission.runner import run_mission
-    with display.step("plan"):
-        plan = plan_mission(spec, site)
-    scene = None
-    if html or meshcat:
-        from drake_auv.visualization import Scene
+    with RunProgress(RUN_PHASES, enabled=progress) as display:
+        log_file = mcap or spec.outputs.mcap
+        # the site, the modules, the plan, the scene, the MCAP log and run_mission's Diagram
+        display.start("setup", total=4 + bool(html or meshcat) + bool(log_file), note="site")
+        with display.step("site"):
+            site = load_site(spec.site, spec.seed, label=spec.name)
+            check_against_site(spec, site)
+        with display.step("modules"):
+            from drake_auv.mission.plan import plan_mission
+            from drake_auv.mission.recording import finish_recording, prepare_scene
+            from drake_auv.mission.report import write_outputs
+            from drake_auv.mission.runner import run_mission
+        with display.step("plan"):
+            plan = plan_mission(spec, site)
+        scene = None
+        if html or meshcat:
+            from drake_auv.visualization import Scene
 
-        with display.step("scene"):
-            scene = Scene(live=meshcat, port=meshcat_port)
-            if meshcat:
-                display.write(f"live view: {scene.meshcat.web_url()}")
-            prepare_scene(scene, site, plan)
-            if html:
-                scene.start_recording(playback_speed=playback_speed, live=meshcat)
-    log = None
-    if log_file:
-        from drake_auv.rosio.writer import dive_log
+            with display.step("scene"):
+                scene = Scene(live=meshcat, port=meshcat_port)
+                if meshcat:
+                    display.write(f"live view: {scene.meshcat.web_url()}")
+                prepare_scene(scene, site, plan)
+                if html:
+                    scene.start_recording(playback_speed=playback_speed, live=meshcat)
+        log = None
+        if log_file:
+            from drake_auv.rosio.writer import dive_log
 
-        with display.step("dive.mcap"):
-            FilePath(out).mkdir(parents=True, exist_ok=True)
-            log = dive_log(FilePath(out) / "dive.mcap", spec, site)
-    result = run_mission(spec, site, scene=scene, progress=display, plan=plan,
-                         realtime_rate=realtime, mcap=log)
-    setup_s = time.perf_counter() - start - result.wall_s
+            with display.step("dive.mcap"):
+                FilePath(out).mkdir(parents=True, exist_ok=True)
+                log = dive_log(FilePath(out) / "dive.mcap", spec, site)
+        result = run_mission(spec, site, scene=scene, progress=display, plan=plan,
+                             realtime_rate=realtime, mcap=log)
+        setup_s = time.perf_counter() - start - result.wall_s
 
-    def finish(out):
-        finish_recording(result, scene, out / "mission.html")
+        def finish(out):
+            finish_recording(result, scene, out / "mission.html")
 
-    summary = write_outputs(result, FilePath(out), setup_s=setup_s,
-                            finish=finish if html else None, progress=display)
-    display.close()
-    return summary
+        return write_outputs(result, FilePath(out), setup_s=setup_s,
+                             finish=finish if html else None, progress=display)
 
 
 RUN_NEEDS_BYTES = 300 * MiB  # a dive's outputs: the boulder demo writes 135 MB (points.ply 76)
