@@ -105,24 +105,24 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
 
     overrides = [*overrides, *([] if reconstruction else ["outputs.reconstruction=false"])]
     spec = load_mission(mission, seed=seed, overrides=overrides)
+    site = load_site(spec.site, spec.seed, label=spec.name)
+    check_against_site(spec, site)
     if spec.outputs.reconstruction:
         _note_missing_reconstruction()
+    from drake_auv.mission.plan import plan_mission
+    from drake_auv.mission.recording import finish_recording, prepare_scene
+    from drake_auv.mission.report import write_outputs
+    from drake_auv.mission.runner import run_mission
     from drake_auv.progress import RUN_PHASES, RunProgress
 
+    # the plan is the input's last check: the display begins after it, so that bad input
+    # gets its one line alone
+    plan = plan_mission(spec, site)
     with RunProgress(RUN_PHASES, enabled=progress) as display:
         log_file = mcap or spec.outputs.mcap
-        # the site, the modules, the plan, the scene, the MCAP log and run_mission's Diagram
-        display.start("setup", total=4 + bool(html or meshcat) + bool(log_file), note="site")
-        with display.step("site"):
-            site = load_site(spec.site, spec.seed, label=spec.name)
-            check_against_site(spec, site)
-        with display.step("modules"):
-            from drake_auv.mission.plan import plan_mission
-            from drake_auv.mission.recording import finish_recording, prepare_scene
-            from drake_auv.mission.report import write_outputs
-            from drake_auv.mission.runner import run_mission
-        with display.step("plan"):
-            plan = plan_mission(spec, site)
+        # the scene, the MCAP log and run_mission's Diagram
+        display.start("setup", total=1 + bool(html or meshcat) + bool(log_file),
+                      note="scene" if html or meshcat else "Diagram")
         scene = None
         if html or meshcat:
             from drake_auv.visualization import Scene
