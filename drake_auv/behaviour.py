@@ -91,6 +91,16 @@ class Behaviour(LeafSystem):
         """The index of the leg flying (0 with the `leg` input unconnected)."""
         return read_leg(self.leg_input, context)[0]
 
+    progress_is_share = False  # True: the status's progress is the share of the leg done
+
+    def share(self, context) -> float | None:
+        """The share of its current leg done, in [0, 1], from this system's `context`, for a
+        progress display (`MissionSupervisor.flown_share`): its status's progress when that is
+        a share (`progress_is_share`), else None (it cannot tell)."""
+        if not self.progress_is_share:
+            return None
+        return float(BehaviourStatus(self.status_output.Eval(context)).progress)
+
     def DeclareTrajectoryState(self, initial=None):
         """Declares the abstract state holding the timed path (`initial`: a value with a
         `trajectory` attribute, default an empty `TrajectoryHolder`); returns its index."""

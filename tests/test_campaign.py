@@ -215,3 +215,17 @@ def test_without_dask_one_line_naming_the_extra_and_nothing_written(command, tmp
     err = capsys.readouterr().err.strip()
     assert "drake_auv[campaign]" in err and len(err.splitlines()) == 1, err
     assert not out.exists()
+
+
+def test_a_variant_whose_runs_all_failed_shows_dashes_not_n_a():
+    from drake_auv.campaign.summary import summarise_campaign, summary_markdown
+
+    ok = dict(status="ok", contact="False", coverage_multibeam="0.9", coverage_camera="0.5",
+              min_clearance_m="2.5", real_time_factor="40", responses="")
+    rows = [dict(ok, **{"site.prior_error_m": "0"}),
+            dict(status="failed", error="ValueError: x", **{"site.prior_error_m": "5"})]
+    text = summary_markdown(summarise_campaign(rows, ["site.prior_error_m"],
+                                               dict(mission="m", seeds="0")))
+    failed = next(line for line in text.splitlines() if line.startswith("| 5 |"))
+    assert "n/a" not in text and failed.split(" | ")[4:] == ["-"] * 4 + ["0 (0 aborted)", "- |"]
+    assert "| 90.0 [90.0-90.0] | 50.0 [50.0-50.0] | 2.50 [2.50-2.50] (2.50) |" in text

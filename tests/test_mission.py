@@ -235,14 +235,3 @@ def test_a_dive_stopped_before_its_survey_still_reports(tmp_path):
 def listed_files(report_md: str) -> list[str]:
     line = next(x for x in report_md.splitlines() if x.startswith("Files: "))
     return re.findall(r"`([^`]+)`", line)
-
-
-def test_an_exploration_lists_the_files_it_writes(tmp_path):
-    """No off-line plan, no plan.png, and the report does not list one."""
-    out = tmp_path / "explore"
-    assert main(["run", "boulder_explore", "-o", str(out), "--quiet", "--no-html",
-                 "--set", "limits.max_time_s=5"]) == 0
-    files = listed_files((out / "report.md").read_text())
-    assert "plan.png" not in files and "mission.html" not in files
-    assert not (out / "plan.png").exists()
-    assert all((out / name).stat().st_size > 0 for name in files)

@@ -375,11 +375,16 @@ def test_the_figures_colour_scale_is_what_it_scores():
     rng = np.random.default_rng(0)
     truth, support = rng.exponential(0.07, (2, len(mesh.vertices))) * [[1.0], [0.2]]
     fig = fig_reconstruction([("sphere", mesh, truth), ("sphere", mesh, support, SUPPORT_LABEL)])
-    bars = {a._colorbar.ax.get_ylabel(): a._colorbar for a in fig.axes if hasattr(a, "_colorbar")}
+    bars = {a._colorbar.ax.get_ylabel().split("\n")[0]: a._colorbar
+            for a in fig.axes if hasattr(a, "_colorbar")}
     assert set(bars) == {TRUTH_LABEL, SUPPORT_LABEL}
     for label, d in ((TRUTH_LABEL, truth), (SUPPORT_LABEL, support)):
         assert bars[label].norm.vmax == pytest.approx(np.percentile(d, 95))
         assert bars[label].norm.vmax == colour_scale(d) and np.median(d) < 0.3 * colour_scale(d)
+        # the label states the scale
+        assert bars[label].ax.get_ylabel().endswith(
+            f"scale: 0 to its 95th percentile, {colour_scale(d):.2f} m")
     assert colour_scale([np.nan, 0.0]) == 0.01
     one = fig_reconstruction([("sphere", mesh, truth)], vmax=1.0)
-    assert [a._colorbar.norm.vmax for a in one.axes if hasattr(a, "_colorbar")] == [1.0]
+    (bar,) = [a._colorbar for a in one.axes if hasattr(a, "_colorbar")]
+    assert bar.norm.vmax == 1.0 and bar.ax.get_ylabel().endswith("scale: 0 to 1.00 m")

@@ -80,12 +80,13 @@ def summarise_campaign(rows: list[dict], vary_keys, meta: dict) -> dict:
                          for values, group in groups.items()]}
 
 
-def _pct(q: dict | None, key: str) -> str:
-    return "n/a" if q is None else f"{100 * q[key]:.1f}"
-
-
-def _m(q: dict | None, key: str) -> str:
-    return "n/a" if q is None else f"{q[key]:.2f}"
+def _spread(q: dict | None, scale: float, spec: str, least: bool = False) -> str:
+    """A table cell: the median [5th-95th percentile] of quantiles `q` times `scale` (and
+    their minimum with `least`); "-" where no run gave the quantity (every run failed)."""
+    if q is None:
+        return "-"
+    cell = f"{scale * q['p50']:{spec}} [{scale * q['p5']:{spec}}-{scale * q['p95']:{spec}}]"
+    return cell + (f" ({scale * q['p0']:{spec}})" if least else "")
 
 
 def summary_markdown(summary: dict) -> str:
@@ -110,17 +111,16 @@ def summary_markdown(summary: dict) -> str:
                     summary["overall"]))
     for values, s in entries:
         cells = list(values.values())
-        rate = ("n/a" if s["contact_rate"] is None else
+        rate = ("-" if s["contact_rate"] is None else
                 f"{100 * s['contact_rate']:.0f} % ({100 * s['contact_rate_95'][0]:.0f}-"
                 f"{100 * s['contact_rate_95'][1]:.0f} %)")
         cov, cam, clr = s["coverage_multibeam"], s["coverage_camera"], s["min_clearance_m"]
         rtf = s["real_time_factor"]
         cells += [str(s["runs"]), str(s["failed"]), str(s["contacts"]), rate,
-                  f"{_pct(cov, 'p50')} [{_pct(cov, 'p5')}-{_pct(cov, 'p95')}]",
-                  f"{_pct(cam, 'p50')} [{_pct(cam, 'p5')}-{_pct(cam, 'p95')}]",
-                  f"{_m(clr, 'p50')} [{_m(clr, 'p5')}-{_m(clr, 'p95')}] ({_m(clr, 'p0')})",
+                  _spread(cov, 100, ".1f"), _spread(cam, 100, ".1f"),
+                  _spread(clr, 1, ".2f", least=True),
                   f"{s['with_response']} ({s['aborted']} aborted)",
-                  "n/a" if rtf is None else f"{rtf['median']:.0f}x"]
+                  "-" if rtf is None else f"{rtf['median']:.0f}x"]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Plots: `coverage.png` (coverage distribution per variant), `clearance.png` "
               "(minimum-clearance histogram), `variants.png` (per-variant comparison).", ""]

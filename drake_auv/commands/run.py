@@ -7,7 +7,8 @@ sections (`--set replanner.optimizer=none`, `--set sonar_noise=clean`,
 mission flies (the leg, the replanner's section and the reference drawn as they change), paced
 by `--realtime R` (1 = real time, 0 = as fast as possible); the outputs are the same.
 `--mcap` (or the mission key `outputs.mcap`) also writes `dive.mcap`, the dive as ROS 2
-messages (`drake_auv.rosio`, docs/ros.md), as it flies.
+messages (`drake_auv.rosio`, docs/ros.md), as it flies. One display on standard error shows the
+run's phases (`drake_auv.progress`: setup, dive, results, outputs); `--quiet` hides it.
 """
 
 from __future__ import annotations
@@ -112,33 +113,43 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     from drake_auv.mission.recording import finish_recording, prepare_scene
     from drake_auv.mission.report import write_outputs
     from drake_auv.mission.runner import run_mission
+    from drake_auv.progress import RUN_PHASES, RunProgress
 
+    # the plan is the input's last check: the display begins after it, so that bad input
+    # gets its one line alone
     plan = plan_mission(spec, site)
-    scene = None
-    if html or meshcat:
-        from drake_auv.visualization import Scene
+    with RunProgress(RUN_PHASES, enabled=progress) as display:
+        log_file = mcap or spec.outputs.mcap
+        # the scene, the MCAP log and run_mission's Diagram
+        display.start("setup", total=1 + bool(html or meshcat) + bool(log_file),
+                      note="scene" if html or meshcat else "Diagram")
+        scene = None
+        if html or meshcat:
+            from drake_auv.visualization import Scene
 
-        scene = Scene(live=meshcat, port=meshcat_port)
-        if meshcat:
-            print(f"live view: {scene.meshcat.web_url()}", flush=True)
-        prepare_scene(scene, site, plan)
-        if html:
-            scene.start_recording(playback_speed=playback_speed, live=meshcat)
-    log = None
-    if mcap or spec.outputs.mcap:
-        from drake_auv.rosio.writer import dive_log
+            with display.step("scene"):
+                scene = Scene(live=meshcat, port=meshcat_port)
+                if meshcat:
+                    display.write(f"live view: {scene.meshcat.web_url()}")
+                prepare_scene(scene, site, plan)
+                if html:
+                    scene.start_recording(playback_speed=playback_speed, live=meshcat)
+        log = None
+        if log_file:
+            from drake_auv.rosio.writer import dive_log
 
-        FilePath(out).mkdir(parents=True, exist_ok=True)
-        log = dive_log(FilePath(out) / "dive.mcap", spec, site)
-    result = run_mission(spec, site, scene=scene, progress=progress, plan=plan,
-                         realtime_rate=realtime, mcap=log)
-    setup_s = time.perf_counter() - start - result.wall_s
+            with display.step("dive.mcap"):
+                FilePath(out).mkdir(parents=True, exist_ok=True)
+                log = dive_log(FilePath(out) / "dive.mcap", spec, site)
+        result = run_mission(spec, site, scene=scene, progress=display, plan=plan,
+                             realtime_rate=realtime, mcap=log)
+        setup_s = time.perf_counter() - start - result.wall_s
 
-    def finish(out):
-        finish_recording(result, scene, out / "mission.html")
+        def finish(out):
+            finish_recording(result, scene, out / "mission.html")
 
-    return write_outputs(result, FilePath(out), setup_s=setup_s,
-                         finish=finish if html else None)
+        return write_outputs(result, FilePath(out), setup_s=setup_s,
+                             finish=finish if html else None, progress=display)
 
 
 RUN_NEEDS_BYTES = 300 * MiB  # a dive's outputs: the boulder demo writes 135 MB (points.ply 76)

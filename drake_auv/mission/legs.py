@@ -116,3 +116,23 @@ def goal_reached(leg: Leg, index: int, t: float, x: np.ndarray, progress: np.nda
     along = ((state.x - progress.start_x) * leg.direction[0]
              + (state.y - progress.start_y) * leg.direction[1])
     return along >= (leg.distance or 0.0) and (leg.end_depth is None or -state.z <= leg.end_depth)
+
+
+def leg_share(leg: Leg, elapsed_s: float, x: np.ndarray, progress: np.ndarray,
+              behaviour_share: float | None) -> float:
+    """How much of `leg` is flown, in [0, 1], `elapsed_s` s after it began with the vehicle at
+    the estimated state `x` and its progress record `progress` (`LegProgress`): the laps
+    turned or the distance made good for those goals, else its behaviour's own share
+    (`behaviour_share`, None when it cannot tell), else the share of its time budget elapsed
+    (a lower bound: the budget ends the leg at the latest)."""
+    state, record = VehicleState(x), LegProgress(progress)
+    if leg.goal == "loops":
+        share = abs(record.turned) / (2.0 * np.pi * leg.loops)
+    elif leg.goal == "distance" and leg.distance:
+        share = ((state.x - record.start_x) * leg.direction[0]
+                 + (state.y - record.start_y) * leg.direction[1]) / leg.distance
+    elif behaviour_share is not None:
+        share = behaviour_share
+    else:
+        share = elapsed_s / leg.max_duration
+    return float(np.clip(share, 0.0, 1.0))

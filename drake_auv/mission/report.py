@@ -39,7 +39,10 @@ from drake_auv.mission.config import mission_to_dict
 from drake_auv.mission.ocean_summary import ocean_markdown, ocean_summary
 from drake_auv.mission.runner import VEHICLE_RADIUS, MissionResult
 from drake_auv.output_files import open_replacing, replacing, write_json, write_text
-from drake_auv.reconstruction.products import products_markdown, write_products
+from drake_auv.planning.figures import fig_path3d
+from drake_auv.progress import RunProgress
+from drake_auv.reconstruction.products import (SURFACE_STAGES, products_markdown,
+                                               write_products)
 from drake_auv.signals import ReplanningStep, VehicleState, Water
 
 PHASE_COLOURS = {"transit": "0.45", "follow": "tab:green", "survey": "tab:blue"}
@@ -267,11 +270,23 @@ def _distance_line(d: dict) -> str:
     parts = [] if d["mean_m"] is None else [
         f"over {d['samples']} survey samples{near}: mean {d['mean_m']:.2f} m, sd "
         f"{d['sd_m']:.2f} m"]
-    line = "- True distance to the target " + "; ".join(
+    line = "- True distance to the target: " + "; ".join(
         parts + [f"minimum over the dive {d['min_m']:.2f} m"]) + "."
     if d["map_mean_m"] is not None:
         line += f" Against the on-line map: mean {d['map_mean_m']:.2f} m, sd {d['map_sd_m']:.2f} m."
     return line
+
+
+def exploration_markdown(section: dict | None) -> list[str]:
+    """The report's line on an exploration (`exploration_summary`); none without one."""
+    if section is None:
+        return []
+    stopped = ("nothing more worth seeing" if section["stopped"] == "gain"
+               else "its time ran out")
+    return [f"- Exploration (next views by {section['strategy']}): "
+            f"{section['viewpoints']} viewpoints; the planner believed "
+            f"{100 * section['believed_coverage']:.1f} % of the mapped surface covered when "
+            f"it stopped ({stopped})."]
 
 
 def report_markdown(summary: dict, files=()) -> str:
@@ -325,6 +340,7 @@ def report_markdown(summary: dict, files=()) -> str:
               f"of the water): {summary['min_clearance_m']:.2f} m: "
               + ("**contact**." if summary["contact"] else "no contact.")
               + f" Largest navigation error: {summary['navigation_error_max_m']:.2f} m.",
+              *exploration_markdown(summary.get("exploration")),
               *ocean_markdown(summary.get("ocean")),
               "", "## Timing (wall clock: varies with the machine and its load)", ""]
     t = summary["timing"]
@@ -465,43 +481,55 @@ def peak_rss_mb() -> float:
 
 
 def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float | None = None,
-                  finish=None) -> dict:
+                  finish=None, progress: RunProgress | None = None) -> dict:
     """Writes report.json, report.md, coverage.png, coverage_vs_time.png, distance.png, plan.png
-    (coverage plans),
-    trajectory.csv, diagram.dot and the data products (points.ply; reconstruction.ply and .png
-    with Open3D, `reconstruction.products`) into `outdir`; returns the summary.
+    (coverage plans), trajectory.csv, diagram.dot and the data products (points.ply;
+    reconstruction.ply and .png with Open3D, `reconstruction.products`) into `outdir`; returns
+    the summary.
 
     `finish(outdir)` (the Meshcat recording, which reads the products) runs after the other
     files and before the report, so that `timing.outputs_s` counts it; `setup_s` is the
-    caller's wall time before the simulation (see the module for the `timing` keys)."""
+    caller's wall time before the simulation (see the module for the `timing` keys).
+    `progress`: the run's display, whose `outputs` phase this runs, a step per file (or group
+    of files) written."""
     start = time.perf_counter()
     out = FilePath(outdir)
     out.mkdir(parents=True, exist_ok=True)
-    summary = summarise(result)
+    names = ["coverage.png", "distance.png", "coverage_vs_time.png",
+             *(["plan.png"] if result.plan.coverage is not None else [])]
+    files = [*names, "trajectory.csv", "diagram.dot", *(["mission.html"] if finish else [])]
+    progress = progress if progress is not None else RunProgress.off()
+    surface = len(SURFACE_STAGES) + 1 if result.spec.outputs.reconstruction else 0
+    progress.start("outputs", total=len(files) + 3 + surface, note="summary")
+    with progress.step("summary"):
+        summary = summarise(result)
     products = time.perf_counter()
     summary["reconstruction"] = _rounded(write_products(
-        result, out, dpi, surface=result.spec.outputs.reconstruction))
+        result, out, dpi, surface=result.spec.outputs.reconstruction, progress=progress))
     reconstruction_s = time.perf_counter() - products
-    figures = {"coverage.png": fig_coverage(result), "distance.png": fig_distance(result),
-               "coverage_vs_time.png": fig_coverage_vs_time(result, summary["coverage_vs_time"])}
-    if result.plan.coverage is not None:
-        from drake_auv.planning.figures import fig_path3d
-
-        figures["plan.png"] = fig_path3d(result.plan.coverage)
-    for name, fig in figures.items():
-        with replacing(out / name) as temporary:
-            fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
-    write_trajectory(result, out / "trajectory.csv")
-    write_text(out / "diagram.dot", result.diagram_dot)
-    files = [*figures, "trajectory.csv", "diagram.dot"]
+    makers = {"coverage.png": lambda: fig_coverage(result),
+              "distance.png": lambda: fig_distance(result),
+              "coverage_vs_time.png": lambda: fig_coverage_vs_time(
+                  result, summary["coverage_vs_time"]),
+              "plan.png": lambda: fig_path3d(result.plan.coverage)}
+    for name in names:
+        with progress.step(name), replacing(out / name) as temporary:
+            makers[name]().savefig(temporary, dpi=dpi, bbox_inches="tight")
+    with progress.step("trajectory.csv"):
+        write_trajectory(result, out / "trajectory.csv")
+    with progress.step("diagram.dot"):
+        write_text(out / "diagram.dot", result.diagram_dot)
     if finish is not None:
-        finish(out)
-        files.append("mission.html")
-    outputs_s = time.perf_counter() - start
-    summary["timing"].update(_rounded(dict(
-        setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
-        total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
-    write_json(out / "report.json", summary)
-    write_text(out / "report.md",
-               report_markdown(summary, files) + products_markdown(summary["reconstruction"]))
+        with progress.step("mission.html"):
+            finish(out)
+    with progress.step("report"):
+        outputs_s = time.perf_counter() - start
+        summary["timing"].update(_rounded(dict(
+            setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
+            total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
+        write_json(out / "report.json", summary)
+        write_text(out / "report.md",
+                   report_markdown(summary, files) + "\n"
+                   + products_markdown(summary["reconstruction"]))
+    progress.finish(note=f"written to {out}")
     return summary

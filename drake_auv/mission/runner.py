@@ -2,8 +2,9 @@
 
 `run_mission(spec)` simulates until the `MissionSupervisor`'s monitor ends the dive (every leg
 done) or the time cap (`limits.max_time_s`, default the sum of the legs' budgets). The monitor
-also advances the progress bar and moves the logs' samples to disk every `LOG_SPOOL_S`
-(`mission.log_spool`: their memory does not grow with the dive). `MissionResult` holds what
+also updates the progress display (`dive_share`: the legs flown, not the time budget) and
+moves the logs' samples to disk every `LOG_SPOOL_S` (`mission.log_spool`: their memory does
+not grow with the dive). `MissionResult` holds what
 the report needs, read from the logs and the systems' Contexts after the run; true distances
 come from the exact point-to-mesh distance, on the true world, and the clearance is signed
 (`geometry.clearance`: negative inside the world or out of the water).
@@ -17,8 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from pydrake.systems.analysis import Simulator, SimulatorStatus
 from pydrake.systems.framework import EventStatus
-from tqdm import tqdm
 
+from drake_auv.behaviour import Behaviour
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.mission.config import MissionSpec
@@ -27,6 +28,7 @@ from drake_auv.mission.log_spool import LogSpool
 from drake_auv.mission.plan import MissionPlan, plan_mission
 from drake_auv.mission.site import Site, load_site, check_against_site
 from drake_auv.mission.supervisor import responses_from_log
+from drake_auv.progress import RunProgress
 from drake_auv.signals import (LegSignal, Profile, ReplanningStep, VehicleState, Water,
                                annotate_graphviz)
 
@@ -135,31 +137,60 @@ def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndar
     return phases, begun, starts
 
 
+def dive_share(handles: MissionHandles, root_context, cap: float) -> float:
+    """How much of the dive is done, in [0, 1]: the mission's own share
+    (`MissionSupervisor.flown_share`, with the flying behaviour's share of its leg) or the
+    share of the time cap `cap` (s) elapsed, whichever is larger: the cap ends it at the
+    latest."""
+    supervisor = handles.supervisor
+    context = supervisor.GetMyContextFromRoot(root_context)
+    leg = supervisor.flying(context)
+    own = None
+    if leg is not None:
+        behaviour = handles.behaviours[leg.behaviour]
+        if isinstance(behaviour, Behaviour):  # a step's own LeafSystem may be another kind
+            own = behaviour.share(behaviour.GetMyContextFromRoot(root_context))
+    return max(supervisor.flown_share(context, own), root_context.get_time() / cap)
+
+
 def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
-                progress: bool = True, plan: MissionPlan | None = None,
+                progress: bool | RunProgress = True, plan: MissionPlan | None = None,
                 realtime_rate: float = 0.0, probe=None, mcap=None) -> MissionResult:
     """Flies `spec` in one dive, at `site` (default `load_site(spec.site, spec.seed)`) with
     `plan` (default `plan_mission(spec, site)`), paced at `realtime_rate` times real time
     (0: as fast as possible; pacing changes no result); `probe(root_context)`, when given, is
     called at every simulator step (a benchmark's sampling of memory and wall time); `mcap`:
-    an `rosio.McapLog` the dive is written into (closed, into place, when the dive ends)."""
-    site = site if site is not None else load_site(spec.site, spec.seed, label=spec.name)
+    an `rosio.McapLog` the dive is written into (closed, into place, when the dive ends).
+
+    `progress`: a `RunProgress` in its `setup` phase (this call's last step of it is the
+    Diagram's build; it then runs the `dive` phase, ended at 100 % when the dive ends, and the
+    `results` phase, reading the dive back), or whether to show one of its own."""
+    own = not isinstance(progress, RunProgress)
+    display = RunProgress(("setup", "dive", "results"), enabled=progress) if own else progress
+    if own:
+        display.start("setup", total=1 + (site is None) + (plan is None),
+                      note="site" if site is None else "plan" if plan is None else "Diagram")
+    if site is None:
+        with display.step("site"):
+            site = load_site(spec.site, spec.seed, label=spec.name)
     check_against_site(spec, site)
-    plan = plan if plan is not None else plan_mission(spec, site)
-    diagram, handles = build_mission_diagram(site, spec, plan, scene=scene, mcap=mcap)
-    simulator = Simulator(diagram)
+    if plan is None:
+        with display.step("plan"):
+            plan = plan_mission(spec, site)
+    with display.step("Diagram"):
+        diagram, handles = build_mission_diagram(site, spec, plan, scene=scene, mcap=mcap)
+        simulator = Simulator(diagram)
     simulator.set_target_realtime_rate(realtime_rate)
     context = simulator.get_context()
     cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
-    bar = tqdm(total=int(np.ceil(cap)), unit="s sim", desc=f"mission {spec.name}",
-               disable=not progress)
     supervisor = handles.supervisor
     spool = LogSpool(handles.logs, LOG_SPOOL_S)
+    display.start("dive", note=f"mission {spec.name}")
 
     def monitor(root_context) -> EventStatus:
-        now = int(root_context.get_time())
-        if now > bar.n:
-            bar.update(now - bar.n)
+        if display.due():
+            display.update(dive_share(handles, root_context, cap),
+                           note=f"mission {spec.name}, t = {root_context.get_time():.0f} s")
         spool.spool(root_context)
         if probe is not None:
             probe(root_context)
@@ -170,20 +201,30 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
         wall = time.perf_counter()
         status = simulator.AdvanceTo(cap)
         wall = time.perf_counter() - wall
-        bar.update(bar.total - bar.n)  # a dive that ends before the cap ends the bar at 100 %
-        bar.close()
+        display.finish(note=f"mission {spec.name}, t = {context.get_time():.0f} s")
         completed = status.reason() == SimulatorStatus.ReturnReason.kReachedTerminationCondition
-        logs = {name: spool.read(name, context) for name in handles.logs}
+        display.start("results", total=COLLECT_STEPS + 1, note="logs")
+        with display.step("logs"):
+            logs = {name: spool.read(name, context) for name in handles.logs}
     finally:
         spool.close()
         if mcap is not None:
             mcap.close()
-    return _collect(spec, site, plan, diagram, handles, context, completed, wall, logs)
+    result = _collect(spec, site, plan, diagram, handles, context, completed, wall, logs,
+                      display)
+    display.finish(note=f"{len(result.times)} samples")
+    if own:
+        display.close()
+    return result
+
+
+COLLECT_STEPS = 3  # the display's steps of `_collect`
 
 
 def _collect(spec, site, plan, diagram, handles: MissionHandles, context, completed: bool,
-             wall: float, logs: dict) -> MissionResult:
-    """`logs`: each of `handles.logs`' samples over the whole dive (`LogSpool.read`)."""
+             wall: float, logs: dict, progress: RunProgress) -> MissionResult:
+    """`logs`: each of `handles.logs`' samples over the whole dive (`LogSpool.read`);
+    `progress`: the display, `COLLECT_STEPS` steps of its phase."""
     times = logs["state"].sample_times()
     state = logs["state"].data().T.copy()
     estimated = logs["estimated_state"].data().T.copy()
@@ -191,35 +232,39 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
     phases, begun, starts = _phases(logs["leg"], plan.legs, end)
     leg_at = begun[np.maximum(np.searchsorted(starts, times, side="right") - 1, 0)]
     position = VehicleState(state).position
-    distance = mesh_distance(site.target_mesh, position)
-    clearance = site.clearance.signed(position)
-    replanning = np.zeros((0, ReplanningStep.size()))
-    if "replanning" in logs:
-        table = logs["replanning"].data().T
-        steps = ReplanningStep(table)
-        # one row per step: the log samples the last step at every period
-        replanning = table[np.r_[True, np.diff(steps.time) != 0] & (steps.planned > 0)]
-    mapper_context = handles.mapper.GetMyContextFromRoot(context)
-    profile = np.full((len(times), Profile.size()), np.nan)
-    if "profile" in logs:
-        profile = logs["profile"].data().T[:len(times)]
-    water = np.zeros((len(times), Water.size()))
-    if "water" in logs:
-        water = logs["water"].data().T[:len(times)].copy()
-    vehicle = handles.vehicle
-    saturation = vehicle.dynamics.thrust_saturation_output.Eval(
-        vehicle.dynamics.GetMyContextFromRoot(context)).copy()
-    current_drift = vehicle.navigation.current_drift_output.Eval(
-        vehicle.navigation.GetMyContextFromRoot(context)).copy()
-    return MissionResult(
-        spec, site, plan, times, state, estimated, distance, clearance, leg_at, phases,
-        handles.supervisor.outcomes(handles.supervisor.GetMyContextFromRoot(context)),
-        handles.camera_coverage.best_angles(handles.camera_coverage.GetMyContextFromRoot(context)),
-        handles.multibeam_coverage.best_angles(
-            handles.multibeam_coverage.GetMyContextFromRoot(context)),
-        replanning, handles.mapper.scan_log(mapper_context),
-        handles.mapper.map_output.Eval(mapper_context), completed, profile,
-        logs["reference"].data().T[:len(times)].copy(), wall,
-        annotate_graphviz(diagram, diagram.GetGraphvizString()),
-        diagram, handles, context, responses_from_log(logs["response"]), water, saturation,
-        current_drift)
+    with progress.step("distance to the target"):
+        distance = mesh_distance(site.target_mesh, position)
+    with progress.step("clearance"):
+        clearance = site.clearance.signed(position)
+    with progress.step("the systems' state"):
+        replanning = np.zeros((0, ReplanningStep.size()))
+        if "replanning" in logs:
+            table = logs["replanning"].data().T
+            steps = ReplanningStep(table)
+            # one row per step: the log samples the last step at every period
+            replanning = table[np.r_[True, np.diff(steps.time) != 0] & (steps.planned > 0)]
+        mapper_context = handles.mapper.GetMyContextFromRoot(context)
+        profile = np.full((len(times), Profile.size()), np.nan)
+        if "profile" in logs:
+            profile = logs["profile"].data().T[:len(times)]
+        water = np.zeros((len(times), Water.size()))
+        if "water" in logs:
+            water = logs["water"].data().T[:len(times)].copy()
+        vehicle = handles.vehicle
+        saturation = vehicle.dynamics.thrust_saturation_output.Eval(
+            vehicle.dynamics.GetMyContextFromRoot(context)).copy()
+        current_drift = vehicle.navigation.current_drift_output.Eval(
+            vehicle.navigation.GetMyContextFromRoot(context)).copy()
+        return MissionResult(
+            spec, site, plan, times, state, estimated, distance, clearance, leg_at, phases,
+            handles.supervisor.outcomes(handles.supervisor.GetMyContextFromRoot(context)),
+            handles.camera_coverage.best_angles(
+                handles.camera_coverage.GetMyContextFromRoot(context)),
+            handles.multibeam_coverage.best_angles(
+                handles.multibeam_coverage.GetMyContextFromRoot(context)),
+            replanning, handles.mapper.scan_log(mapper_context),
+            handles.mapper.map_output.Eval(mapper_context), completed, profile,
+            logs["reference"].data().T[:len(times)].copy(), wall,
+            annotate_graphviz(diagram, diagram.GetGraphvizString()),
+            diagram, handles, context, responses_from_log(logs["response"]), water, saturation,
+            current_drift)

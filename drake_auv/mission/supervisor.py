@@ -33,7 +33,8 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import EventStatus, InputPortIndex, LeafSystem
 
 from drake_auv.mapping.mapper import OnlineMap
-from drake_auv.mission.legs import Leg, advance_progress, goal_reached, start_progress
+from drake_auv.mission.legs import (Leg, advance_progress, goal_reached, leg_share,
+                                    start_progress)
 from drake_auv.mission.safety import (CAUSES, RESPONSES, SENSORS, SafetyRules, abort_target,
                                       back_off_target, closing, relied_sensors,
                                       response_record, response_reference)
@@ -67,6 +68,8 @@ class MissionSupervisor(LeafSystem):
         if not (np.isfinite(period) and 0 < period <= 5.0):
             raise ValueError(f"MissionSupervisor period must be in (0, 5] s, got {period}")
         self.legs = tuple(legs)
+        # the legs' time budgets summed before each leg, and all of them
+        self._budgets = np.r_[0.0, np.cumsum([leg.max_duration for leg in self.legs])]
         self.behaviour_ports = dict(behaviour_ports)
         self.rules = rules if rules is not None else SafetyRules()
         self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
@@ -247,6 +250,31 @@ class MissionSupervisor(LeafSystem):
         if self.GetMyContextFromRoot(root_context).get_discrete_state(self._done)[0]:
             return EventStatus.ReachedTermination(self, "mission complete")
         return EventStatus.Succeeded()
+
+    def flying(self, context) -> Leg | None:
+        """The leg flying in this system's `context` (None once the dive is done)."""
+        if context.get_discrete_state(self._done)[0]:
+            return None
+        return self.legs[int(self._leg_now(context).index)]
+
+    def flown_share(self, context, behaviour_share: float | None = None) -> float:
+        """How much of the mission is flown, in [0, 1], from this system's `context`: the legs
+        ended and the flying leg's share of it (`legs.leg_share`; `behaviour_share`: its
+        behaviour's own, used while its status reports this leg), each leg weighing its time
+        budget (which is its nominal duration times `limits.time_margin`, plus a slack); 1
+        once done."""
+        leg = self.flying(context)
+        if leg is None:
+            return 1.0
+        current = self._leg_now(context)
+        index = int(current.index)
+        if BehaviourStatus(self._status(leg.behaviour, context)).leg != index:
+            behaviour_share = None
+        share = leg_share(leg, context.get_time() - current.start_s,
+                          self.state_input.Eval(context),
+                          context.get_discrete_state(self._progress).get_value(),
+                          behaviour_share)
+        return (self._budgets[index] + share * leg.max_duration) / self._budgets[-1]
 
     def outcomes(self, context) -> list[str]:
         """Per leg, how it ended (`OUTCOMES`), from this system's `context`."""

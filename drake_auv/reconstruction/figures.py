@@ -49,7 +49,8 @@ def fig_reconstruction(panels, vmax: float | None = None, title: str = "") -> Fi
     Args:
         panels: [(label, mesh, distances[, colour label])]: a mesh (any frame, m) and a
             per-vertex distance (m; by default to the truth, `TRUTH_LABEL`); one colour bar
-            per distinct colour label, from 0 (dark) to its scale (yellow, and above).
+            per distinct colour label, from 0 (dark) to its scale (yellow, and above), the
+            label stating the scale.
         vmax: every scale's top, m; None: each colour label's own, `colour_scale` of its
             panels' distances together (so panels of one label compare).
     """
@@ -86,8 +87,11 @@ def fig_reconstruction(panels, vmax: float | None = None, title: str = "") -> Fi
                 ax.set_zticks([])
             rows[measure].append(ax)
     for colour_label, axes in rows.items():
+        top = norms[colour_label].vmax
+        scale = f"{top:.2f} m" if vmax is not None else \
+            f"its {SCALE_PERCENTILE}th percentile, {top:.2f} m"
         fig.colorbar(ScalarMappable(norms[colour_label], cmap), ax=axes, shrink=0.6,
-                     extend="max", label=colour_label)
+                     extend="max", label=f"{colour_label}\nscale: 0 to {scale}")
     if title:
         fig.suptitle(title)
     return fig

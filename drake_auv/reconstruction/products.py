@@ -25,15 +25,19 @@ import trimesh
 
 from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.output_files import replacing
+from drake_auv.progress import RunProgress
 from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply_chunks
 from drake_auv.reconstruction.scoring import score
-from drake_auv.reconstruction.surface import (OUTLIERS, SUPPORT, Reconstruction,
+from drake_auv.reconstruction.surface import (OUTLIERS, STAGES, SUPPORT, Reconstruction,
                                               open3d_available, open3d_error, reconstruct)
 
 CROP_MARGIN = 1.0  # m around the target's bounding box: its returns decide whether to build
 THIN_VOXEL = 0.1  # m, one return per cube before the normals and Poisson
 MIN_POINTS = 1000  # returns in the target's box below which no surface is built
 SUPPORT_LABEL = "distance of the surface to the nearest return (m)"
+# what `mission_surface` does, in order: the display's steps of a reconstruction (and its
+# files, one more)
+SURFACE_STAGES = ("the returns", *STAGES, "scores")
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,15 +81,19 @@ def write_points(result, filename) -> int:
 
 
 def mission_surface(result, depth: int = 9, trim: float = 0.05, k: int = 200,
-                    support: float = SUPPORT, progress: bool = False) -> MissionSurface | None:
+                    support: float = SUPPORT, progress: bool = False,
+                    stage=None) -> MissionSurface | None:
     """Reconstructs the dive's returns and scores the whole surface; None when Open3D is
     unusable or the target's box (grown by `CROP_MARGIN`) holds fewer than `MIN_POINTS`
-    returns."""
+    returns. `stage(name)`, when given, is called as each of `SURFACE_STAGES` begins after
+    the first (the returns read)."""
+    stage = stage if stage is not None else (lambda name: None)
     cloud = dive_cloud(result)
     if not open3d_available() or target_returns(result, cloud) < max(MIN_POINTS, k + 1):
         return None
     surface = reconstruct(cloud, depth=depth, trim=trim, k=k, support=support,
-                          progress=progress)
+                          progress=progress, stage=stage)
+    stage(SURFACE_STAGES[-1])
     summary, errors = score(result.site.target_mesh, surface.mesh, cloud.points,
                             world=result.site.world)
     summary.update(depth=depth, trim=trim, k=k, support=support, outliers=OUTLIERS,
@@ -103,18 +111,34 @@ def error_colours(errors: np.ndarray, vmax: float) -> np.ndarray:
     return colormaps["inferno"](np.clip(np.asarray(errors) / vmax, 0.0, 1.0))
 
 
-def write_products(result, outdir, dpi: int = 110, surface: bool = True) -> dict:
+def write_products(result, outdir, dpi: int = 110, surface: bool = True,
+                   progress: RunProgress | None = None) -> dict:
     """Writes points.ply and, when a surface was built, reconstruction.ply and
     reconstruction.png into `outdir`; returns the report's `reconstruction` section (with
-    `built` False and the `reason` when none was). `surface` False: points.ply alone."""
-    from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
-
+    `built` False and the `reason` when none was). `surface` False: points.ply alone.
+    `progress`: the run's display, one step for the points and (with `surface`)
+    `len(SURFACE_STAGES) + 1` for the reconstruction."""
+    progress = progress if progress is not None else RunProgress.off()
     out = FilePath(outdir)
-    write_points(result, out / "points.ply")
+    with progress.step("points.ply"):
+        write_points(result, out / "points.ply")
     if not surface:
         return dict(built=False, reason="switched off (outputs.reconstruction: false, "
                                         "--no-reconstruction)")
-    surface = mission_surface(result)
+    begun = progress.done
+    progress.update(begun, note=f"reconstruction: {SURFACE_STAGES[0]}")
+    section = _write_surface(result, out, dpi, lambda name: progress.advance(
+        note=f"reconstruction: {name}"))
+    progress.update(begun + len(SURFACE_STAGES) + 1)  # the files too (or nothing built)
+    return section
+
+
+def _write_surface(result, out: FilePath, dpi: int, stage) -> dict:
+    """The reconstruction part of `write_products` (`stage`: `mission_surface`'s)."""
+    from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
+
+    surface = mission_surface(result, stage=stage)
+    stage("its files (.ply, .png)")
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
         if open3d_error() is not None and target_returns(result, dive_cloud(result)) \
                 >= MIN_POINTS:

@@ -42,6 +42,7 @@ OUTLIERS_RANGE = (0.0, 100.0)  # outlier ratio; 0: no outlier removal
 OUTLIERS = 3.0  # default: a return whose neighbours are 3 x farther than usual is dropped
 OUTLIER_NEIGHBOURS = 8
 MIN_POINTS = 10
+STAGES = ("normals", "screened Poisson", "support trim")  # of `reconstruct`, in order
 
 
 def open3d_available() -> bool:
@@ -253,23 +254,28 @@ def check_spread(points: np.ndarray) -> None:
 
 def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 200,
                 support: float = SUPPORT, progress: bool = True,
-                outliers: float = OUTLIERS) -> Reconstruction:
+                outliers: float = OUTLIERS, stage=None) -> Reconstruction:
     """The trimmed screened-Poisson surface of `cloud` (outliers dropped first, see
     `outlier_mask`, none when `outliers` is 0; normals from k neighbours, oriented by the
     recorded sensor origins when the cloud has them; faces farther than `support` local
-    spacings from every point removed, none when 0), with a progress bar over the stages."""
+    spacings from every point removed, none when 0), with a progress bar over the stages;
+    `stage(name)`, when given, is called as each of the `STAGES` begins (a run's display)."""
+    stage = stage if stage is not None else (lambda name: None)
     check_parameters(len(cloud), depth, k, trim, support, outliers)
     cloud = cloud.subset(np.flatnonzero(outlier_mask(cloud.points, outliers)))
     check_parameters(len(cloud), depth, k, trim, support, outliers)
     check_spread(cloud.points)
-    with tqdm(total=3, desc="reconstruct", unit="stage", disable=not progress,
+    with tqdm(total=len(STAGES), desc="reconstruct", unit="stage", disable=not progress,
               leave=False) as bar:
+        stage(STAGES[0])
         bar.set_postfix_str(f"normals (k = {k}) of {len(cloud)} points")
         normals = estimate_normals(cloud.points, cloud.origins if cloud.has_origins else None, k)
         bar.update()
+        stage(STAGES[1])
         bar.set_postfix_str(f"screened Poisson, depth {depth}")
         mesh, densities = poisson(cloud.points, normals, depth, trim)
         bar.update()
+        stage(STAGES[2])
         bar.set_postfix_str(f"support trim ({support:g} local spacings)")
         extent = float(np.ptp(cloud.points, axis=0).max())
         cell = POISSON_SCALE * extent / 2 ** int(depth)

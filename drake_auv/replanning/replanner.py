@@ -199,6 +199,12 @@ class Replanner(Behaviour):
         plan = self.section(context)
         output.set_value(np.zeros((0, 3)) if plan is None else plan.trajectory)
 
+    def share(self, context) -> float:
+        """The share of the nominal waypoints passed (the status's next waypoint over their
+        number)."""
+        passed = BehaviourStatus(self.status_output.Eval(context)).progress
+        return float(passed / max(len(self.nominal_input.Eval(context).points), 1))
+
     def _status(self, context) -> BehaviourStatus:
         progress = ReplannerProgress(context.get_discrete_state(self._progress).get_value())
         status = BehaviourStatus.zeros()

@@ -39,6 +39,8 @@ class PathReference(Behaviour):
         yaw_rate: largest yaw rate of the timing, rad/s.
     """
 
+    progress_is_share = True
+
     def __init__(self, legs: PathLeg | dict[int, PathLeg], terrain=None, clearance: float = 3.0,
                  min_depth: float = 1.0, period: float = 0.1,
                  yaw_rate: float = np.radians(15.0)):

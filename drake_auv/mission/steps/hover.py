@@ -89,6 +89,8 @@ def station_keeper():
         estimated pose; `status` progress: the share of the duration elapsed).
         """
 
+        progress_is_share = True
+
         def __init__(self, legs: dict[int, HoverLeg], period: float = 0.1):
             super().__init__(legs)
             if not (np.isfinite(period) and 0 < period <= 5.0):
