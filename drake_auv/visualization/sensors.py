@@ -20,6 +20,7 @@ from pydrake.perception import BaseField, Fields, PointCloud
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.sonar.returns import SonarReturns
+from drake_auv.visualization.legend import LegendEntry, swatch
 
 UNSEEN_RGB = (0.55, 0.55, 0.55)
 
@@ -41,6 +42,13 @@ def depth_colors(z: np.ndarray) -> np.ndarray:
     span = max(float(np.ptp(z)) if len(z) else 0.0, 1e-9)
     t = (z - z.min()) / span if len(z) else z
     return np.column_stack([t, 0.3 + 0.6 * t, 1.0 - t])
+
+
+def coverage_legend(path: str) -> LegendEntry:
+    """The legend's entry of the coverage drawn at `path`."""
+    return LegendEntry("coverage", "green to red", "best multibeam angle on the target: green "
+                       "head-on, yellow 45°, red grazing, grey unseen",
+                       swatch(angle_colors(np.radians([0.0, 45.0, 90.0])), [UNSEEN_RGB]), path)
 
 
 def draw_coverage(meshcat, path: str, world, face_angles: np.ndarray,
