@@ -3,8 +3,9 @@
 A `LegendEntry` names one layer or marker: its colour swatch (CSS), how it looks in words and
 what it shows. `Scene.add_legend` collects them as layers are drawn. Meshcat has no text
 overlay, so the legend reaches the two views differently:
-- the standalone recording (`Scene.write_html`): `overlay_html` adds positioned `<div>`s to
-  Meshcat's static page: the legend (bottom left), one row per layer with a checkbox bound to
+- the standalone recording (`Scene.write_html`): `overlay_html` adds positioned panels to
+  Meshcat's static page: the legend (bottom left; folded in windows under 800 x 600 px, a
+  click opens it), one row per layer with a checkbox bound to
   the layer's visibility in the viewer (the rows' `data-visible` follow the viewer, also when
   a layer is toggled in Meshcat's own scene tree), and the mission clock (top left): the
   simulated time read from the animation's time (`viewer.animator.time` times the playback
@@ -71,9 +72,9 @@ _STYLE = f"""
  color:#eee;font:12px/1.3 sans-serif;padding:5px 8px;border-radius:4px;max-width:390px}}
 #{CLOCK_ID} {{top:8px;font-size:14px}}
 #{LEGEND_ID} {{bottom:8px}}
+#{LEGEND_ID} summary {{cursor:pointer;color:#aaa}}
 #{LEGEND_ID} label {{display:flex;align-items:center;gap:5px;margin:1px 0;cursor:pointer}}
 #{LEGEND_ID} .sw {{flex:0 0 26px;height:10px;border:1px solid #888}}
-#{LEGEND_ID} .hint {{color:#aaa}}
 """
 
 _SCRIPT = """
@@ -87,6 +88,8 @@ _SCRIPT = """
       viewer.set_dirty();
     });
   });
+  const legend = document.getElementById("%(legend)s");
+  if (legend !== null && (innerWidth < 800 || innerHeight < 600)) legend.open = false;
   const clock = document.getElementById("%(clock)s");
   function tick() {
     rows.forEach((row) => {
@@ -128,9 +131,10 @@ def overlay_html(entries, speed: float | None = None, legs=()) -> str:
     script = _SCRIPT % dict(legs=json.dumps([[float(s), str(label)] for s, label in legs]),
                             speed=json.dumps(float(speed or 0.0)), legend=LEGEND_ID,
                             clock=CLOCK_ID)
-    return (f'<div id="{OVERLAY_ID}"><style>{_STYLE}</style>{clock}'
-            f'<div id="{LEGEND_ID}" class="panel"><span class="hint">layers: tick to show; '
-            f'Open Controls: the animation</span>{"".join(rows)}</div></div>'
+    legend = "" if not rows else (
+        f'<details id="{LEGEND_ID}" class="panel" open><summary>legend: tick a layer to show '
+        f'it; the animation is under Open Controls</summary>{"".join(rows)}</details>')
+    return (f'<div id="{OVERLAY_ID}"><style>{_STYLE}</style>{clock}{legend}</div>'
             f'<script>{script}</script>')
 
 
