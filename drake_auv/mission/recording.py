@@ -22,10 +22,10 @@ from drake_auv.mission.runner import MissionResult
 from drake_auv.mission.site import Site
 from drake_auv.signals import VehicleState
 from drake_auv.visualization.legend import LegendEntry, css_colour
+from drake_auv.visualization.scene import PATH_RGBA
 
 HIDDEN_LAYERS = ("octree", "reconstruction")  # drawn, but off until a click shows them
 WORLD_RGB = (0.55, 0.5, 0.42)
-NOMINAL_RGB = (1.0, 0.55, 0.0)
 
 
 def prepare_scene(scene, site: Site, plan: MissionPlan) -> None:
@@ -35,9 +35,9 @@ def prepare_scene(scene, site: Site, plan: MissionPlan) -> None:
     scene.add_legend(LegendEntry("world", "brown mesh", "the seabed and the structure",
                                  css_colour(WORLD_RGB), scene.path_of("world")))
     if plan.nominal is not None and len(plan.nominal) >= 2:
-        scene.add_path("nominal_path", plan.nominal, rgba=(*NOMINAL_RGB, 1.0))
         scene.add_legend(LegendEntry("nominal path", "orange line", "the off-line plan",
-                                     css_colour(NOMINAL_RGB), scene.path_of("nominal_path")))
+                                     css_colour(PATH_RGBA),
+                                     scene.add_path("nominal_path", plan.nominal)))
     for name in HIDDEN_LAYERS:
         scene.hide(name)
     start = np.asarray(VehicleState(plan.start_state).position, dtype=float)

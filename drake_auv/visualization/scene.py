@@ -33,6 +33,7 @@ _HULLS = (("hull_port", (0.0, 0.3, 0.2), Rgba(0.95, 0.75, 0.1, 1.0)),
           ("hull_starboard", (0.0, -0.3, 0.2), Rgba(0.95, 0.75, 0.1, 1.0)),
           ("hull_lower", (0.0, 0.0, -0.3), Rgba(0.35, 0.35, 0.4, 1.0)))
 _TRAIL_RGBA = Rgba(0.1, 0.6, 1.0, 1.0)
+PATH_RGBA = (1.0, 0.55, 0.0, 1.0)  # `add_path`'s default
 _CAMERA = "/Cameras/default/rotated/<object>"
 _FOV_DEG = 75.0  # vertical field of view of Meshcat's default perspective camera
 
@@ -160,12 +161,15 @@ class Scene:
         return path
 
     def add_terrain(self, bathymetry, stride: int = 1, rgba=(0.55, 0.5, 0.42, 1.0)) -> str:
-        """Draws a `Bathymetry` grid as the seabed surface at `terrain`."""
+        """Draws a `Bathymetry` grid as the seabed surface at `terrain` (in the legend)."""
         from drake_auv.terrain.mesh import bathymetry_to_mesh
 
-        return self.add_mesh("terrain", bathymetry_to_mesh(bathymetry, stride), rgba)
+        path = self.add_mesh("terrain", bathymetry_to_mesh(bathymetry, stride), rgba)
+        self.add_legend(LegendEntry("terrain", "brown mesh", "the seabed", css_colour(rgba),
+                                    path))
+        return path
 
-    def add_path(self, name: str, path, rgba=(1.0, 0.55, 0.0, 1.0), line_width: float = 2.0) -> str:
+    def add_path(self, name: str, path, rgba=PATH_RGBA, line_width: float = 2.0) -> str:
         """Draws a `Path` (or an (N, 3) array of points) as a polyline at `name`."""
         points = path.points if isinstance(path, Path) else np.asarray(path, dtype=float)
         if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
