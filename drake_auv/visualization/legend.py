@@ -54,16 +54,16 @@ def css_colour(rgb) -> str:
     return f"rgb({r},{g},{b})"
 
 
-def swatch(colours, blocks=()) -> str:
-    """A CSS background: one colour, or a left-to-right gradient through `colours` ((n, 3) in
-    [0, 1]), followed by solid `blocks` (e.g. the grey of unseen faces) a fifth wide each."""
+def swatch(colours, smooth: bool = True) -> str:
+    """A CSS background, left to right through `colours` ((n, 3) in [0, 1]): a gradient, or
+    (not `smooth`) n bands of equal width."""
     colours = [css_colour(c) for c in np.atleast_2d(np.asarray(colours, dtype=float))]
-    stops = colours if len(colours) > 1 else colours * 2
-    width = 100 - 20 * len(blocks)
-    parts = [f"{c} {width * i / (len(stops) - 1):.0f}%" for i, c in enumerate(stops)]
-    for k, block in enumerate(blocks):
-        start = width + 20 * k
-        parts += [f"{css_colour(block)} {start}%", f"{css_colour(block)} {start + 20}%"]
+    if smooth:
+        stops = colours if len(colours) > 1 else colours * 2
+        parts = [f"{c} {100 * i / (len(stops) - 1):.0f}%" for i, c in enumerate(stops)]
+    else:
+        n = len(colours)
+        parts = [f"{c} {100 * i / n:.1f}% {100 * (i + 1) / n:.1f}%" for i, c in enumerate(colours)]
     return f"linear-gradient(90deg,{','.join(parts)})"
 
 
@@ -74,7 +74,7 @@ _STYLE = f"""
 #{LEGEND_ID} {{bottom:8px}}
 #{LEGEND_ID} summary {{cursor:pointer;color:#aaa}}
 #{LEGEND_ID} label {{display:flex;align-items:center;gap:5px;margin:1px 0;cursor:pointer}}
-#{LEGEND_ID} .sw {{flex:0 0 26px;height:10px;border:1px solid #888}}
+#{LEGEND_ID} .sw {{flex:0 0 34px;height:10px;border:1px solid #888}}
 """
 
 _SCRIPT = """
