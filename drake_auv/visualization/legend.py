@@ -5,11 +5,11 @@ what it shows. `Scene.add_legend` collects them as layers are drawn. Meshcat has
 overlay, so the legend reaches the two views differently:
 - the standalone recording (`Scene.write_html`): `overlay_html` adds positioned panels to
   Meshcat's static page: the legend (bottom left; folded in windows under 800 x 600 px, a
-  click opens it), one row per layer with a checkbox bound to
-  the layer's visibility in the viewer (the rows' `data-visible` follow the viewer, also when
-  a layer is toggled in Meshcat's own scene tree), and the mission clock (top left): the
-  simulated time read from the animation's time (`viewer.animator.time` times the playback
-  speed) and the leg flying then;
+  click opens it), one row per layer with a checkbox bound to the layer's visibility in the
+  viewer (the rows' `data-visible` follow the viewer, also when a layer is toggled in
+  Meshcat's own scene tree), and the mission clock (top left): the simulated time read from
+  the animation's time (`viewer.animator.time` times the playback speed) and the leg flying
+  then;
 - the live view (`drake-auv run --meshcat`): read-only entries in Meshcat's control panel,
   one button per entry named "look: name" (a click does nothing), and the clock as a slider
   the mission moves (`visualization.live`).
