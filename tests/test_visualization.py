@@ -118,7 +118,7 @@ def test_current_arrow_follows_the_water(tmp_path):
         arrow.water_input.FixValue(context, np.r_[velocity, np.zeros(3)])
         arrow.ForcedPublish(context)
     tracks = animation_tracks(scene.write_html(tmp_path / "current.html").read_text())
-    path = "/drake_auv/current"
+    path = "/drake_auv/current/arrow"  # under the layer a user toggles
     assert tracks[(path, ".visible")] == [(10, True), (20, False)]
     (frame, position), = tracks[(path, ".position")]
     assert frame == 10

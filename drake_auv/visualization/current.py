@@ -39,7 +39,9 @@ class CurrentVisualizer(LeafSystem):
         if not (math.isfinite(metres_per_mps) and 0.1 <= metres_per_mps <= 1000.0):
             raise ValueError(f"arrow scale must be in [0.1, 1000] m per m/s, got "
                              f"{metres_per_mps}")
+        # the layer (a user's toggle) and, under it, the arrow its keyframes move and hide
         self.scene, self.path = scene, scene.path_of("current")
+        self.arrow = f"{self.path}/arrow"
         self.metres_per_mps = float(metres_per_mps)
         self.state_input = self.DeclareVectorInputPort("state", VehicleState.size())
         self.water_input = self.DeclareVectorInputPort("water", Water.size())
@@ -55,11 +57,11 @@ class CurrentVisualizer(LeafSystem):
         """A unit arrow along +z from the origin: shaft, then head with its point at z = 1."""
         meshcat = self.scene.meshcat
         radius, length = _SHAFT
-        meshcat.SetObject(f"{self.path}/shaft", Cylinder(radius, length), ARROW_RGBA)
-        meshcat.SetTransform(f"{self.path}/shaft", RigidTransform([0.0, 0.0, length / 2]))
+        meshcat.SetObject(f"{self.arrow}/shaft", Cylinder(radius, length), ARROW_RGBA)
+        meshcat.SetTransform(f"{self.arrow}/shaft", RigidTransform([0.0, 0.0, length / 2]))
         height, head = _HEAD
-        meshcat.SetObject(f"{self.path}/head", MeshcatCone(height, head, head), ARROW_RGBA)
-        meshcat.SetTransform(f"{self.path}/head",
+        meshcat.SetObject(f"{self.arrow}/head", MeshcatCone(height, head, head), ARROW_RGBA)
+        meshcat.SetTransform(f"{self.arrow}/head",
                              RigidTransform(RotationMatrix.MakeXRotation(np.pi), [0, 0, 1.0]))
 
     def _publish_arrow(self, context):
@@ -72,8 +74,8 @@ class CurrentVisualizer(LeafSystem):
         visible = speed >= STILL_MPS
         if visible:
             rotation = RotationMatrix.MakeFromOneVector(velocity / speed, 2)
-            scene.meshcat.SetTransform(self.path, RigidTransform(
+            scene.meshcat.SetTransform(self.arrow, RigidTransform(
                 rotation, position + [0.0, 0.0, _LIFT_M]), when)
             length = self.metres_per_mps * speed
-            scene.meshcat.SetProperty(self.path, "scale", [length] * 3, when)
-        scene.meshcat.SetProperty(self.path, "visible", visible, when)
+            scene.meshcat.SetProperty(self.arrow, "scale", [length] * 3, when)
+        scene.meshcat.SetProperty(self.arrow, "visible", visible, when)
