@@ -115,7 +115,8 @@ def builder_rows() -> list[str]:
     rows = []
     for function in (add_girona500, diagram.add_faults, diagram.add_sonars,
                      diagram.add_behaviours, diagram.add_ocean,
-                     diagram.add_coverage_recorders, add_mission_view, add_mcap_recorder,
+                     diagram.add_coverage_recorders, diagram.add_visualizers, add_mission_view,
+                     add_mcap_recorder,
                      diagram.build_mission_diagram):
         parameters = ", ".join(inspect.signature(function).parameters)
         summary = re.split(r"(?<=\.)\s", " ".join(inspect.getdoc(function).split()))[0]

@@ -18,7 +18,7 @@ from pydrake.geometry import Meshcat, MeshcatParams
 import drake_auv.visualization as visualization
 from drake_auv.cli import main
 from drake_auv.mission.legs import Leg
-from drake_auv.visualization.live import MissionView
+from drake_auv.visualization.live import CLOCK, LABEL_PREFIX, MissionView
 
 CHROMIUM = shutil.which("chromium")
 SHORT = ["--set", "limits.max_time_s=30", "--quiet"]
@@ -104,8 +104,10 @@ def test_mission_view_draws_the_leg_and_the_section():
     meshcat = Meshcat(MeshcatParams(host="localhost"))
     section = np.column_stack([np.linspace(0, 5, 6), np.zeros(6), np.full(6, -20.0)])
     view, context = view_context(meshcat, [0.0, 0.0], section)
+    context.SetTime(12.5)
     view.ForcedPublish(context)
     assert meshcat.GetButtonNames() == ["leg 1 of 2: transit, path until arrive (since 0 s)"]
+    assert meshcat.GetSliderValue(CLOCK) == pytest.approx(12.5, abs=0.5)  # 1 s steps
     assert meshcat.HasPath("/test/leg/target") and meshcat.HasPath("/test/leg/line")
     assert meshcat.HasPath("/test/section") and meshcat.HasPath("/test/reference")
     # the next leg replaces the label and the goal geometry
@@ -173,8 +175,16 @@ def test_the_page_is_served_during_the_run(live_run):
     for layer in ("live/reference", "live/leg/centre", "vehicle", "world"):
         assert scene.meshcat.HasPath(scene.path_of(layer)), layer
     # the transit arrived after 26 s: the follow leg's label replaced it
-    assert [name.split(" (")[0] for name in scene.meshcat.GetButtonNames()] == [
+    names = scene.meshcat.GetButtonNames()
+    assert [name.split(" (")[0] for name in names if name.startswith(LABEL_PREFIX)] == [
         "leg 2 of 4: follow, follow until loops"]
+    # the legend names each layer and marker; the clock stopped at the cap
+    legend = {entry.label for entry in scene.legend.values()}
+    assert legend <= set(names)
+    assert {"magenta sphere: leg's target", "magenta bar: loops' centre", "yellow sphere: "
+            "reference", "cyan arrow: current", "viridis dots: octree"} <= legend
+    assert scene.meshcat.GetSliderNames() == [CLOCK]
+    assert scene.meshcat.GetSliderValue(CLOCK) == 30.0
     assert (out / "run" / "mission.html").is_file()  # the recording is still written
 
 

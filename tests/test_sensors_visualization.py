@@ -16,7 +16,7 @@ from drake_auv.scenarios import get_scenario
 from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.visualization.sensors import (CoverageVisualizer, SonarVisualizer, angle_colors,
-                                             draw_coverage)
+                                             coverage_bands, draw_coverage)
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +82,15 @@ def test_draw_coverage_checks_its_input(meshcat):
     angles = np.full(len(sc.world.faces), np.nan)
     angles[sc.target_faces] = 0.3
     draw_coverage(meshcat, "/drake_auv/test_pool_coverage", sc.world, angles, sc.target_faces)
-    assert meshcat.HasPath("/drake_auv/test_pool_coverage")
+    # 0.3 rad (17 deg) falls in the 15-30 deg band alone
+    bands = {name: meshcat.HasPath(f"/drake_auv/test_pool_coverage/{name}")
+             for name, _ in coverage_bands()}
+    assert [name for name, drawn in bands.items() if drawn] == ["15-30_deg"]
+    # half of them seen head-on, the rest unseen: the 15-30 deg band is gone
+    angles[sc.target_faces] = np.where(np.arange(sc.target_faces.sum()) % 2, 0.05, np.nan)
+    draw_coverage(meshcat, "/drake_auv/test_pool_coverage", sc.world, angles, sc.target_faces)
+    assert [name for name, _ in coverage_bands()
+            if meshcat.HasPath(f"/drake_auv/test_pool_coverage/{name}")] == ["0-15_deg", "unseen"]
     with pytest.raises(ValueError, match="one value per world face"):
         draw_coverage(meshcat, "/x", sc.world, angles[:10])
     with pytest.raises(ValueError, match="no faces"):

@@ -80,3 +80,69 @@ def test_frame_camera_looks_at_the_drawn_box():
     assert np.linalg.norm(view) > 21.2 / np.sin(np.radians(37.5))
     with pytest.raises(ValueError, match="direction"):
         scene.frame_camera(direction=(0.0, 0.0, 0.0))
+
+
+def animation_tracks(html: str) -> dict:
+    """{(path, track name): [(frame, value)]} of a StaticHtml file's animation (msgpack, which
+    dask's distributed brings)."""
+    import msgpack
+
+    tracks = {}
+    for command in embedded_commands(html):
+        try:
+            message = msgpack.unpackb(command, strict_map_key=False)
+        except (ValueError, msgpack.ExtraData):
+            continue  # an embedded asset (an image, a script), not a command
+        if isinstance(message, dict) and message.get("type") == "set_animation":
+            for animation in message["animations"]:
+                for track in animation["clip"]["tracks"]:
+                    tracks[(animation["path"], track["name"])] = [
+                        (key["time"], key["value"]) for key in track["keys"]]
+    return tracks
+
+
+def test_current_arrow_follows_the_water(tmp_path):
+    from pydrake.common.eigen_geometry import Quaternion
+    from pydrake.math import RotationMatrix
+
+    from drake_auv.visualization.current import ARROW_M_PER_MPS, CurrentVisualizer
+
+    scene = Scene()
+    arrow = CurrentVisualizer(scene, period=0.5)
+    context = arrow.CreateDefaultContext()
+    arrow.state_input.FixValue(context, np.r_[1.0, 2.0, -30.0, np.zeros(9)])
+    scene.start_recording(playback_speed=1.0, frames_per_second=10.0)
+    water = np.array([0.12, -0.05, 0.02])
+    for t, velocity in ((1.0, water), (2.0, np.zeros(3))):  # then still water
+        context.SetTime(t)
+        arrow.water_input.FixValue(context, np.r_[velocity, np.zeros(3)])
+        arrow.ForcedPublish(context)
+    tracks = animation_tracks(scene.write_html(tmp_path / "current.html").read_text())
+    path = "/drake_auv/current/arrow"  # under the layer a user toggles
+    assert tracks[(path, ".visible")] == [(10, True), (20, False)]
+    (frame, position), = tracks[(path, ".position")]
+    assert frame == 10
+    np.testing.assert_allclose(position, [1.0, 2.0, -29.0])  # 1 m above the vehicle
+    (_, scale), = tracks[(path, ".scale")]
+    np.testing.assert_allclose(scale, [ARROW_M_PER_MPS * np.linalg.norm(water)] * 3)
+    (_, (x, y, z, w)), = tracks[(path, ".quaternion")]
+    axis = RotationMatrix(Quaternion(w, x, y, z)).matrix()[:, 2]  # the arrow's +z
+    np.testing.assert_allclose(axis, water / np.linalg.norm(water), atol=1e-9)
+    assert "current" in scene.legend
+
+
+def test_the_page_names_the_layers_drawn_and_hides_the_hidden(tmp_path):
+    from drake_auv.visualization.legend import CLOCK_ID, LEGEND_ID, LegendEntry
+
+    scene = Scene()
+    scene.add_path("route", np.array([[0.0, 0.0, -30.0], [40.0, 20.0, -20.0]]))
+    for name in ("route", "never_drawn"):
+        scene.add_legend(LegendEntry(name, "orange line", f"the {name}", "rgb(255,140,0)",
+                                     scene.path_of(name)))
+    scene.hide("route")
+    html = scene.write_html(tmp_path / "still.html").read_text()
+    legend = html[html.index(f'id="{LEGEND_ID}"'):]
+    assert 'data-layer="/drake_auv/route"' in legend and "never_drawn" not in legend
+    assert f'id="{CLOCK_ID}"' not in html  # no recording, no clock
+    hidden = [c for c in embedded_commands(html) if b"set_property" in c and b"visible" in c]
+    assert len(hidden) == 1 and b"/drake_auv/route" in hidden[0] and b"\xc2" in hidden[0]

@@ -77,7 +77,11 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     out_dir = FilePath(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if scene is not None:
-        scene.add_path("path", path)
+        from drake_auv.visualization.legend import LegendEntry, css_colour
+        from drake_auv.visualization.scene import PATH_RGBA
+
+        scene.add_legend(LegendEntry("path", "orange line", "the path to fly",
+                                     css_colour(PATH_RGBA), scene.add_path("path", path)))
     diagram, handles = build_tracking_diagram(path.resample(1.0), speed=speed,
                                               navigation=navigation, scene=scene)
     if scene is not None:

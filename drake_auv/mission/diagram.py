@@ -263,6 +263,38 @@ def add_coverage_recorders(builder: DiagramBuilder, caster: RayCaster, vehicle: 
     return camera, recorder
 
 
+def add_visualizers(builder: DiagramBuilder, scene, spec: MissionSpec, plan: MissionPlan,
+                    vehicle: VehicleSystems, mapper: OctreeMapper,
+                    supervisor: MissionSupervisor, estimated, switch, replanner=None,
+                    ocean: Ocean | None = None) -> None:
+    """What `scene` draws while the mission flies: the vehicle and its trail, the on-line map,
+    with a sea the current at the vehicle (the `ocean`'s `water`), and in a live scene the
+    leg, the replanner's section, the reference and the mission clock (`visualization.live`).
+    Each layer is named in the scene's legend."""
+    from drake_auv.visualization.current import CurrentVisualizer
+    from drake_auv.visualization.octree import OctreeVisualizer, octree_legend
+
+    # a pose every 0.5 s: at the recordings' 20x playback and 32 frames/s a frame is 0.6 s
+    scene.add_vehicle_visualizer(builder, vehicle.dynamics.state_output, period=0.5)
+    octree_view = builder.AddNamedSystem("octree_visualizer", OctreeVisualizer(
+        scene.meshcat, scene.path_of("octree"), period=10.0))
+    builder.Connect(mapper.map_output, octree_view.map_input)
+    scene.add_legend(octree_legend(scene.path_of("octree")))
+    if ocean is not None:
+        arrow = builder.AddNamedSystem("current_visualizer", CurrentVisualizer(scene, period=1.0))
+        builder.Connect(vehicle.dynamics.state_output, arrow.state_input)
+        builder.Connect(ocean.water_output, arrow.water_input)
+    if scene.live:  # the leg, the replanner's section and the reference, for a browser
+        from drake_auv.visualization.live import add_mission_view
+
+        cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
+        add_mission_view(builder, scene, plan.legs, supervisor.leg_output, estimated,
+                         switch.get_output_port(),
+                         replanner.GetOutputPort("section") if replanner is not None
+                         and replanner.HasOutputPort("section") else None,
+                         duration=cap if np.isfinite(cap) else None)
+
+
 def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | None = None,
                           scene=None, caster: RayCaster | None = None, mcap=None):
     """The whole mission `spec` at `site` as one Diagram; returns (diagram, MissionHandles).
@@ -325,20 +357,8 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     builder.ExportOutput(mapper.map_output, "map")
     builder.ExportOutput(supervisor.leg_output, "leg")
     if scene is not None:
-        from drake_auv.visualization.octree import OctreeVisualizer
-
-        # a pose every 0.5 s: at the recordings' 20x playback and 32 frames/s a frame is 0.6 s
-        scene.add_vehicle_visualizer(builder, vehicle.dynamics.state_output, period=0.5)
-        octree_view = builder.AddNamedSystem("octree_visualizer", OctreeVisualizer(
-            scene.meshcat, scene.path_of("octree"), period=10.0))
-        builder.Connect(mapper.map_output, octree_view.map_input)
-        if scene.live:  # the leg, the replanner's section and the reference, for a browser
-            from drake_auv.visualization.live import add_mission_view
-
-            add_mission_view(builder, scene, plan.legs, supervisor.leg_output, estimated,
-                             switch.get_output_port(),
-                             replanner.GetOutputPort("section") if replanner is not None
-                             and replanner.HasOutputPort("section") else None)
+        add_visualizers(builder, scene, spec, plan, vehicle, mapper, supervisor, estimated,
+                        switch, replanner, ocean)
     diagram = builder.Build()
     diagram.set_name(f"mission_{spec.name}")
     handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, supervisor,

@@ -1,12 +1,14 @@
 """The mission's Meshcat recording: the site and plan before the dive, the results after it.
 
-Layers (under the scene's root, each can be toggled in Meshcat's tree): `world` (the true
-world), `nominal_path` (the off-line plan), `vehicle` and its trail (drawn while it flies),
-`octree` (the on-line map's occupied voxels), `coverage` (the target coloured by the best
-multibeam viewing angle, red unseen) and `reconstruction` (the surface from the returns,
-coloured by its distance to the true target, when one was built). The camera opens framed on
-the target (not the whole world: a seabed can be far larger than the structure), lit by
-`Scene.frame_camera`.
+Layers (under the scene's root, each named in the legend and toggled by its checkbox or in
+Meshcat's scene tree): `world` (the true world), `nominal_path` (the off-line plan), `vehicle`
+and its trail (drawn while it flies), `current` (the water velocity at the vehicle, with a
+sea), `coverage` (the target coloured by the best multibeam viewing angle, grey unseen), and,
+hidden at first, `octree` (the on-line map's occupied voxels) and `reconstruction` (the
+surface from the returns, coloured by its distance to the true world, when one was built).
+The camera opens framed on the target and the vehicle's start (not the whole world: a seabed
+can be far larger than the structure), lit by `Scene.frame_camera`; the clock shows the
+mission time and the leg flying.
 """
 
 from __future__ import annotations
@@ -18,27 +20,58 @@ import numpy as np
 from drake_auv.mission.plan import MissionPlan
 from drake_auv.mission.runner import MissionResult
 from drake_auv.mission.site import Site
+from drake_auv.signals import VehicleState
+from drake_auv.visualization.legend import LegendEntry, css_colour
+from drake_auv.visualization.scene import PATH_RGBA
+
+HIDDEN_LAYERS = ("octree", "reconstruction")  # drawn, but off until a click shows them
+WORLD_RGB = (0.55, 0.5, 0.42)
 
 
 def prepare_scene(scene, site: Site, plan: MissionPlan) -> None:
-    """Draws the world and the nominal path, and frames the camera on the target."""
-    scene.add_mesh("world", site.world, rgba=(0.55, 0.5, 0.42, 1.0))
+    """Draws the world and the nominal path, hides `HIDDEN_LAYERS`, and frames the camera on
+    the target and the vehicle's start."""
+    scene.add_mesh("world", site.world, rgba=(*WORLD_RGB, 1.0))
+    scene.add_legend(LegendEntry("world", "brown mesh", "the seabed and the structure",
+                                 css_colour(WORLD_RGB), scene.path_of("world")))
     if plan.nominal is not None and len(plan.nominal) >= 2:
-        scene.add_path("nominal_path", plan.nominal)
-    scene.frame_camera(direction=(-0.6, -1.0, 1.8), bounds=site.target_mesh.bounds, margin=1.4)
+        scene.add_legend(LegendEntry("nominal path", "orange line", "the off-line plan",
+                                     css_colour(PATH_RGBA),
+                                     scene.add_path("nominal_path", plan.nominal)))
+    for name in HIDDEN_LAYERS:
+        scene.hide(name)
+    start = np.asarray(VehicleState(plan.start_state).position, dtype=float)
+    box = np.asarray(site.target_mesh.bounds, dtype=float)
+    bounds = np.array([np.minimum(box[0], start), np.maximum(box[1], start)])
+    scene.frame_camera(direction=(-0.6, -1.0, 1.8), bounds=bounds, margin=1.2)
+
+
+def leg_starts(result: MissionResult) -> list[tuple[float, str]]:
+    """[(mission time s, label)] of each leg flown, in order, for the recording's clock."""
+    from drake_auv.visualization.live import leg_label
+
+    if len(result.times) == 0:
+        return []
+    begun = np.r_[0, np.flatnonzero(np.diff(result.leg_at)) + 1]
+    return [(float(result.times[i]), leg_label(result.plan.legs, int(result.leg_at[i])))
+            for i in begun]
 
 
 def finish_recording(result: MissionResult, scene, filename):
     """Adds the end-of-dive layers (on-line map, coverage, and the reconstruction that
-    `write_outputs` left beside `filename`) and writes the standalone HTML."""
+    `write_outputs` left beside `filename`) and the clock's legs, and writes the standalone
+    HTML."""
     from drake_auv.reconstruction.products import draw_products
-    from drake_auv.visualization.octree import draw_octree
-    from drake_auv.visualization.sensors import draw_coverage
+    from drake_auv.visualization.octree import draw_octree, octree_legend
+    from drake_auv.visualization.sensors import coverage_legend, draw_coverage
 
     world, target = result.site.world, result.site.target_faces
     best = np.full(len(world.faces), np.nan)
     best[target] = result.multibeam_best
     draw_coverage(scene.meshcat, scene.path_of("coverage"), world, best, target, lift=0.05)
+    scene.add_legend(coverage_legend(scene.path_of("coverage")))
     draw_octree(scene.meshcat, scene.path_of("octree"), result.online_map.map)
+    scene.add_legend(octree_legend(scene.path_of("octree")))
     draw_products(scene, result, FilePath(filename).parent)
+    scene.clock_legs = leg_starts(result)
     return scene.write_html(filename)

@@ -202,6 +202,7 @@ def draw_products(scene, result, outdir, max_faces: int = 30_000) -> None:
     """Adds the `reconstruction` layer (the surface of `outdir`/reconstruction.ply, coloured by
     error, at most `max_faces` faces) to a mission's Meshcat scene, when there is one."""
     from drake_auv.reconstruction.figures import decimated
+    from drake_auv.visualization.legend import LegendEntry, swatch
 
     filename = FilePath(outdir) / "reconstruction.ply"
     if not filename.is_file():
@@ -214,3 +215,7 @@ def draw_products(scene, result, outdir, max_faces: int = 30_000) -> None:
                                        np.asfortranarray(small.vertices.T),
                                        np.asfortranarray(small.faces.T.astype(np.int32)),
                                        np.asfortranarray(colours.T))
+    scene.add_legend(LegendEntry(
+        "reconstruction", "black to yellow mesh", "the surface from the returns by its "
+        "distance to the truth: black on it, yellow far (reconstruction.png)", swatch(error_colours(np.linspace(0, 1, 5), 1.0)),
+        scene.path_of("reconstruction")))

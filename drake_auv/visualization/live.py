@@ -9,7 +9,10 @@ mission flies, for a browser watching the served scene (`drake-auv run MISSION -
   when the leg begins;
 - `section`: the replanner's last optimised section (its `section` output), a polyline in the
   navigation frame;
-- `reference`: a small sphere at the reference the tracker follows.
+- `reference`: a small sphere at the reference the tracker follows;
+- the mission clock: a slider of Meshcat's control panel ("mission clock (s)") the view moves
+  to the simulated time at every publish (dragging it changes nothing);
+- the legend of these markers (`Scene.add_legend`: read-only entries of the control panel).
 It only publishes (no state, no computed output), so a mission flies the same with it or
 without it as long as its period falls on event times the mission already has (1 s does: the
 supervisor judges every 0.5 s and the logs sample every 0.1 s).
@@ -26,18 +29,34 @@ from pydrake.systems.framework import LeafSystem
 from drake_auv.behaviour import LEG_SIZE, read_leg
 from drake_auv.mission.legs import Leg
 from drake_auv.signals import Reference, VehicleState
+from drake_auv.visualization.legend import LegendEntry, css_colour
 
 LABEL_PREFIX = "leg "  # the control-panel label's name starts with it
+CLOCK = "mission clock (s)"  # the control-panel slider showing the simulated time
 LEG_RGBA = Rgba(1.0, 0.1, 0.8, 1.0)
 SECTION_RGBA = Rgba(0.1, 1.0, 0.3, 1.0)
 REFERENCE_RGBA = Rgba(1.0, 1.0, 0.2, 1.0)
 
 
-def leg_label(legs: tuple[Leg, ...], index: int, start: float) -> str:
-    """The control-panel label of leg `index` begun at `start` s."""
+def leg_label(legs: tuple[Leg, ...], index: int, start: float | None = None) -> str:
+    """The label of leg `index` (begun at `start` s, when given: the control panel's)."""
     leg = legs[index]
     return (f"{LABEL_PREFIX}{index + 1} of {len(legs)}: {leg.phase}, {leg.behaviour} until "
-            f"{leg.goal} (since {start:.0f} s)")
+            f"{leg.goal}" + ("" if start is None else f" (since {start:.0f} s)"))
+
+
+def mission_view_legend(root: str) -> tuple[LegendEntry, ...]:
+    """The legend's entries of what a `MissionView` under `root` draws."""
+    leg, magenta = f"{root}/leg", css_colour(LEG_RGBA)
+    return (LegendEntry("leg's target", "magenta sphere", "where an arrive leg goes (the line "
+                        "joins the vehicle; a distance leg's run is a magenta line)", magenta,
+                        leg),
+            LegendEntry("loops' centre", "magenta bar", "the vertical axis a loops leg "
+                        "circles", magenta, leg),
+            LegendEntry("section", "green line", "the replanner's last optimised section",
+                        css_colour(SECTION_RGBA), f"{root}/section"),
+            LegendEntry("reference", "yellow sphere", "the point the tracker follows",
+                        css_colour(REFERENCE_RGBA), f"{root}/reference"))
 
 
 class MissionView(LeafSystem):
@@ -45,10 +64,12 @@ class MissionView(LeafSystem):
 
     Ports (views in `drake_auv.signals`): inputs `leg` (`LegSignal`, the supervisor's),
     `estimated_state` (`VehicleState`), `reference` (`Reference`) and `section` (abstract
-    (N, 3) array, m; may be left unconnected: no replanner).
+    (N, 3) array, m; may be left unconnected: no replanner). `duration`: the clock's end, s
+    (default: the legs' budgets).
     """
 
-    def __init__(self, meshcat, root: str, legs: tuple[Leg, ...], period: float = 1.0):
+    def __init__(self, meshcat, root: str, legs: tuple[Leg, ...], period: float = 1.0,
+                 duration: float | None = None):
         super().__init__()
         if not (np.isfinite(period) and 0.05 <= period <= 60.0):
             raise ValueError(f"MissionView period must be in [0.05, 60] s, got {period}")
@@ -63,8 +84,16 @@ class MissionView(LeafSystem):
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
         self.DeclareForcedPublishEvent(self._publish)
         meshcat.SetObject(f"{self.root}/reference", Sphere(0.3), REFERENCE_RGBA)
+        if duration is None:
+            duration = sum(leg.max_duration for leg in self.legs)
+        if not (np.isfinite(duration) and duration > 0):
+            raise ValueError(f"MissionView duration must be a finite time > 0 s, got {duration}")
+        if CLOCK in meshcat.GetSliderNames():
+            meshcat.DeleteSlider(CLOCK)
+        meshcat.AddSlider(CLOCK, 0.0, float(np.ceil(duration)), 1.0, 0.0)
 
     def _publish(self, context):
+        self.meshcat.SetSliderValue(CLOCK, context.get_time())
         index, start = read_leg(self.leg_input, context)
         self._draw_leg(index, start, VehicleState(self.state_input.Eval(context)).position)
         reference = Reference(self.reference_input.Eval(context))
@@ -106,11 +135,16 @@ class MissionView(LeafSystem):
 
 
 def add_mission_view(builder, scene, legs: tuple[Leg, ...], leg_port, estimated_port,
-                     reference_port, section_port=None, period: float = 1.0) -> MissionView:
-    """Adds a `MissionView` drawing under `scene`'s `live` layer, wired to the supervisor's
-    `leg`, the estimated state, the tracked reference and (with a replanner) its `section`."""
+                     reference_port, section_port=None, period: float = 1.0,
+                     duration: float | None = None) -> MissionView:
+    """Adds a `MissionView` drawing under `scene`'s `live` layer (its markers in the scene's
+    legend), wired to the supervisor's `leg`, the estimated state, the tracked reference and
+    (with a replanner) its `section`; `duration`: the clock's end, s."""
     view = builder.AddNamedSystem("mission_view", MissionView(
-        scene.meshcat, scene.path_of("live"), legs, period))
+        scene.meshcat, scene.path_of("live"), legs, period, duration))
+    for entry in mission_view_legend(view.root):
+        if entry.name != "section" or section_port is not None:
+            scene.add_legend(entry)
     builder.Connect(leg_port, view.leg_input)
     builder.Connect(estimated_port, view.state_input)
     builder.Connect(reference_port, view.reference_input)

@@ -15,6 +15,7 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mapping.octree_map import OctreeMap
+from drake_auv.visualization.legend import LegendEntry, swatch
 
 
 def depth_colours(z: np.ndarray, cmap: str = "viridis") -> np.ndarray:
@@ -23,6 +24,13 @@ def depth_colours(z: np.ndarray, cmap: str = "viridis") -> np.ndarray:
     span = np.ptp(z) if len(z) else 0.0
     t = (z - z.min()) / span if span > 0 else np.zeros_like(z)
     return (255 * colormaps[cmap](t)[:, :3]).astype(np.uint8)
+
+
+def octree_legend(path: str, cmap: str = "viridis") -> LegendEntry:
+    """The legend's entry of the voxels drawn at `path`."""
+    return LegendEntry("octree", "viridis dots", "the on-line map's occupied voxels by depth: "
+                       "purple deep, yellow shallow",
+                       swatch(colormaps[cmap](np.linspace(0, 1, 5))), path)
 
 
 def draw_octree(meshcat, path: str, octree_map: OctreeMap, point_size: float | None = None,

@@ -5,7 +5,8 @@ Other modules add their own layers (sonar beams, octree, coverage) through `scen
 `scene.path_of(name)`. The vehicle is posed from a `state` port by `VehicleVisualizer`, a
 LeafSystem that publishes periodically; with `start_recording` every pose (and each completed
 piece of the trail, by its visibility) is also keyframed, and `write_html` saves the whole
-animation as one standalone HTML file, with the camera framed on the scene.
+animation as one standalone HTML file, with the camera framed on the scene, the legend of its
+layers (`add_legend`, `visualization.legend`) and, with a recording, the mission clock.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from pydrake.systems.framework import LeafSystem
 from drake_auv.output_files import write_text
 from drake_auv.planning.path import Path
 from drake_auv.signals import VehicleState
+from drake_auv.visualization.legend import LegendEntry, css_colour, overlay_html, with_overlay
 
 # GIRONA 500 envelope: 1.5 m long, 1.0 m wide, 1.0 m high, two buoyant upper hulls and one
 # lower hull (Ribas et al. 2012); hull radius and spacing picked to match that envelope.
@@ -30,6 +32,8 @@ _HULL_LENGTH = 1.5 - 2 * _HULL_RADIUS  # cylinder part of the capsule
 _HULLS = (("hull_port", (0.0, 0.3, 0.2), Rgba(0.95, 0.75, 0.1, 1.0)),
           ("hull_starboard", (0.0, -0.3, 0.2), Rgba(0.95, 0.75, 0.1, 1.0)),
           ("hull_lower", (0.0, 0.0, -0.3), Rgba(0.35, 0.35, 0.4, 1.0)))
+_TRAIL_RGBA = Rgba(0.1, 0.6, 1.0, 1.0)
+PATH_RGBA = (1.0, 0.55, 0.0, 1.0)  # `add_path`'s default
 _CAMERA = "/Cameras/default/rotated/<object>"
 _FOV_DEG = 75.0  # vertical field of view of Meshcat's default perspective camera
 
@@ -63,7 +67,9 @@ class Scene:
     """One Meshcat scene (served on localhost only). Attributes: `meshcat`, `root` (scene-tree
     prefix), `live` (a browser watches it while the mission flies: the mission Diagram then
     also draws the leg, the replanner's section and the reference, `visualization.live`),
-    `recording`, `bounds` (box of the meshes and paths drawn), `camera_framed`."""
+    `recording`, `bounds` (box of the meshes and paths drawn), `camera_framed`, `legend`
+    ({name: `LegendEntry`}, in the order drawn) and `clock_legs` ([(mission time s, the leg's
+    label)], by time: what the recording's clock names)."""
 
     def __init__(self, meshcat: Meshcat | None = None, root: str = "drake_auv",
                  live: bool = False, port: int | None = None):
@@ -77,6 +83,8 @@ class Scene:
         self._trails = 0
         self.bounds: np.ndarray | None = None  # (2, 3) min and max corners of what is drawn
         self.camera_framed = False
+        self.legend: dict[str, LegendEntry] = {}
+        self.clock_legs: list[tuple[float, str]] = []
 
     def path_of(self, name: str) -> str:
         """The scene-tree path of a named layer."""
@@ -87,6 +95,20 @@ class Scene:
         phases of a mission (one diagram each) all stay in the recording."""
         self._trails += 1
         return self.path_of(f"{name}_trail/{self._trails - 1}")
+
+    def add_legend(self, entry: LegendEntry) -> None:
+        """Names a layer or marker in the legend (once per name); in a live scene, also as a
+        read-only entry of Meshcat's control panel."""
+        if entry.name in self.legend:
+            return
+        self.legend[entry.name] = entry
+        if self.live and entry.label not in self.meshcat.GetButtonNames():
+            self.meshcat.AddButton(entry.label)
+
+    def hide(self, name: str) -> None:
+        """Starts the layer `name` hidden (drawn, one click away in the legend and in
+        Meshcat's scene tree)."""
+        self.meshcat.SetProperty(self.path_of(name), "visible", False)
 
     def include(self, points) -> None:
         """Grows `bounds` to hold `points` ((N, 3), m): what `frame_camera` looks at."""
@@ -139,12 +161,15 @@ class Scene:
         return path
 
     def add_terrain(self, bathymetry, stride: int = 1, rgba=(0.55, 0.5, 0.42, 1.0)) -> str:
-        """Draws a `Bathymetry` grid as the seabed surface at `terrain`."""
+        """Draws a `Bathymetry` grid as the seabed surface at `terrain` (in the legend)."""
         from drake_auv.terrain.mesh import bathymetry_to_mesh
 
-        return self.add_mesh("terrain", bathymetry_to_mesh(bathymetry, stride), rgba)
+        path = self.add_mesh("terrain", bathymetry_to_mesh(bathymetry, stride), rgba)
+        self.add_legend(LegendEntry("terrain", "brown mesh", "the seabed", css_colour(rgba),
+                                    path))
+        return path
 
-    def add_path(self, name: str, path, rgba=(1.0, 0.55, 0.0, 1.0), line_width: float = 2.0) -> str:
+    def add_path(self, name: str, path, rgba=PATH_RGBA, line_width: float = 2.0) -> str:
         """Draws a `Path` (or an (N, 3) array of points) as a polyline at `name`."""
         points = path.points if isinstance(path, Path) else np.asarray(path, dtype=float)
         if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
@@ -180,17 +205,23 @@ class Scene:
         return (self.time_offset + sim_time) / self.playback_speed
 
     def write_html(self, filename) -> FilePath:
-        """Publishes the recording (if any) and writes the scene as one standalone HTML file;
-        frames the camera on the scene first unless `frame_camera` was called."""
+        """Publishes the recording (if any) and writes the scene as one standalone HTML file
+        with the legend of the layers drawn and, with a recording, the mission clock; frames
+        the camera on the scene first unless `frame_camera` was called."""
         if not self.camera_framed and self.bounds is not None:
             self.frame_camera()
-        if self.recording:
+        recorded = self.recording
+        if recorded:
             self.meshcat.StopRecording()
             self.meshcat.PublishRecording()
             self.recording = False
+        entries = [entry for entry in self.legend.values()
+                   if entry.layer is None or self.meshcat.HasPath(entry.layer)]
+        overlay = overlay_html(entries, self.playback_speed if recorded else None,
+                               self.clock_legs)
         filename = FilePath(filename)
         filename.parent.mkdir(parents=True, exist_ok=True)
-        write_text(filename, self.meshcat.StaticHtml())
+        write_text(filename, with_overlay(self.meshcat.StaticHtml(), overlay))
         return filename
 
 
@@ -218,6 +249,11 @@ class VehicleVisualizer(LeafSystem):
         self.DeclareForcedPublishEvent(self._publish_pose)
         self.DeclareInitializationPublishEvent(self._reset_trail)
         self._draw_vehicle()
+        scene.add_legend(LegendEntry(name, "yellow hulls", "the GIRONA 500 at its true pose",
+                                     css_colour(_HULLS[0][2]), self.vehicle_path))
+        if trail:
+            scene.add_legend(LegendEntry(f"{name} trail", "blue line", "where it has been",
+                                         css_colour(_TRAIL_RGBA), scene.path_of(f"{name}_trail")))
 
     def _draw_vehicle(self):
         meshcat = self.scene.meshcat
@@ -252,7 +288,7 @@ class VehicleVisualizer(LeafSystem):
         if len(self._trail_points) > self.trail_piece:
             path = f"{self.trail_path}/{self._pieces}"
             points = np.asfortranarray(np.array(self._trail_points).T)
-            scene.meshcat.SetLine(path, points, 2.0, Rgba(0.1, 0.6, 1.0, 1.0))
+            scene.meshcat.SetLine(path, points, 2.0, _TRAIL_RGBA)
             if scene.recording:
                 scene.meshcat.SetProperty(path, "visible", False, 0.0)
                 scene.meshcat.SetProperty(path, "visible", True, when)

@@ -3,8 +3,9 @@
 `SonarVisualizer` draws the last scan of a sonar (`returns` input) as beam segments from the
 sensor to each return plus the return points, optionally keeping the points of the last
 `history` scans as a depth-coloured cloud. `CoverageVisualizer` colours the target surface by
-best viewing angle (from `CoverageRecorder.face_angles`): unseen faces grey, seen faces from
-green (0 deg, head-on) to red (90 deg, grazing). `draw_coverage` does the same once, offline.
+best viewing angle (from `CoverageRecorder.face_angles`), in 15 deg bands: unseen faces grey,
+seen faces from green (0 deg, head-on) to red (90 deg, grazing). `draw_coverage` does the same
+once, offline.
 
 Both publish periodically (not every step). Drake's Meshcat recordings animate transforms and
 properties, not geometry, so a saved HTML shows the last scan and coverage drawn; watch live
@@ -20,8 +21,10 @@ from pydrake.perception import BaseField, Fields, PointCloud
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.sonar.returns import SonarReturns
+from drake_auv.visualization.legend import LegendEntry, swatch
 
 UNSEEN_RGB = (0.55, 0.55, 0.55)
+COVERAGE_BAND_DEG = 15.0  # the coverage layer's colour bands, deg of viewing angle
 
 
 def angle_colors(angles: np.ndarray) -> np.ndarray:
@@ -43,11 +46,30 @@ def depth_colors(z: np.ndarray) -> np.ndarray:
     return np.column_stack([t, 0.3 + 0.6 * t, 1.0 - t])
 
 
+def coverage_bands() -> list[tuple[str, np.ndarray]]:
+    """[(name, RGB)] of the coverage layer's bands: `COVERAGE_BAND_DEG` wide from head-on
+    (coloured by `angle_colors` at their centre), then the unseen faces."""
+    edges = np.arange(0.0, 90.0, COVERAGE_BAND_DEG)
+    colours = angle_colors(np.radians(edges + COVERAGE_BAND_DEG / 2))
+    return [(f"{lo:.0f}-{lo + COVERAGE_BAND_DEG:.0f}_deg", rgb)
+            for lo, rgb in zip(edges, colours)] + [("unseen", np.array(UNSEEN_RGB))]
+
+
+def coverage_legend(path: str) -> LegendEntry:
+    """The legend's entry of the coverage drawn at `path`."""
+    return LegendEntry("coverage", "green to red", f"best multibeam angle on the target, in "
+                       f"{COVERAGE_BAND_DEG:.0f}° bands: green head-on, yellow 45°, red "
+                       "grazing, grey unseen",
+                       swatch([rgb for _, rgb in coverage_bands()], smooth=False), path)
+
+
 def draw_coverage(meshcat, path: str, world, face_angles: np.ndarray,
                   faces: np.ndarray | None = None, lift: float = 0.0) -> None:
     """Draws `faces` of `world` (default: all) coloured by `face_angles` (per world face,
-    rad, NaN unseen). Each face gets its own vertices so colours do not bleed; `lift` (m)
-    moves them along the face normals, so the layer shows over the world mesh itself."""
+    rad, NaN unseen), one mesh per band of `coverage_bands` at `path`/<band name> (a band
+    without faces is deleted). A band's faces share their vertices: a fraction of the bytes
+    of a mesh coloured face by face, whose colours must not bleed. `lift` (m) moves the
+    vertices along their normals, so the layer shows over the world mesh itself."""
     face_angles = np.asarray(face_angles, dtype=float)
     if face_angles.shape != (len(world.faces),):
         raise ValueError(f"face_angles must have one value per world face "
@@ -57,12 +79,22 @@ def draw_coverage(meshcat, path: str, world, face_angles: np.ndarray,
         faces = np.flatnonzero(faces)
     if len(faces) == 0:
         raise ValueError("draw_coverage: no faces to draw")
-    triangles = (np.asarray(world.triangles)[faces]
-                 + lift * np.asarray(world.face_normals)[faces][:, None, :]).reshape(-1, 3)
-    colors = np.repeat(angle_colors(face_angles[faces]), 3, axis=0)
-    indices = np.arange(len(triangles), dtype=np.int32).reshape(-1, 3)
-    meshcat.SetTriangleColorMesh(path, np.asfortranarray(triangles.T),
-                                 np.asfortranarray(indices.T), np.asfortranarray(colors.T))
+    angles = np.degrees(face_angles[faces])
+    bands = coverage_bands()
+    band = np.where(np.isnan(angles), len(bands) - 1, np.clip(
+        np.nan_to_num(angles) // COVERAGE_BAND_DEG, 0, len(bands) - 2)).astype(int)
+    corners, vertices = np.asarray(world.faces), np.asarray(world.vertices)
+    normals = np.asarray(world.vertex_normals)
+    for k, (name, rgb) in enumerate(bands):
+        chosen = corners[faces[band == k]]
+        if len(chosen) == 0:
+            meshcat.Delete(f"{path}/{name}")
+            continue
+        used, triangles = np.unique(chosen, return_inverse=True)
+        points = vertices[used] + lift * normals[used]
+        meshcat.SetTriangleMesh(f"{path}/{name}", np.asfortranarray(points.T),
+                                np.asfortranarray(triangles.reshape(-1, 3).T.astype(np.int32)),
+                                Rgba(*rgb, 1.0))
 
 
 class SonarVisualizer(LeafSystem):
