@@ -418,6 +418,19 @@ def test_templates_write_the_bytes_rosbags_writes():
     beams = np.array([[1.0, 0, 0], [0, 1.0, 0], [0.6, 0.8, 0]])
     assert m.CloudWriter("profiler").cdr(12.3, ranges, beams) == m.serialize(
         m.point_cloud(12.3, "profiler", ranges, beams), "sensor_msgs/msg/PointCloud2")
+    wide = np.random.default_rng(0).normal(size=(5, 4))  # beams as a strided view
+    assert m.CloudWriter("dvl").cdr(0.5, wide[:, 3], wide[:, :3]) == m.serialize(
+        m.point_cloud(0.5, "dvl", wide[:, 3], wide[:, :3]), "sensor_msgs/msg/PointCloud2")
+    scans = m.ScanWriter("multibeam", 0.1)
+    for k, (angles, echoes) in enumerate(((np.linspace(-1, 1, 3), ranges),
+                                          (np.linspace(-1, 1, 3), ranges[::-1]),
+                                          (np.linspace(-0.5, 0.7, 5), np.arange(5.0)))):
+        assert scans.cdr(12.3 + k, angles, echoes, 20.0) == m.serialize(m.laser_scan(
+            12.3 + k, "multibeam", angles, echoes, 20.0, 0.1), "sensor_msgs/msg/LaserScan")
+    for typename, value in (("std_msgs/msg/Int32", -7), ("std_msgs/msg/Int32", 2**31 - 1),
+                            ("std_msgs/msg/Float64", 0.8125)):
+        assert m.scalar_cdr(typename, value) == m.serialize(m.scalar(typename, value),
+                                                            typename)
 
 
 def test_marker_points_spliced_into_the_serialisation_decode():

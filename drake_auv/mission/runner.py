@@ -11,6 +11,7 @@ come from the exact point-to-mesh distance, on the true world, and the clearance
 
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import dataclass, field
 
@@ -142,42 +143,43 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
     `plan` (default `plan_mission(spec, site)`), paced at `realtime_rate` times real time
     (0: as fast as possible; pacing changes no result); `probe(root_context)`, when given, is
     called at every simulator step (a benchmark's sampling of memory and wall time); `mcap`:
-    an `rosio.McapLog` the dive is written into (closed, into place, when the dive ends)."""
-    site = site if site is not None else load_site(spec.site, spec.seed, label=spec.name)
-    check_against_site(spec, site)
-    plan = plan if plan is not None else plan_mission(spec, site)
-    diagram, handles = build_mission_diagram(site, spec, plan, scene=scene, mcap=mcap)
-    simulator = Simulator(diagram)
-    simulator.set_target_realtime_rate(realtime_rate)
-    context = simulator.get_context()
-    cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
-    bar = tqdm(total=int(np.ceil(cap)), unit="s sim", desc=f"mission {spec.name}",
-               disable=not progress)
-    supervisor = handles.supervisor
-    spool = LogSpool(handles.logs, LOG_SPOOL_S)
+    an `rosio.McapLog` the dive is written into (closed, into place, when the dive ends;
+    aborted, no file left, when building or flying it fails)."""
+    with mcap if mcap is not None else contextlib.nullcontext():
+        site = site if site is not None else load_site(spec.site, spec.seed, label=spec.name)
+        check_against_site(spec, site)
+        plan = plan if plan is not None else plan_mission(spec, site)
+        diagram, handles = build_mission_diagram(site, spec, plan, scene=scene, mcap=mcap)
+        simulator = Simulator(diagram)
+        simulator.set_target_realtime_rate(realtime_rate)
+        context = simulator.get_context()
+        cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
+        bar = tqdm(total=int(np.ceil(cap)), unit="s sim", desc=f"mission {spec.name}",
+                   disable=not progress)
+        supervisor = handles.supervisor
+        spool = LogSpool(handles.logs, LOG_SPOOL_S)
 
-    def monitor(root_context) -> EventStatus:
-        now = int(root_context.get_time())
-        if now > bar.n:
-            bar.update(now - bar.n)
-        spool.spool(root_context)
-        if probe is not None:
-            probe(root_context)
-        return supervisor.monitor(root_context)
+        def monitor(root_context) -> EventStatus:
+            now = int(root_context.get_time())
+            if now > bar.n:
+                bar.update(now - bar.n)
+            spool.spool(root_context)
+            if probe is not None:
+                probe(root_context)
+            return supervisor.monitor(root_context)
 
-    simulator.set_monitor(monitor)
-    try:
-        wall = time.perf_counter()
-        status = simulator.AdvanceTo(cap)
-        wall = time.perf_counter() - wall
-        bar.update(bar.total - bar.n)  # a dive that ends before the cap ends the bar at 100 %
-        bar.close()
-        completed = status.reason() == SimulatorStatus.ReturnReason.kReachedTerminationCondition
-        logs = {name: spool.read(name, context) for name in handles.logs}
-    finally:
-        spool.close()
-        if mcap is not None:
-            mcap.close()
+        simulator.set_monitor(monitor)
+        try:
+            wall = time.perf_counter()
+            status = simulator.AdvanceTo(cap)
+            wall = time.perf_counter() - wall
+            bar.update(bar.total - bar.n)  # a dive that ends before the cap: the bar at 100 %
+            bar.close()
+            completed = (status.reason()
+                         == SimulatorStatus.ReturnReason.kReachedTerminationCondition)
+            logs = {name: spool.read(name, context) for name in handles.logs}
+        finally:
+            spool.close()
     return _collect(spec, site, plan, diagram, handles, context, completed, wall, logs)
 
 

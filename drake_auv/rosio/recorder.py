@@ -103,6 +103,8 @@ class McapRecorder(LeafSystem):
             thrust=m.array_template(THRUSTER_NAMES),
             current=m.array_template(("east_mps", "north_mps", "up_mps")))
         self._clouds = {name: m.CloudWriter(name) for name in self.sonars}
+        self._scans = {name: m.ScanWriter(name, self.sonars[name][1])
+                       for name in self.laser_scans}
         log.add_metadata("sensors", {f"{name}_max_range_m": repr(float(r))
                                      for name, (_, _, r) in self.sonars.items()})
         self.state_input = self.DeclareVectorInputPort("state", VehicleState.size())
@@ -163,8 +165,8 @@ class McapRecorder(LeafSystem):
                 progress[1:] = key
         if tick % self._every["coverage"] == 0:
             for name, port in self.coverage_inputs.items():
-                self.log.write(coverage_topic(name), "std_msgs/msg/Float64",
-                               m.scalar("std_msgs/msg/Float64", float(port.Eval(context)[0])), t)
+                self._write_scalar(coverage_topic(name), "std_msgs/msg/Float64",
+                                   float(port.Eval(context)[0]), t)
         if self.map_input is not None and tick % self._every["map"] == 0:
             octree = self.map_input.Eval(context).map
             self.log.write_cdr(TOPICS["map"], "visualization_msgs/msg/MarkerArray",
@@ -211,10 +213,13 @@ class McapRecorder(LeafSystem):
         if self.water_input is not None:
             self._write_fixed("current", Water(self.water_input.Eval(context)).velocity, (), t)
         if tick % self._every["mission"] == 0:
-            self.log.write(TOPICS["leg"], "std_msgs/msg/Int32", m.scalar(
-                "std_msgs/msg/Int32", int(LegSignal(self.leg_input.Eval(context)).index)), t)
-            self.log.write(TOPICS["response"], "std_msgs/msg/Int32", m.scalar(
-                "std_msgs/msg/Int32", int(Response(self.response_input.Eval(context)).mode)), t)
+            self._write_scalar(TOPICS["leg"], "std_msgs/msg/Int32",
+                               int(LegSignal(self.leg_input.Eval(context)).index), t)
+            self._write_scalar(TOPICS["response"], "std_msgs/msg/Int32",
+                               int(Response(self.response_input.Eval(context)).mode), t)
+
+    def _write_scalar(self, topic: str, typename: str, value, t: float) -> None:
+        self.log.write_cdr(topic, typename, m.scalar_cdr(typename, value), t)
 
     def _write_fixed(self, topic: str, floats, stamps, t: float) -> None:
         template = self._templates[topic]
@@ -230,14 +235,14 @@ class McapRecorder(LeafSystem):
         is stamped with that tick). Logged at `now`, the tick that received it (as a
         recorder's receive time): in log order, the updates reach a replay in the order the
         mapper recorded them."""
-        mount, period, _ = self.sonars[name]
-        rows = [row for row in poses if row[0] == row[0]]  # NaN: no tick yet
-        rows.sort(key=lambda row: abs(row[0] - returns.time))  # on time first
+        mount = self.sonars[name][0]
+        rows = poses[poses[:, 0] == poses[:, 0]]  # NaN: no tick yet
+        rows = rows[np.argsort(abs(rows[:, 0] - returns.time), kind="stable")]  # on time first
         origin_nav = returns.origin_nav
         for row in rows:
             rotation = rotation_world_body(*row[4:7])
             origin = row[1:4] + rotation @ mount.position
-            if max(abs(origin - origin_nav)) < 1e-9:
+            if np.abs(origin - origin_nav).max() < 1e-9:
                 break
         else:
             raise ValueError(f"McapRecorder: {name} returns at {returns.time:.3f} s were not "
@@ -246,9 +251,9 @@ class McapRecorder(LeafSystem):
         beams = np.asarray(returns.directions_nav) @ (rotation @ mount.rotation)
         self.log.write_cdr(points_topic(name), "sensor_msgs/msg/PointCloud2",
                            self._clouds[name].cdr(t, returns.ranges, beams), now)
-        if name in self.laser_scans:
-            self.log.write(scan_topic(name), "sensor_msgs/msg/LaserScan", m.laser_scan(
-                t, name, returns.angles, returns.ranges, returns.max_range, period), now)
+        if name in self._scans:
+            self.log.write_cdr(scan_topic(name), "sensor_msgs/msg/LaserScan", self._scans[
+                name].cdr(t, returns.angles, returns.ranges, returns.max_range), now)
 
 
 def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supervisor,

@@ -1,23 +1,36 @@
 """`McapLog`: ROS 2 messages streamed into an MCAP file as a dive runs (no Drake).
 
 The file is a rosbag2 MCAP (profile `ros2`, `ros2msg` schemas, CDR messages; `/tf_static` is
-offered transient-local, so `ros2 bag play` latches it). Messages go into chunks of
-`CHUNK_BYTES`, each written out when full: memory holds one chunk and the chunk index,
-whatever the dive's length. The chunks are LZ4-compressed by default: on a boulder dive it
-halves the file (185 kB a simulated second against 333 uncompressed) for about twice the
-writing time of a sonar cloud; `compression="zstd"` compresses more at three times it,
-`"none"` writes the fastest. It is written as `NAME.part`
-beside the file and renamed into place by `close()`; a log that is never closed leaves only
-the `.part`.
+offered transient-local, so `ros2 bag play` latches it). A message's record (the 31 bytes of
+its opcode, length, channel, sequence and times, then its CDR) is packed straight into the
+open chunk, the other records (schemas, channels, chunks and their message indexes, metadata,
+the summary) are `mcap.records`' own: the writer's cost is a dive's few messages a tick, not
+a library's per-message bookkeeping. A chunk is written out when it holds `CHUNK_BYTES`:
+memory holds one chunk and the chunk index, whatever the dive's length. Chunks are
+compressed with zstd at level 1 by default (on a boulder dive a third smaller than LZ4 for
+about the same time, `benchmarks/bench_mcap.py`), `"lz4"` or `"none"` on request.
+
+The file is written through `output_files.replacing` (a private folder beside it, renamed
+into place by `close()`, never following a link at its name); `abort()`, or an error inside
+`with McapLog(...)`, removes it and leaves no file.
 """
 
 from __future__ import annotations
 
-import os
+import contextlib
+import struct
+import zlib
 from pathlib import Path as FilePath
 
-from mcap.writer import CompressionType, Writer
+import lz4.frame
+import zstandard
+from mcap.data_stream import RecordBuilder
+from mcap.opcode import Opcode
+from mcap.records import (Channel, Chunk, ChunkIndex, DataEnd, Footer, Header, MessageIndex,
+                          Metadata, MetadataIndex, Schema, Statistics, SummaryOffset)
+from mcap.writer import MCAP0_MAGIC
 
+from drake_auv.output_files import open_replacing
 from drake_auv.rosio.messages import msgdef, nanoseconds, serialize
 
 CHUNK_BYTES = 2**20
@@ -28,71 +41,214 @@ _QOS = ("- history: 3\n  depth: 0\n  reliability: 1\n  durability: {durability}\
         "  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n"
         "  avoid_ros_namespace_conventions: false\n")
 LATCHED = ("/tf_static",)
-COMPRESSIONS = {"none": CompressionType.NONE, "lz4": CompressionType.LZ4,
-                "zstd": CompressionType.ZSTD}
+COMPRESSIONS = {"zstd": zstandard.ZstdCompressor(level=1).compress,
+                "lz4": lz4.frame.compress, "none": None}
+# a Message record's head: opcode, record length, channel id, sequence, log and publish time
+_MESSAGE = struct.Struct("<BQHIQQ")
+_MESSAGE_FIELDS, _MESSAGE_OPCODE = _MESSAGE.size - 9, int(Opcode.MESSAGE)
 
 
 class McapLog:
-    """An MCAP file of ROS 2 messages being written; `write(topic, typename, message, t)`."""
+    """An MCAP file of ROS 2 messages being written; `write(topic, typename, message, t)`.
 
-    def __init__(self, filename, metadata: dict | None = None, compression: str = "lz4"):
+    `counts`: {topic: messages written}. `close()` puts the file in place, `abort()` drops it
+    (both once; a `with` block closes it, or aborts it on an error)."""
+
+    def __init__(self, filename, metadata: dict | None = None, compression: str = "zstd"):
         if compression not in COMPRESSIONS:
             raise ValueError(f"MCAP compression must be one of {', '.join(COMPRESSIONS)}, "
                              f"got {compression!r}")
         self.filename = FilePath(filename)
-        self._part = self.filename.with_name(self.filename.name + ".part")
-        self._stream = open(self._part, "wb")
-        self._writer = Writer(self._stream, chunk_size=CHUNK_BYTES,
-                              compression=COMPRESSIONS[compression])
-        self._writer.start(profile="ros2", library="drake_auv")
-        self._schemas: dict[str, int] = {}
-        self._channels: dict[str, tuple[int, str]] = {}
+        self._compression = "" if compression == "none" else compression
+        self._compress = COMPRESSIONS[compression]
+        self._files = contextlib.ExitStack()
+        self._stream = self._files.enter_context(open_replacing(self.filename, "wb"))
+        self._offset = 0
+        self._schemas: dict[str, Schema] = {}
+        # topic -> [channel id, typename]; Channel records by id
+        self._channels: dict[str, list] = {}
+        self._channel_records: dict[int, Channel] = {}
+        self._chunk = bytearray()
+        self._indexes: dict[int, list] = {}  # channel id -> the open chunk's (time, offset)
+        self._times = [0, 0]  # the open chunk's first and last log time, ns
+        self._span: list[int] = []  # the file's first and last log time, ns
+        self._chunk_indexes: list[ChunkIndex] = []
+        self._metadata_indexes: list[MetadataIndex] = []
         self.counts: dict[str, int] = {}
-        if metadata:
-            self.add_metadata("drake_auv", metadata)
+        try:
+            self._emit(MCAP0_MAGIC)
+            self._write_record(Header(profile="ros2", library="drake_auv"))
+            if metadata:
+                self.add_metadata("drake_auv", metadata)
+        except BaseException:
+            self.abort()
+            raise
+
+    def __enter__(self) -> "McapLog":
+        return self
+
+    def __exit__(self, kind, error, trace) -> None:
+        if kind is None:
+            self.close()
+        else:
+            self.abort()
+
+    def _emit(self, data: bytes) -> None:
+        self._stream.write(data)
+        self._offset += len(data)
+
+    def _write_record(self, record) -> int:
+        """Writes an `mcap.records` record to the file; returns its length."""
+        builder = RecordBuilder()
+        record.write(builder)
+        data = builder.end()
+        self._emit(data)
+        return len(data)
 
     def add_metadata(self, name: str, values: dict) -> None:
         """A metadata record `name` of string values."""
-        self._writer.add_metadata(name, {k: str(v) for k, v in values.items()})
+        offset = self._offset
+        length = self._write_record(Metadata(name=name, metadata={
+            k: str(v) for k, v in values.items()}))
+        self._metadata_indexes.append(MetadataIndex(offset=offset, length=length, name=name))
 
-    def _channel(self, topic: str, typename: str) -> int:
+    def _channel(self, topic: str, typename: str) -> list:
+        """[channel id, typename] of `topic`, its schema and channel records written into the
+        open chunk the first time."""
         channel = self._channels.get(topic)
         if channel is None:
+            builder = RecordBuilder()
             schema = self._schemas.get(typename)
             if schema is None:
-                schema = self._schemas[typename] = self._writer.register_schema(
-                    typename, "ros2msg", msgdef(typename).encode())
-            qos = _QOS.format(durability=1 if topic in LATCHED else 2)
-            channel = self._channels[topic] = (self._writer.register_channel(
-                topic, "cdr", schema, {"offered_qos_profiles": qos}), typename)
+                schema = self._schemas[typename] = Schema(
+                    id=len(self._schemas) + 1, name=typename, encoding="ros2msg",
+                    data=msgdef(typename).encode())
+                schema.write(builder)
+            record = Channel(id=len(self._channels) + 1, topic=topic, message_encoding="cdr",
+                             schema_id=schema.id, metadata={"offered_qos_profiles": _QOS.format(
+                                 durability=1 if topic in LATCHED else 2)})
+            record.write(builder)
+            self._chunk += builder.end()
+            channel = self._channels[topic] = [record.id, typename]
+            self._channel_records[record.id] = record
             self.counts[topic] = 0
-        elif channel[1] != typename:
+        if channel[1] != typename:
             raise ValueError(f"{topic} carries {channel[1]}, not {typename}")
-        return channel[0]
+        return channel
 
     def write(self, topic: str, typename: str, message, t: float) -> None:
         """Appends `message` (a rosbags message of `typename`) on `topic`, logged at `t` s."""
         self.write_cdr(topic, typename, serialize(message, typename), t)
 
-    def write_cdr(self, topic: str, typename: str, data: bytes, t: float) -> None:
+    def write_cdr(self, topic: str, typename: str, data, t: float) -> None:
         """Appends a message of `typename` already serialised (CDR `data`)."""
-        channel = self._channel(topic, typename)
+        channel = self._channels.get(topic)
+        if channel is None or channel[1] != typename:
+            channel = self._channel(topic, typename)
         ns = nanoseconds(t)
-        self._writer.add_message(channel, log_time=ns, publish_time=ns, data=data,
-                                 sequence=self.counts[topic])
-        self.counts[topic] += 1
+        chunk, sequence = self._chunk, self.counts[topic]
+        index = self._indexes.get(channel[0])
+        if index is None:
+            index = self._indexes[channel[0]] = []
+            if len(self._indexes) == 1:
+                self._times[:] = ns, ns
+        index.append((ns, len(chunk)))
+        chunk += _MESSAGE.pack(_MESSAGE_OPCODE, _MESSAGE_FIELDS + len(data), channel[0],
+                               sequence, ns, ns)
+        chunk += data
+        self.counts[topic] = sequence + 1
+        times = self._times
+        if ns > times[1]:
+            times[1] = ns
+        elif ns < times[0]:
+            times[0] = ns
+        if len(chunk) >= CHUNK_BYTES:
+            self._write_chunk()
+
+    def _write_chunk(self) -> None:
+        """Writes the open chunk (compressed) and its message indexes; a new chunk opens."""
+        if not self._indexes:
+            return
+        data = bytes(self._chunk)
+        packed = self._compress(data) if self._compress is not None else data
+        start, (first, last) = self._offset, self._times
+        self._span = [min(self._span[0], first), max(self._span[1], last)] if self._span \
+            else [first, last]
+        length = self._write_record(Chunk(
+            message_start_time=first, message_end_time=last, uncompressed_size=len(data),
+            uncompressed_crc=zlib.crc32(data), compression=self._compression, data=packed))
+        builder, offsets = RecordBuilder(), {}
+        for channel_id, records in self._indexes.items():
+            offsets[channel_id] = self._offset + builder.count
+            MessageIndex(channel_id=channel_id, records=records).write(builder)
+        indexes = builder.end()
+        self._emit(indexes)
+        self._chunk_indexes.append(ChunkIndex(
+            message_start_time=first, message_end_time=last, chunk_start_offset=start,
+            chunk_length=length, message_index_offsets=offsets,
+            message_index_length=len(indexes), compression=self._compression,
+            compressed_size=len(packed), uncompressed_size=len(data)))
+        self._chunk = bytearray()
+        self._indexes = {}
 
     @property
     def closed(self) -> bool:
         return self._stream.closed
 
     def close(self) -> None:
-        """Writes the summary and renames the file into place (once)."""
+        """Writes the last chunk and the summary, and renames the file into place (once)."""
         if self._stream.closed:
             return
-        self._writer.finish()
-        self._stream.close()
-        os.replace(self._part, self.filename)
+        try:
+            self._write_chunk()
+            self._write_record(DataEnd(data_section_crc=0))
+            self._write_summary()
+        except BaseException:
+            self.abort()
+            raise
+        self._files.close()
+
+    def abort(self) -> None:
+        """Drops the file being written: nothing is left at `filename` (nor beside it)."""
+        if self._stream.closed:
+            return
+        error = RuntimeError(f"{self.filename}: MCAP log aborted")
+        self._files.__exit__(RuntimeError, error, None)
+
+    def _write_summary(self) -> None:
+        """The summary section (schemas, channels, statistics, chunk and metadata indexes,
+        their offsets) and the footer, as `mcap.writer.Writer.finish` writes them."""
+        start = self._offset
+        builder, offsets = RecordBuilder(), []
+        by_id = {channel_id: self.counts[record.topic]
+                 for channel_id, record in self._channel_records.items()}
+        span = self._span or [0, 0]
+        groups = ((Opcode.SCHEMA, list(self._schemas.values())),
+                  (Opcode.CHANNEL, list(self._channel_records.values())),
+                  (Opcode.STATISTICS, [Statistics(
+                      message_count=sum(by_id.values()), schema_count=len(self._schemas),
+                      channel_count=len(self._channel_records), attachment_count=0,
+                      metadata_count=len(self._metadata_indexes),
+                      chunk_count=len(self._chunk_indexes), message_start_time=span[0],
+                      message_end_time=span[1], channel_message_counts=by_id)]),
+                  (Opcode.CHUNK_INDEX, self._chunk_indexes),
+                  (Opcode.METADATA_INDEX, self._metadata_indexes))
+        for opcode, records in groups:
+            group_start = builder.count
+            for record in records:
+                record.write(builder)
+            offsets.append(SummaryOffset(group_opcode=opcode, group_start=start + group_start,
+                                         group_length=builder.count - group_start))
+        offsets_start = start + builder.count
+        for offset in offsets:
+            offset.write(builder)
+        summary = builder.end()
+        crc = zlib.crc32(struct.pack("<BQQQ", Opcode.FOOTER, 20, start, offsets_start),
+                         zlib.crc32(summary))
+        self._emit(summary)
+        self._write_record(Footer(summary_start=start, summary_offset_start=offsets_start,
+                                  summary_crc=crc))
+        self._emit(MCAP0_MAGIC)
 
 
 def dive_log(filename, spec, site) -> McapLog:
