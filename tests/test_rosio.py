@@ -542,3 +542,112 @@ def test_recorder_alone_with_fixed_inputs(tmp_path):
     p_bs, r_bs = static["multibeam"][1]
     p_mb, r_mb = dynamic["base_link"][0]
     np.testing.assert_allclose(p_mb + r_mb @ (p_bs + r_bs @ [4.0, 0, 0]), points[0], atol=1e-12)
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4", "none"])
+def test_mcap_log_of_many_chunks_reads_back_whole(tmp_path, monkeypatch, compression):
+    """Messages spread over many chunks (a 4 kB chunk) come back from the mcap reader (CRCs
+    checked, through the summary's indexes and sequentially) and rosbags, in order, with the
+    summary's counts."""
+    from mcap.reader import make_reader
+    from mcap.records import Chunk
+    from mcap.stream_reader import StreamReader
+    from rosbags.highlevel import AnyReader
+
+    from drake_auv.rosio import writer
+
+    monkeypatch.setattr(writer, "CHUNK_BYTES", 4096)
+    rng = np.random.default_rng(3)
+    expected = []
+    with writer.McapLog(tmp_path / "many.mcap", {"k": 1}, compression) as log:
+        for k in range(400):
+            t = 0.1 * k
+            log.write_cdr("/leg", "std_msgs/msg/Int32", m.scalar_cdr("std_msgs/msg/Int32", k), t)
+            expected.append(("/leg", k))
+            if k % 3 == 0:
+                beams = rng.normal(size=(20, 3))
+                beams /= np.linalg.norm(beams, axis=1)[:, None]
+                ranges = rng.uniform(1, 9, 20)
+                log.write_cdr("/cloud", "sensor_msgs/msg/PointCloud2",
+                              m.CloudWriter("dvl").cdr(t, ranges, beams), t)
+                expected.append(("/cloud", ranges.astype(np.float32)))
+    with open(tmp_path / "many.mcap", "rb") as f:
+        reader = make_reader(f, validate_crcs=True)
+        summary = reader.get_summary()
+        assert summary.statistics.message_count == len(expected)
+        assert summary.statistics.chunk_count == len(summary.chunk_indexes) > 10
+        assert {summary.channels[c].topic: n for c, n in
+                summary.statistics.channel_message_counts.items()} == {"/leg": 400,
+                                                                       "/cloud": 134}
+        assert {c.compression for c in summary.chunk_indexes} == {
+            "" if compression == "none" else compression}
+        got = [(channel.topic, message) for _, channel, message in reader.iter_messages()]
+        assert {r.name: r.metadata for r in reader.iter_metadata()} == {"drake_auv": {"k": "1"}}
+    assert [topic for topic, _ in got] == [topic for topic, _ in expected]
+    assert [msg.sequence for topic, msg in got if topic == "/leg"] == list(range(400))
+    with open(tmp_path / "many.mcap", "rb") as f:
+        chunks = [r for r in StreamReader(f, validate_crcs=True, emit_chunks=True).records
+                  if isinstance(r, Chunk)]
+    assert len(chunks) == summary.statistics.chunk_count
+    with AnyReader([tmp_path / "many.mcap"]) as bag:
+        decoded = [(c.topic, bag.deserialize(raw, c.msgtype))
+                   for c, _, raw in bag.messages()]
+    assert len(decoded) == len(expected)
+    for (topic, msg), (want_topic, want) in zip(decoded, expected):
+        assert topic == want_topic
+        if topic == "/leg":
+            assert msg.data == want
+        else:
+            np.testing.assert_array_equal(
+                np.frombuffer(bytes(msg.data), np.float32).reshape(-1, 10)[:, 3], want)
+
+
+def test_mcap_log_replaces_a_link_and_an_aborted_log_leaves_nothing(tmp_path):
+    from drake_auv.rosio.writer import McapLog
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep")
+    (tmp_path / "dive.mcap").symlink_to(victim)
+    log = McapLog(tmp_path / "dive.mcap")
+    log.write_cdr("/x", "std_msgs/msg/Float64", m.scalar_cdr("std_msgs/msg/Float64", 1.0), 0.0)
+    log.close()
+    assert victim.read_text() == "keep" and not (tmp_path / "dive.mcap").is_symlink()
+    assert (tmp_path / "dive.mcap").read_bytes()[:8] == b"\x89MCAP0\r\n"
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(RuntimeError, match="mid-dive"):
+        with McapLog(tmp_path / "other.mcap") as other:
+            other.write_cdr("/x", "std_msgs/msg/Float64",
+                            m.scalar_cdr("std_msgs/msg/Float64", 1.0), 0.0)
+            raise RuntimeError("mid-dive")
+    assert other.closed and sorted(p.name for p in tmp_path.iterdir()) == before
+    other.close()  # after an abort: nothing to do
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_run_mission_aborts_its_log_when_building_or_flying_fails(tmp_path, monkeypatch):
+    """A failure while the diagram is built or while the dive flies closes the log's file
+    and leaves no dive.mcap (nor its temporary folder)."""
+    import drake_auv.mission.runner as runner
+
+    spec = load_mission("pool", overrides=["limits.max_time_s=2"])
+    site = load_site(spec.site, spec.seed, label=spec.name)
+    real_build = runner.build_mission_diagram
+
+    def failing_build(*args, **kwargs):
+        raise RuntimeError("no diagram")
+
+    monkeypatch.setattr(runner, "build_mission_diagram", failing_build)
+    log = dive_log(tmp_path / "dive.mcap", spec, site)
+    with pytest.raises(RuntimeError, match="no diagram"):
+        run_mission(spec, site, progress=False, mcap=log)
+    assert log.closed and list(tmp_path.iterdir()) == []
+    monkeypatch.setattr(runner, "build_mission_diagram", real_build)
+
+    def probe(context):
+        if context.get_time() > 0.5:
+            raise RuntimeError("sensor fault")
+
+    log = dive_log(tmp_path / "dive.mcap", spec, site)
+    with pytest.raises(RuntimeError, match="sensor fault"):
+        run_mission(spec, site, progress=False, mcap=log, probe=probe)
+    assert log.closed and list(tmp_path.iterdir()) == []

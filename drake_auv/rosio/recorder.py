@@ -147,8 +147,9 @@ class McapRecorder(LeafSystem):
         if tick == 0:
             self._write_static(t)
         estimated = self.estimated_state_input.Eval(context)
-        poses = context.get_discrete_state(self._poses).get_value().reshape(-1, 13)
-        poses = np.vstack([np.r_[t, estimated][None], poses[:-1]])
+        before = context.get_discrete_state(self._poses).get_value().reshape(-1, 13)
+        poses = np.empty_like(before)
+        poses[0, 0], poses[0, 1:], poses[1:] = t, estimated, before[:-1]
         self._write_vehicle(context, t, tick, estimated)
         sequences = context.get_discrete_state(self._sequences).get_value().copy()
         for k, (name, port) in enumerate(self.returns_inputs.items()):

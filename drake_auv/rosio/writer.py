@@ -3,12 +3,13 @@
 The file is a rosbag2 MCAP (profile `ros2`, `ros2msg` schemas, CDR messages; `/tf_static` is
 offered transient-local, so `ros2 bag play` latches it). A message's record (the 31 bytes of
 its opcode, length, channel, sequence and times, then its CDR) is packed straight into the
-open chunk, the other records (schemas, channels, chunks and their message indexes, metadata,
-the summary) are `mcap.records`' own: the writer's cost is a dive's few messages a tick, not
-a library's per-message bookkeeping. A chunk is written out when it holds `CHUNK_BYTES`:
-memory holds one chunk and the chunk index, whatever the dive's length. Chunks are
-compressed with zstd at level 1 by default (on a boulder dive a third smaller than LZ4 for
-about the same time, `benchmarks/bench_mcap.py`), `"lz4"` or `"none"` on request.
+open chunk, and a chunk and its message indexes into the file (the indexes with numpy); the
+other records (schemas, channels, metadata, the summary) are `mcap.records`' own: the
+writer's cost is a dive's few messages a tick, not a library's per-message bookkeeping. A
+chunk is written out when it holds `CHUNK_BYTES`: memory holds one chunk and the chunk
+index, whatever the dive's length. Chunks are compressed with zstd at level 1 by default (on
+a boulder dive a third smaller than LZ4 for about the same time: `benchmarks/bench_mcap.py`
+compares them), `"lz4"` or `"none"` on request.
 
 The file is written through `output_files.replacing` (a private folder beside it, renamed
 into place by `close()`, never following a link at its name); `abort()`, or an error inside
@@ -23,11 +24,12 @@ import zlib
 from pathlib import Path as FilePath
 
 import lz4.frame
+import numpy as np
 import zstandard
 from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
-from mcap.records import (Channel, Chunk, ChunkIndex, DataEnd, Footer, Header, MessageIndex,
-                          Metadata, MetadataIndex, Schema, Statistics, SummaryOffset)
+from mcap.records import (Channel, ChunkIndex, DataEnd, Footer, Header, Metadata,
+                          MetadataIndex, Schema, Statistics, SummaryOffset)
 from mcap.writer import MCAP0_MAGIC
 
 from drake_auv.output_files import open_replacing
@@ -46,6 +48,11 @@ COMPRESSIONS = {"zstd": zstandard.ZstdCompressor(level=1).compress,
 # a Message record's head: opcode, record length, channel id, sequence, log and publish time
 _MESSAGE = struct.Struct("<BQHIQQ")
 _MESSAGE_FIELDS, _MESSAGE_OPCODE = _MESSAGE.size - 9, int(Opcode.MESSAGE)
+# a Chunk record's head up to its compression's name: opcode, record length, start and end
+# time, uncompressed size and CRC, the name's length; a MessageIndex's up to its entries
+_CHUNK, _CHUNK_OPCODE = struct.Struct("<BQQQQII"), int(Opcode.CHUNK)
+_MESSAGE_INDEX, _MESSAGE_INDEX_OPCODE = struct.Struct("<BQHI"), int(Opcode.MESSAGE_INDEX)
+_U64 = struct.Struct("<Q")
 
 
 class McapLog:
@@ -72,6 +79,7 @@ class McapLog:
         self._indexes: dict[int, list] = {}  # channel id -> the open chunk's (time, offset)
         self._times = [0, 0]  # the open chunk's first and last log time, ns
         self._span: list[int] = []  # the file's first and last log time, ns
+        self._time, self._ns = None, 0  # the last message's log time, s and ns
         self._chunk_indexes: list[ChunkIndex] = []
         self._metadata_indexes: list[MetadataIndex] = []
         self.counts: dict[str, int] = {}
@@ -145,7 +153,9 @@ class McapLog:
         channel = self._channels.get(topic)
         if channel is None or channel[1] != typename:
             channel = self._channel(topic, typename)
-        ns = nanoseconds(t)
+        if t != self._time:  # the messages of a tick share their time
+            self._time, self._ns = t, nanoseconds(t)
+        ns = self._ns
         chunk, sequence = self._chunk, self.counts[topic]
         index = self._indexes.get(channel[0])
         if index is None:
@@ -169,25 +179,28 @@ class McapLog:
         """Writes the open chunk (compressed) and its message indexes; a new chunk opens."""
         if not self._indexes:
             return
-        data = bytes(self._chunk)
+        data = self._chunk
         packed = self._compress(data) if self._compress is not None else data
         start, (first, last) = self._offset, self._times
         self._span = [min(self._span[0], first), max(self._span[1], last)] if self._span \
             else [first, last]
-        length = self._write_record(Chunk(
-            message_start_time=first, message_end_time=last, uncompressed_size=len(data),
-            uncompressed_crc=zlib.crc32(data), compression=self._compression, data=packed))
-        builder, offsets = RecordBuilder(), {}
+        kind = self._compression.encode()
+        head = _CHUNK.pack(_CHUNK_OPCODE, _CHUNK.size - 9 + len(kind) + 8 + len(packed),
+                           first, last, len(data), zlib.crc32(data), len(kind))
+        self._emit(b"".join((head, kind, _U64.pack(len(packed)))))
+        self._emit(packed)
+        offsets = {}
         for channel_id, records in self._indexes.items():
-            offsets[channel_id] = self._offset + builder.count
-            MessageIndex(channel_id=channel_id, records=records).write(builder)
-        indexes = builder.end()
-        self._emit(indexes)
+            offsets[channel_id] = self._offset
+            pairs = np.array(records, dtype="<u8").tobytes()
+            self._emit(_MESSAGE_INDEX.pack(_MESSAGE_INDEX_OPCODE, 6 + len(pairs), channel_id,
+                                           len(pairs)) + pairs)
         self._chunk_indexes.append(ChunkIndex(
             message_start_time=first, message_end_time=last, chunk_start_offset=start,
-            chunk_length=length, message_index_offsets=offsets,
-            message_index_length=len(indexes), compression=self._compression,
-            compressed_size=len(packed), uncompressed_size=len(data)))
+            chunk_length=offsets[next(iter(offsets))] - start, message_index_offsets=offsets,
+            message_index_length=self._offset - offsets[next(iter(offsets))],
+            compression=self._compression, compressed_size=len(packed),
+            uncompressed_size=len(data)))
         self._chunk = bytearray()
         self._indexes = {}
 
