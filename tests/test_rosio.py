@@ -226,7 +226,9 @@ def _vehicle_log(n: int = 100):
 
 
 def _ros1_bag(path: Path, odom_topic="/nav/odom", cloud_topic="/mbes/cloud", ping_shift=0,
-              cloud_frame="mbes"):
+              cloud_frame="mbes", corrupt=None):
+    """A vehicle's ROS 1 bag (`_vehicle_log`); `corrupt(store, cloud)`: changes to the third
+    cloud's fields (a dict of the `PointCloud2`'s)."""
     from rosbags.rosbag1 import Writer
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -271,15 +273,18 @@ def _ros1_bag(path: Path, odom_topic="/nav/odom", cloud_topic="/mbes/cloud", pin
                 child_frame_id="vehicle", pose=m.make_in(
                     store, "geometry_msgs/msg/PoseWithCovariance", pose=pose,
                     covariance=np.zeros(36))))
-        for ns, ranges in pings:
+        for k, (ns, ranges) in enumerate(pings):
             hit = np.isfinite(ranges)
             xyz = (d_s[hit] * ranges[hit, None]).astype("<f4")
             fields = [m.make_in(store, "sensor_msgs/msg/PointField", name=k, offset=4 * i,
                                 datatype=m.FLOAT32, count=1) for i, k in enumerate("xyz")]
-            put(cloud_topic, "sensor_msgs/msg/PointCloud2", ns, m.make_in(
-                store, "sensor_msgs/msg/PointCloud2", header=header(ns + ping_shift, cloud_frame),
-                height=1, width=len(xyz), fields=fields, point_step=12, row_step=12 * len(xyz),
-                data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=True))
+            cloud = dict(header=header(ns + ping_shift, cloud_frame), height=1, width=len(xyz),
+                         fields=fields, point_step=12, row_step=12 * len(xyz),
+                         data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=True)
+            if corrupt is not None and k == 2:
+                cloud.update(corrupt(store, cloud))
+            put(cloud_topic, "sensor_msgs/msg/PointCloud2", ns,
+                m.make_in(store, "sensor_msgs/msg/PointCloud2", **cloud))
     return path
 
 
@@ -357,6 +362,33 @@ def test_replay_rejects_bad_topics(tmp_path, capsys, case, topics, needle):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and needle in err, err
     assert not (out / "points.ply").exists()
+
+
+def _field(store, name, offset, datatype=m.FLOAT32):
+    return m.make_in(store, "sensor_msgs/msg/PointField", name=name, offset=offset,
+                     datatype=datatype, count=1)
+
+
+@pytest.mark.parametrize("corrupt, needle", [
+    (lambda store, c: dict(data=c["data"][:-12]), "not height 1 x row_step"),
+    (lambda store, c: dict(point_step=8, row_step=8 * c["width"]),
+     "field z at offset 8 overruns point_step 8"),
+    (lambda store, c: dict(row_step=12 * c["width"] - 1), "row_step"),
+    (lambda store, c: dict(fields=[_field(store, "x", 0, 2), *c["fields"][1:]]),
+     "field x is datatype 2 count 1, not FLOAT32 (7) or FLOAT64 (8)"),
+    (lambda store, c: dict(fields=c["fields"][:2]), "no field z"),
+    (lambda store, c: dict(fields=[*c["fields"], _field(store, "t", 8, 11)]),
+     "field t has datatype 11"),
+])
+def test_replay_rejects_a_cloud_it_cannot_read_before_any_work(tmp_path, capsys, corrupt,
+                                                              needle):
+    bag = _ros1_bag(tmp_path / "v.bag", corrupt=corrupt)
+    out = tmp_path / "out"
+    assert main(["replay", str(bag), "-o", str(out), "--topics",
+                 "odometry=/nav/odom,multibeam=/mbes/cloud"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "/mbes/cloud message 3" in err and needle in err, err
+    assert not out.exists() or not any(out.iterdir())
 
 
 def test_replay_rejects_returns_without_a_transform_at_their_stamp(tmp_path, capsys):
@@ -651,3 +683,35 @@ def test_run_mission_aborts_its_log_when_building_or_flying_fails(tmp_path, monk
     with pytest.raises(RuntimeError, match="sensor fault"):
         run_mission(spec, site, progress=False, mcap=log, probe=probe)
     assert log.closed and list(tmp_path.iterdir()) == []
+
+
+def test_message_block_writes_the_records_single_writes_do(tmp_path):
+    from mcap.reader import make_reader
+
+    from drake_auv.rosio.writer import McapLog, MessageBlock
+
+    templates = [("/tf", m.tf_template(m.MAP, (m.BASE, m.TRUTH))),
+                 ("/odometry", m.odometry_template(m.BASE)),
+                 ("/thrust", m.array_template(("a", "b", "c")))]
+    rng = np.random.default_rng(5)
+    ticks = [(0.1 * k, rng.normal(size=14 + 13 + 3).tolist()) for k in range(5)]
+    with McapLog(tmp_path / "block.mcap") as log:
+        block = MessageBlock(log, templates)
+        log.write_cdr("/other", "std_msgs/msg/Int32", m.scalar_cdr("std_msgs/msg/Int32", 3), 0)
+        for t, floats in ticks:
+            block.write(floats, t)
+    with McapLog(tmp_path / "single.mcap") as log:
+        log.write_cdr("/other", "std_msgs/msg/Int32", m.scalar_cdr("std_msgs/msg/Int32", 3), 0)
+        for t, floats in ticks:
+            ns = m.nanoseconds(t)
+            for (topic, template), (first, end) in zip(templates, ((0, 14), (14, 27),
+                                                                   (27, 30))):
+                log.write_cdr(topic, template.typename, template.cdr(
+                    floats[first:end], (ns,) * len(template.stamp_offsets)), t)
+
+    def records(name):
+        with open(tmp_path / name, "rb") as f:
+            return [(channel.topic, message.sequence, message.log_time, message.data)
+                    for _, channel, message in make_reader(f).iter_messages()]
+
+    assert records("block.mcap") == records("single.mcap") and len(records("block.mcap")) == 16

@@ -105,14 +105,14 @@ class CdrTemplate:
 
     def __init__(self, typename: str, build, n_floats: int, n_stamps: int = 1,
                  n_counts: int = 0):
-        self.typename = typename
+        self.typename, self.n_floats = typename, n_floats
         floats = [float(np.float64(-1.2345678e301) * (1.0 + 1e-9 * k)) for k in range(n_floats)]
         stamps = [(0x5E_C0_00_00 + k, 0x3A_5E_C0_00 + k) for k in range(n_stamps)]
         counts = [0x7C_0A_70_00 + k for k in range(n_counts)]
         data = serialize(build(floats, [make("builtin_interfaces/msg/Time", sec=sec, nanosec=ns)
                                         for sec, ns in stamps], counts), typename)
-        self._floats = _runs([self._find(data, _F64.pack(v)) for v in floats])
-        self._stamps = [self._find(data, _STAMP.pack(*v)) for v in stamps]
+        self.float_runs = _runs([self._find(data, _F64.pack(v)) for v in floats])
+        self.stamp_offsets = [self._find(data, _STAMP.pack(*v)) for v in stamps]
         self._counts = [self._find(data, _U32.pack(v)) for v in counts]
         self.data = bytes(data)
 
@@ -124,9 +124,9 @@ class CdrTemplate:
 
     def cdr(self, floats=(), stamps_ns=(), counts=()) -> bytearray:
         buf = bytearray(self.data)
-        for packer, at, first, end in self._floats:
+        for packer, at, first, end in self.float_runs:
             packer.pack_into(buf, at, *floats[first:end])
-        for at, ns in zip(self._stamps, stamps_ns):
+        for at, ns in zip(self.stamp_offsets, stamps_ns):
             _STAMP.pack_into(buf, at, ns // 1_000_000_000, ns % 1_000_000_000)
         for at, value in zip(self._counts, counts):
             _U32.pack_into(buf, at, value)

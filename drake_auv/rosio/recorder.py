@@ -31,7 +31,7 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.rosio import messages as m
-from drake_auv.rosio.writer import McapLog
+from drake_auv.rosio.writer import McapLog, MessageBlock
 from drake_auv.signals import LegSignal, Reference, Response, VehicleState, Water
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.control import rotation_world_body
@@ -96,12 +96,8 @@ class McapRecorder(LeafSystem):
                          in self.sonars.items()], default=1)
         self.world, self.target = world, target
         self.plan = None if plan is None else np.asarray(plan, dtype=float).reshape(-1, 3)
-        # the messages of each tick, serialised once and filled in (`messages.CdrTemplate`)
-        self._templates = dict(
-            tf=m.tf_template(m.MAP, (m.BASE, m.TRUTH)), odometry=m.odometry_template(m.BASE),
-            odometry_truth=m.odometry_template(m.TRUTH), reference=m.pose_template(m.MAP),
-            thrust=m.array_template(THRUSTER_NAMES),
-            current=m.array_template(("east_mps", "north_mps", "up_mps")))
+        # the vehicle's messages of each tick, serialised once and filled in
+        # (`messages.CdrTemplate`, `writer.MessageBlock`); built when the inputs are declared
         self._clouds = {name: m.CloudWriter(name) for name in self.sonars}
         self._scans = {name: m.ScanWriter(name, self.sonars[name][1])
                        for name in self.laser_scans}
@@ -126,6 +122,14 @@ class McapRecorder(LeafSystem):
             0.5))) if map_input else None)
         self.water_input = (self.DeclareVectorInputPort("water", Water.size()) if water_input
                             else None)
+        self._vehicle = MessageBlock(log, [
+            (TOPICS["tf"], m.tf_template(m.MAP, (m.BASE, m.TRUTH))),
+            (TOPICS["odometry"], m.odometry_template(m.BASE)),
+            (TOPICS["odometry_truth"], m.odometry_template(m.TRUTH)),
+            (TOPICS["reference"], m.pose_template(m.MAP)),
+            (TOPICS["thrust"], m.array_template(THRUSTER_NAMES)),
+            *([(TOPICS["current"], m.array_template(("east_mps", "north_mps", "up_mps")))]
+              if water_input else [])])
         # The estimated state at the last `depth` ticks: rows [time, 12 state], NaN: none yet.
         self._poses = self.DeclareDiscreteState(np.full(depth * 13, np.nan))
         self._sequences = self.DeclareDiscreteState(np.zeros(max(len(self.sonars), 1)))
@@ -199,20 +203,18 @@ class McapRecorder(LeafSystem):
                                     for _, mesh, _ in meshes]), t)
 
     def _write_vehicle(self, context, t: float, tick: int, estimated) -> None:
-        ns = m.nanoseconds(t)
-        poses = []
-        for topic, x in (("odometry", VehicleState(estimated)),
-                         ("odometry_truth", VehicleState(self.state_input.Eval(context)))):
-            pose = (*x.position, *m.quaternion_rpy(*x.attitude))
-            poses += pose
-            self._write_fixed(topic, (*pose, *x.linear_velocity, *x.angular_velocity), ns, t)
-        self._write_fixed("tf", poses, (ns, ns), t)
+        navigation, truth = VehicleState(estimated), VehicleState(self.state_input.Eval(context))
+        pose = (*navigation.position, *m.quaternion_rpy(*navigation.attitude))
+        pose_truth = (*truth.position, *m.quaternion_rpy(*truth.attitude))
         reference = Reference(self.reference_input.Eval(context))
-        self._write_fixed("reference", (*reference.position,
-                                        *m.quaternion_rpy(0.0, 0.0, reference.yaw)), ns, t)
-        self._write_fixed("thrust", self.thrust_input.Eval(context), (), t)
+        floats = [*pose, *pose_truth,
+                  *pose, *navigation.linear_velocity, *navigation.angular_velocity,
+                  *pose_truth, *truth.linear_velocity, *truth.angular_velocity,
+                  *reference.position, *m.quaternion_rpy(0.0, 0.0, reference.yaw),
+                  *self.thrust_input.Eval(context)]
         if self.water_input is not None:
-            self._write_fixed("current", Water(self.water_input.Eval(context)).velocity, (), t)
+            floats += Water(self.water_input.Eval(context)).velocity.tolist()
+        self._vehicle.write(floats, t)
         if tick % self._every["mission"] == 0:
             self._write_scalar(TOPICS["leg"], "std_msgs/msg/Int32",
                                int(LegSignal(self.leg_input.Eval(context)).index), t)
@@ -221,12 +223,6 @@ class McapRecorder(LeafSystem):
 
     def _write_scalar(self, topic: str, typename: str, value, t: float) -> None:
         self.log.write_cdr(topic, typename, m.scalar_cdr(typename, value), t)
-
-    def _write_fixed(self, topic: str, floats, stamps, t: float) -> None:
-        template = self._templates[topic]
-        self.log.write_cdr(TOPICS[topic], template.typename,
-                           template.cdr(floats, stamps if isinstance(stamps, tuple)
-                                        else (stamps,)), t)
 
     def _write_returns(self, name: str, returns: SonarReturns, poses: np.ndarray,
                        now: float) -> None:

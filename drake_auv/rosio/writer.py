@@ -153,25 +153,35 @@ class McapLog:
         channel = self._channels.get(topic)
         if channel is None or channel[1] != typename:
             channel = self._channel(topic, typename)
+        ns = self._nanoseconds(t)
+        self._append((_MESSAGE.pack(_MESSAGE_OPCODE, _MESSAGE_FIELDS + len(data), channel[0],
+                                    self.counts[topic], ns, ns), data),
+                     ((topic, channel[0], 0),), ns)
+
+    def _nanoseconds(self, t: float) -> int:
         if t != self._time:  # the messages of a tick share their time
             self._time, self._ns = t, nanoseconds(t)
-        ns = self._ns
-        chunk, sequence = self._chunk, self.counts[topic]
-        index = self._indexes.get(channel[0])
-        if index is None:
-            index = self._indexes[channel[0]] = []
-            if len(self._indexes) == 1:
-                self._times[:] = ns, ns
-        index.append((ns, len(chunk)))
-        chunk += _MESSAGE.pack(_MESSAGE_OPCODE, _MESSAGE_FIELDS + len(data), channel[0],
-                               sequence, ns, ns)
-        chunk += data
-        self.counts[topic] = sequence + 1
-        times = self._times
-        if ns > times[1]:
-            times[1] = ns
-        elif ns < times[0]:
-            times[0] = ns
+        return self._ns
+
+    def _append(self, parts, records, ns: int) -> None:
+        """Appends the bytes `parts` to the open chunk: message records [(topic, channel id,
+        offset in the parts)], logged at `ns`."""
+        chunk, indexes, counts = self._chunk, self._indexes, self.counts
+        if not indexes:
+            self._times[:] = ns, ns
+        elif ns > self._times[1]:
+            self._times[1] = ns
+        elif ns < self._times[0]:
+            self._times[0] = ns
+        start = len(chunk)
+        for topic, channel_id, offset in records:
+            index = indexes.get(channel_id)
+            if index is None:
+                index = indexes[channel_id] = []
+            index.append((ns, start + offset))
+            counts[topic] += 1
+        for part in parts:
+            chunk += part
         if len(chunk) >= CHUNK_BYTES:
             self._write_chunk()
 
@@ -262,6 +272,52 @@ class McapLog:
         self._write_record(Footer(summary_start=start, summary_offset_start=offsets_start,
                                   summary_crc=crc))
         self._emit(MCAP0_MAGIC)
+
+
+class MessageBlock:
+    """Messages of fixed layout written together each time (a tick's), on `entries`' topics
+    [(topic, `messages.CdrTemplate`)]: their records (head and template) laid end to end
+    once; a `write` packs only their numbers (the heads' sequences and times, the templates'
+    floats and stamps) into a copy and appends it in one piece."""
+
+    _NUMBERS = struct.Struct("<IQQ")  # a message record's sequence, log and publish time
+
+    def __init__(self, log: McapLog, entries):
+        self.log = log
+        parts, self._records, self._heads, self._floats, self._stamps = [], [], [], [], []
+        offset = base = 0
+        for topic, template in entries:
+            channel = log._channel(topic, template.typename)
+            parts.append(_MESSAGE.pack(_MESSAGE_OPCODE, _MESSAGE_FIELDS + len(template.data),
+                                       channel[0], 0, 0, 0))
+            parts.append(template.data)
+            self._records.append((topic, channel[0], offset))
+            self._heads.append((topic, offset + 11))  # after opcode, length and channel
+            body = offset + _MESSAGE.size
+            self._floats += [(packer, body + at, base + first, base + end)
+                             for packer, at, first, end in template.float_runs]
+            self._stamps += [body + at for at in template.stamp_offsets]
+            offset, base = offset + _MESSAGE.size + len(template.data), base + template.n_floats
+        self.data, self.n_floats = b"".join(parts), base
+
+    def write(self, floats, t: float) -> None:
+        """Appends the messages with `floats` (their templates' floats end to end), every
+        stamp `t`, logged at `t` s."""
+        log = self.log
+        ns = log._nanoseconds(t)
+        buf = bytearray(self.data)
+        for packer, at, first, end in self._floats:
+            packer.pack_into(buf, at, *floats[first:end])
+        sec, nanosec = divmod(ns, 1_000_000_000)
+        for at in self._stamps:
+            _STAMP.pack_into(buf, at, sec, nanosec)
+        counts = log.counts
+        for topic, at in self._heads:
+            self._NUMBERS.pack_into(buf, at, counts[topic], ns, ns)
+        log._append((buf,), self._records, ns)
+
+
+_STAMP = struct.Struct("<iI")
 
 
 def dive_log(filename, spec, site) -> McapLog:
