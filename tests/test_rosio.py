@@ -715,3 +715,26 @@ def test_message_block_writes_the_records_single_writes_do(tmp_path):
                     for _, channel, message in make_reader(f).iter_messages()]
 
     assert records("block.mcap") == records("single.mcap") and len(records("block.mcap")) == 16
+
+
+def test_an_error_writing_a_chunk_reaches_the_dive_and_drops_the_log(tmp_path, monkeypatch):
+    """A chunk that cannot be written (on the log's writing thread) fails the next write or
+    the close, and the log is then dropped whole."""
+    from drake_auv.rosio import writer
+
+    def full_disk(data):
+        raise OSError("No space left on device")
+
+    monkeypatch.setattr(writer, "CHUNK_BYTES", 256)
+    monkeypatch.setitem(writer.COMPRESSIONS, "zstd", full_disk)
+    with pytest.raises(OSError, match="No space left"):
+        with writer.McapLog(tmp_path / "full.mcap") as log:
+            for k in range(200):
+                log.write_cdr("/x", "std_msgs/msg/Float64",
+                              m.scalar_cdr("std_msgs/msg/Float64", k), 0.1 * k)
+    assert log.closed and list(tmp_path.iterdir()) == []
+    log = writer.McapLog(tmp_path / "late.mcap")
+    log.write_cdr("/x", "std_msgs/msg/Float64", m.scalar_cdr("std_msgs/msg/Float64", 1.0), 0)
+    with pytest.raises(OSError, match="No space left"):
+        log.close()
+    assert log.closed and list(tmp_path.iterdir()) == []

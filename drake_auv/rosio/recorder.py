@@ -233,10 +233,12 @@ class McapRecorder(LeafSystem):
         recorder's receive time): in log order, the updates reach a replay in the order the
         mapper recorded them."""
         mount = self.sonars[name][0]
-        rows = poses[poses[:, 0] == poses[:, 0]]  # NaN: no tick yet
-        rows = rows[np.argsort(abs(rows[:, 0] - returns.time), kind="stable")]  # on time first
+        times = poses[:, 0].tolist()
+        rows = sorted((k for k, time in enumerate(times) if time == time),  # NaN: no tick yet
+                      key=lambda k: abs(times[k] - returns.time))  # on time first
         origin_nav = returns.origin_nav
-        for row in rows:
+        for k in rows:
+            row = poses[k]
             rotation = rotation_world_body(*row[4:7])
             origin = row[1:4] + rotation @ mount.position
             if np.abs(origin - origin_nav).max() < 1e-9:

@@ -6,8 +6,9 @@ its opcode, length, channel, sequence and times, then its CDR) is packed straigh
 open chunk, and a chunk and its message indexes into the file (the indexes with numpy); the
 other records (schemas, channels, metadata, the summary) are `mcap.records`' own: the
 writer's cost is a dive's few messages a tick, not a library's per-message bookkeeping. A
-chunk is written out when it holds `CHUNK_BYTES`: memory holds one chunk and the chunk
-index, whatever the dive's length. Chunks are compressed with zstd at level 1 by default (on
+chunk is written out when it holds `CHUNK_BYTES`, compressed and written by a thread of the
+log's own while the next one fills (zstd, lz4, the CRC and the writes release the GIL):
+memory holds two chunks and the chunk index, whatever the dive's length. Chunks are compressed with zstd at level 1 by default (on
 a boulder dive a third smaller than LZ4 for about the same time: `benchmarks/bench_mcap.py`
 compares them), `"lz4"` or `"none"` on request.
 
@@ -21,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import struct
 import zlib
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path as FilePath
 
 import lz4.frame
@@ -70,6 +72,8 @@ class McapLog:
         self._compress = COMPRESSIONS[compression]
         self._files = contextlib.ExitStack()
         self._stream = self._files.enter_context(open_replacing(self.filename, "wb"))
+        # full chunks are compressed and written on a thread of their own (`_emit_chunk`)
+        self._thread, self._pending = ThreadPoolExecutor(1, "mcap-chunks"), None
         self._offset = 0
         self._schemas: dict[str, Schema] = {}
         # topic -> [channel id, typename]; Channel records by id
@@ -115,6 +119,7 @@ class McapLog:
 
     def add_metadata(self, name: str, values: dict) -> None:
         """A metadata record `name` of string values."""
+        self._wait()
         offset = self._offset
         length = self._write_record(Metadata(name=name, metadata={
             k: str(v) for k, v in values.items()}))
@@ -186,33 +191,44 @@ class McapLog:
             self._write_chunk()
 
     def _write_chunk(self) -> None:
-        """Writes the open chunk (compressed) and its message indexes; a new chunk opens."""
+        """Hands the open chunk to the writing thread (after the one before it: at most two
+        chunks in memory) and opens a new one."""
         if not self._indexes:
             return
-        data = self._chunk
-        packed = self._compress(data) if self._compress is not None else data
-        start, (first, last) = self._offset, self._times
+        chunk, indexes, (first, last) = self._chunk, self._indexes, self._times
+        self._chunk, self._indexes, self._times = bytearray(), {}, [0, 0]
         self._span = [min(self._span[0], first), max(self._span[1], last)] if self._span \
             else [first, last]
-        kind = self._compression.encode()
+        self._wait()
+        self._pending = self._thread.submit(self._emit_chunk, chunk, indexes, first, last)
+
+    def _wait(self) -> None:
+        """Waits for the chunk being written (raising its error, if any)."""
+        pending, self._pending = self._pending, None
+        if pending is not None:
+            pending.result()
+
+    def _emit_chunk(self, data: bytearray, indexes: dict, first: int, last: int) -> None:
+        """Writes a chunk (compressed) and its message indexes (on the writing thread: the
+        compression, the CRC and the writes let the simulation's thread run meanwhile)."""
+        packed = self._compress(data) if self._compress is not None else data
+        start, kind = self._offset, self._compression.encode()
         head = _CHUNK.pack(_CHUNK_OPCODE, _CHUNK.size - 9 + len(kind) + 8 + len(packed),
                            first, last, len(data), zlib.crc32(data), len(kind))
         self._emit(b"".join((head, kind, _U64.pack(len(packed)))))
         self._emit(packed)
         offsets = {}
-        for channel_id, records in self._indexes.items():
+        for channel_id, records in indexes.items():
             offsets[channel_id] = self._offset
             pairs = np.array(records, dtype="<u8").tobytes()
             self._emit(_MESSAGE_INDEX.pack(_MESSAGE_INDEX_OPCODE, 6 + len(pairs), channel_id,
                                            len(pairs)) + pairs)
+        indexes_start = offsets[next(iter(offsets))]
         self._chunk_indexes.append(ChunkIndex(
             message_start_time=first, message_end_time=last, chunk_start_offset=start,
-            chunk_length=offsets[next(iter(offsets))] - start, message_index_offsets=offsets,
-            message_index_length=self._offset - offsets[next(iter(offsets))],
-            compression=self._compression, compressed_size=len(packed),
-            uncompressed_size=len(data)))
-        self._chunk = bytearray()
-        self._indexes = {}
+            chunk_length=indexes_start - start, message_index_offsets=offsets,
+            message_index_length=self._offset - indexes_start, compression=self._compression,
+            compressed_size=len(packed), uncompressed_size=len(data)))
 
     @property
     def closed(self) -> bool:
@@ -224,17 +240,24 @@ class McapLog:
             return
         try:
             self._write_chunk()
+            self._wait()
             self._write_record(DataEnd(data_section_crc=0))
             self._write_summary()
         except BaseException:
             self.abort()
             raise
+        self._thread.shutdown()
         self._files.close()
 
     def abort(self) -> None:
         """Drops the file being written: nothing is left at `filename` (nor beside it)."""
         if self._stream.closed:
             return
+        try:
+            self._wait()
+        except Exception:  # the file is dropped, whatever went wrong in it
+            pass
+        self._thread.shutdown()
         error = RuntimeError(f"{self.filename}: MCAP log aborted")
         self._files.__exit__(RuntimeError, error, None)
 
