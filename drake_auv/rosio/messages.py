@@ -450,14 +450,15 @@ def marker_array_cdr(markers, points) -> bytes:
         msg.points = [cls(*_sentinel(k))]
     data = serialize(make("visualization_msgs/msg/MarkerArray", markers=list(markers)),
                      "visualization_msgs/msg/MarkerArray")
+    pieces, done = [], 0
     for k, array in enumerate(points):
-        mark = _sentinel(k).astype("<f8").tobytes()
-        at = data.index(mark)
+        at = data.index(_sentinel(k).astype("<f8").tobytes(), done)
         count = at - 4 if data[at - 4:at] == b"\x01\x00\x00\x00" else at - 8
         array = np.ascontiguousarray(np.asarray(array, dtype="<f8").reshape(-1, 3))
-        data = (data[:count] + np.uint32(len(array)).astype("<u4").tobytes()
-                + data[count + 4:at] + array.tobytes() + data[at + 24:])
-    return data
+        pieces += [data[done:count], _U32.pack(len(array)), data[count + 4:at],
+                   array.reshape(-1).view(np.uint8)]
+        done = at + 24
+    return b"".join([*pieces, data[done:]])  # one copy of the points
 
 
 def mesh_corners(vertices, faces) -> np.ndarray:
