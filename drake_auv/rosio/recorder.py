@@ -156,11 +156,12 @@ class McapRecorder(LeafSystem):
         poses[0, 0], poses[0, 1:], poses[1:] = t, estimated, before[:-1]
         self._write_vehicle(context, t, tick, estimated)
         sequences = context.get_discrete_state(self._sequences).get_value().copy()
+        written = False
         for k, (name, port) in enumerate(self.returns_inputs.items()):
             returns = port.Eval(context)
             if returns.sequence != sequences[k] and len(returns):
                 self._write_returns(name, returns, poses, t)
-                sequences[k] = returns.sequence
+                sequences[k], written = returns.sequence, True
         if self.section_input is not None:
             section = np.asarray(self.section_input.Eval(context), dtype=float)
             key = (len(section), float(section.sum()) if len(section) else 0.0)
@@ -180,7 +181,8 @@ class McapRecorder(LeafSystem):
                                    (0.2, 0.6, 1.0, 0.8))], [octree.occupied_points()]), t)
         progress[0] = tick + 1
         state.get_mutable_discrete_state(self._poses).set_value(poses.reshape(-1))
-        state.get_mutable_discrete_state(self._sequences).set_value(sequences)
+        if written:
+            state.get_mutable_discrete_state(self._sequences).set_value(sequences)
         state.get_mutable_discrete_state(self._progress).set_value(progress)
 
     def _write_static(self, t: float) -> None:
@@ -204,14 +206,16 @@ class McapRecorder(LeafSystem):
 
     def _write_vehicle(self, context, t: float, tick: int, estimated) -> None:
         navigation, truth = VehicleState(estimated), VehicleState(self.state_input.Eval(context))
-        pose = (*navigation.position, *m.quaternion_rpy(*navigation.attitude))
-        pose_truth = (*truth.position, *m.quaternion_rpy(*truth.attitude))
+        # Python floats (numpy's scalars pack slower)
+        pose = (*navigation.position.tolist(), *m.quaternion_rpy(*navigation.attitude.tolist()))
+        pose_truth = (*truth.position.tolist(), *m.quaternion_rpy(*truth.attitude.tolist()))
         reference = Reference(self.reference_input.Eval(context))
         floats = [*pose, *pose_truth,
-                  *pose, *navigation.linear_velocity, *navigation.angular_velocity,
-                  *pose_truth, *truth.linear_velocity, *truth.angular_velocity,
-                  *reference.position, *m.quaternion_rpy(0.0, 0.0, reference.yaw),
-                  *self.thrust_input.Eval(context)]
+                  *pose, *navigation.linear_velocity.tolist(),
+                  *navigation.angular_velocity.tolist(),
+                  *pose_truth, *truth.linear_velocity.tolist(), *truth.angular_velocity.tolist(),
+                  *reference.position.tolist(), *m.quaternion_rpy(0.0, 0.0, float(reference.yaw)),
+                  *self.thrust_input.Eval(context).tolist()]
         if self.water_input is not None:
             floats += Water(self.water_input.Eval(context)).velocity.tolist()
         self._vehicle.write(floats, t)
