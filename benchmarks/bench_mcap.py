@@ -15,10 +15,11 @@ simulation) and the log's writing thread (chunks compressed and written), as a s
 rest of the dive's CPU time: the added time that does not depend on which run the load fell
 on. The first run with the log also builds rosbags' type store and serialisers, once a
 process: its extra CPU time over the later ones is printed. Last, the log's chunks are
-compressed again with each of `McapLog`'s compressions (time and size). The load average is
-printed before and after.
+compressed again with each of `McapLog`'s compressions (time and size), and the writer alone
+is fed `--writer-alone` simulated seconds of a dive's messages (resident memory before, at
+the half, at the end). The load average is printed before and after.
 
-    .venv/bin/python benchmarks/bench_mcap.py [--runs 3] [--cap 120]
+    .venv/bin/python benchmarks/bench_mcap.py [--runs 3] [--cap 120] [--writer-alone 6000]
 """
 
 from __future__ import annotations
@@ -126,10 +127,43 @@ def one_run(spec, site, plan, folder: Path | None, cap: float) -> tuple:
             Spent.recorder - Spent.catch_up, Spent.writer)
 
 
+def writer_memory(folder: Path, seconds: float) -> tuple[float, float, float]:
+    """(RSS MB before, at the half, at the end) of an `McapLog` alone fed `seconds` of a
+    dive's messages: each 0.1 s tick the vehicle's five (a `MessageBlock`) and a 256-beam
+    multibeam cloud."""
+    from drake_auv.rosio import messages as m
+    from drake_auv.rosio.writer import MessageBlock
+
+    rng = np.random.default_rng(0)
+    beams = rng.normal(size=(256, 3))
+    beams /= np.linalg.norm(beams, axis=1)[:, None]
+    cloud = m.CloudWriter("multibeam")
+    marks = [rss_mb()]
+    with McapLog(folder / "alone.mcap") as log:
+        block = MessageBlock(log, [
+            ("/tf", m.tf_template(m.MAP, (m.BASE, m.TRUTH))),
+            ("/odometry/navigation", m.odometry_template(m.BASE)),
+            ("/odometry/truth", m.odometry_template(m.TRUTH)),
+            ("/reference", m.pose_template(m.MAP)),
+            ("/thrust", m.array_template(("a", "b", "c", "d", "e")))])
+        ticks = int(round(10 * seconds))
+        for k in range(ticks):
+            t = 0.1 * k
+            block.write(rng.normal(size=block.n_floats).tolist(), t)
+            log.write_cdr("/sonar/multibeam/points", "sensor_msgs/msg/PointCloud2",
+                          cloud.cdr(t, rng.uniform(1, 20, 256), beams), t)
+            if k == ticks // 2:
+                marks.append(rss_mb())
+    marks.append(rss_mb())
+    return tuple(marks)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--cap", type=float, default=120.0, help="simulated s (default 120)")
+    parser.add_argument("--writer-alone", type=float, default=6000.0,
+                        help="simulated s of messages fed to the writer alone (default 6000)")
     args = parser.parse_args(argv)
     time_the_recorder()
     spec = load_mission("boulder", overrides=[f"limits.max_time_s={args.cap}"])
@@ -144,6 +178,7 @@ def main(argv=None) -> int:
                 runs[mcap].append(one_run(spec, site, plan, folder if mcap else None, args.cap))
         size = (folder / "dive.mcap").stat().st_size / 2**20
         recompressed = compressions(folder / "dive.mcap")
+        alone = writer_memory(folder, args.writer_alone)
     print("load average (1, 5, 15 min) after: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()))
     without, with_ = (np.median(runs[k], axis=0) for k in (False, True))
     print(f"boulder capped at {args.cap:g} s, median of {args.runs} runs each:")
@@ -164,6 +199,8 @@ def main(argv=None) -> int:
     print(f"  dive.mcap {size:.1f} MB, {size / args.cap * 1024:.0f} kB per simulated s")
     print(f"  RSS growth over the dive's second half: without {without[2]:.1f} MB, with "
           f"{with_[2]:.1f} MB")
+    print(f"  the writer alone fed {args.writer_alone:g} simulated s of messages: RSS "
+          f"{alone[0]:.1f} MB before, {alone[1]:.1f} MB at the half, {alone[2]:.1f} MB at the end")
     print("  the log's chunks compressed again: " + ", ".join(
         f"{name} {1e3 * cpu:.0f} ms CPU, {mb:.1f} MB" for name, cpu, mb in recompressed))
     return 0

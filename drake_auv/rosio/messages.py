@@ -352,7 +352,7 @@ class CloudWriter:
     def cdr(self, t: float, ranges, beams_sensor) -> bytes:
         data = cloud_data(ranges, beams_sensor)
         head = self._template.cdr((), (nanoseconds(t),), (len(data), data.nbytes))
-        return b"".join((head[:self._prefix_bytes], _U32.pack(data.nbytes), data.tobytes(),
+        return b"".join((head[:self._prefix_bytes], _U32.pack(data.nbytes), data.view(np.uint8),
                          b"\x01" if np.isfinite(data["range"]).all() else b"\x00"))
 
 
