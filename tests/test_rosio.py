@@ -226,7 +226,9 @@ def _vehicle_log(n: int = 100):
 
 
 def _ros1_bag(path: Path, odom_topic="/nav/odom", cloud_topic="/mbes/cloud", ping_shift=0,
-              cloud_frame="mbes"):
+              cloud_frame="mbes", corrupt=None):
+    """A vehicle's ROS 1 bag (`_vehicle_log`); `corrupt(store, cloud)`: changes to the third
+    cloud's fields (a dict of the `PointCloud2`'s)."""
     from rosbags.rosbag1 import Writer
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -271,15 +273,18 @@ def _ros1_bag(path: Path, odom_topic="/nav/odom", cloud_topic="/mbes/cloud", pin
                 child_frame_id="vehicle", pose=m.make_in(
                     store, "geometry_msgs/msg/PoseWithCovariance", pose=pose,
                     covariance=np.zeros(36))))
-        for ns, ranges in pings:
+        for k, (ns, ranges) in enumerate(pings):
             hit = np.isfinite(ranges)
             xyz = (d_s[hit] * ranges[hit, None]).astype("<f4")
             fields = [m.make_in(store, "sensor_msgs/msg/PointField", name=k, offset=4 * i,
                                 datatype=m.FLOAT32, count=1) for i, k in enumerate("xyz")]
-            put(cloud_topic, "sensor_msgs/msg/PointCloud2", ns, m.make_in(
-                store, "sensor_msgs/msg/PointCloud2", header=header(ns + ping_shift, cloud_frame),
-                height=1, width=len(xyz), fields=fields, point_step=12, row_step=12 * len(xyz),
-                data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=True))
+            cloud = dict(header=header(ns + ping_shift, cloud_frame), height=1, width=len(xyz),
+                         fields=fields, point_step=12, row_step=12 * len(xyz),
+                         data=np.frombuffer(xyz.tobytes(), np.uint8), is_dense=True)
+            if corrupt is not None and k == 2:
+                cloud.update(corrupt(store, cloud))
+            put(cloud_topic, "sensor_msgs/msg/PointCloud2", ns,
+                m.make_in(store, "sensor_msgs/msg/PointCloud2", **cloud))
     return path
 
 
@@ -359,6 +364,33 @@ def test_replay_rejects_bad_topics(tmp_path, capsys, case, topics, needle):
     assert not (out / "points.ply").exists()
 
 
+def _field(store, name, offset, datatype=m.FLOAT32):
+    return m.make_in(store, "sensor_msgs/msg/PointField", name=name, offset=offset,
+                     datatype=datatype, count=1)
+
+
+@pytest.mark.parametrize("corrupt, needle", [
+    (lambda store, c: dict(data=c["data"][:-12]), "not height 1 x row_step"),
+    (lambda store, c: dict(point_step=8, row_step=8 * c["width"]),
+     "field z at offset 8 overruns point_step 8"),
+    (lambda store, c: dict(row_step=12 * c["width"] - 1), "row_step"),
+    (lambda store, c: dict(fields=[_field(store, "x", 0, 2), *c["fields"][1:]]),
+     "field x is datatype 2 count 1, not FLOAT32 (7) or FLOAT64 (8)"),
+    (lambda store, c: dict(fields=c["fields"][:2]), "no field z"),
+    (lambda store, c: dict(fields=[*c["fields"], _field(store, "t", 8, 11)]),
+     "field t has datatype 11"),
+])
+def test_replay_rejects_a_cloud_it_cannot_read_before_any_work(tmp_path, capsys, corrupt,
+                                                              needle):
+    bag = _ros1_bag(tmp_path / "v.bag", corrupt=corrupt)
+    out = tmp_path / "out"
+    assert main(["replay", str(bag), "-o", str(out), "--topics",
+                 "odometry=/nav/odom,multibeam=/mbes/cloud"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "/mbes/cloud message 3" in err and needle in err, err
+    assert not out.exists() or not any(out.iterdir())
+
+
 def test_replay_rejects_returns_without_a_transform_at_their_stamp(tmp_path, capsys):
     bag = _ros1_bag(tmp_path / "v.bag", ping_shift=30 * 10**9)  # stamps after the poses
     out = tmp_path / "out"
@@ -418,6 +450,19 @@ def test_templates_write_the_bytes_rosbags_writes():
     beams = np.array([[1.0, 0, 0], [0, 1.0, 0], [0.6, 0.8, 0]])
     assert m.CloudWriter("profiler").cdr(12.3, ranges, beams) == m.serialize(
         m.point_cloud(12.3, "profiler", ranges, beams), "sensor_msgs/msg/PointCloud2")
+    wide = np.random.default_rng(0).normal(size=(5, 4))  # beams as a strided view
+    assert m.CloudWriter("dvl").cdr(0.5, wide[:, 3], wide[:, :3]) == m.serialize(
+        m.point_cloud(0.5, "dvl", wide[:, 3], wide[:, :3]), "sensor_msgs/msg/PointCloud2")
+    scans = m.ScanWriter("multibeam", 0.1)
+    for k, (angles, echoes) in enumerate(((np.linspace(-1, 1, 3), ranges),
+                                          (np.linspace(-1, 1, 3), ranges[::-1]),
+                                          (np.linspace(-0.5, 0.7, 5), np.arange(5.0)))):
+        assert scans.cdr(12.3 + k, angles, echoes, 20.0) == m.serialize(m.laser_scan(
+            12.3 + k, "multibeam", angles, echoes, 20.0, 0.1), "sensor_msgs/msg/LaserScan")
+    for typename, value in (("std_msgs/msg/Int32", -7), ("std_msgs/msg/Int32", 2**31 - 1),
+                            ("std_msgs/msg/Float64", 0.8125)):
+        assert m.scalar_cdr(typename, value) == m.serialize(m.scalar(typename, value),
+                                                            typename)
 
 
 def test_marker_points_spliced_into_the_serialisation_decode():
@@ -529,3 +574,167 @@ def test_recorder_alone_with_fixed_inputs(tmp_path):
     p_bs, r_bs = static["multibeam"][1]
     p_mb, r_mb = dynamic["base_link"][0]
     np.testing.assert_allclose(p_mb + r_mb @ (p_bs + r_bs @ [4.0, 0, 0]), points[0], atol=1e-12)
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4", "none"])
+def test_mcap_log_of_many_chunks_reads_back_whole(tmp_path, monkeypatch, compression):
+    """Messages spread over many chunks (a 4 kB chunk) come back from the mcap reader (CRCs
+    checked, through the summary's indexes and sequentially) and rosbags, in order, with the
+    summary's counts."""
+    from mcap.reader import make_reader
+    from mcap.records import Chunk
+    from mcap.stream_reader import StreamReader
+    from rosbags.highlevel import AnyReader
+
+    from drake_auv.rosio import writer
+
+    monkeypatch.setattr(writer, "CHUNK_BYTES", 4096)
+    rng = np.random.default_rng(3)
+    expected = []
+    with writer.McapLog(tmp_path / "many.mcap", {"k": 1}, compression) as log:
+        for k in range(400):
+            t = 0.1 * k
+            log.write_cdr("/leg", "std_msgs/msg/Int32", m.scalar_cdr("std_msgs/msg/Int32", k), t)
+            expected.append(("/leg", k))
+            if k % 3 == 0:
+                beams = rng.normal(size=(20, 3))
+                beams /= np.linalg.norm(beams, axis=1)[:, None]
+                ranges = rng.uniform(1, 9, 20)
+                log.write_cdr("/cloud", "sensor_msgs/msg/PointCloud2",
+                              m.CloudWriter("dvl").cdr(t, ranges, beams), t)
+                expected.append(("/cloud", ranges.astype(np.float32)))
+    with open(tmp_path / "many.mcap", "rb") as f:
+        reader = make_reader(f, validate_crcs=True)
+        summary = reader.get_summary()
+        assert summary.statistics.message_count == len(expected)
+        assert summary.statistics.chunk_count == len(summary.chunk_indexes) > 10
+        assert {summary.channels[c].topic: n for c, n in
+                summary.statistics.channel_message_counts.items()} == {"/leg": 400,
+                                                                       "/cloud": 134}
+        assert {c.compression for c in summary.chunk_indexes} == {
+            "" if compression == "none" else compression}
+        got = [(channel.topic, message) for _, channel, message in reader.iter_messages()]
+        assert {r.name: r.metadata for r in reader.iter_metadata()} == {"drake_auv": {"k": "1"}}
+    assert [topic for topic, _ in got] == [topic for topic, _ in expected]
+    assert [msg.sequence for topic, msg in got if topic == "/leg"] == list(range(400))
+    with open(tmp_path / "many.mcap", "rb") as f:
+        chunks = [r for r in StreamReader(f, validate_crcs=True, emit_chunks=True).records
+                  if isinstance(r, Chunk)]
+    assert len(chunks) == summary.statistics.chunk_count
+    with AnyReader([tmp_path / "many.mcap"]) as bag:
+        decoded = [(c.topic, bag.deserialize(raw, c.msgtype))
+                   for c, _, raw in bag.messages()]
+    assert len(decoded) == len(expected)
+    for (topic, msg), (want_topic, want) in zip(decoded, expected):
+        assert topic == want_topic
+        if topic == "/leg":
+            assert msg.data == want
+        else:
+            np.testing.assert_array_equal(
+                np.frombuffer(bytes(msg.data), np.float32).reshape(-1, 10)[:, 3], want)
+
+
+def test_mcap_log_replaces_a_link_and_an_aborted_log_leaves_nothing(tmp_path):
+    from drake_auv.rosio.writer import McapLog
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep")
+    (tmp_path / "dive.mcap").symlink_to(victim)
+    log = McapLog(tmp_path / "dive.mcap")
+    log.write_cdr("/x", "std_msgs/msg/Float64", m.scalar_cdr("std_msgs/msg/Float64", 1.0), 0.0)
+    log.close()
+    assert victim.read_text() == "keep" and not (tmp_path / "dive.mcap").is_symlink()
+    assert (tmp_path / "dive.mcap").read_bytes()[:8] == b"\x89MCAP0\r\n"
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with pytest.raises(RuntimeError, match="mid-dive"):
+        with McapLog(tmp_path / "other.mcap") as other:
+            other.write_cdr("/x", "std_msgs/msg/Float64",
+                            m.scalar_cdr("std_msgs/msg/Float64", 1.0), 0.0)
+            raise RuntimeError("mid-dive")
+    assert other.closed and sorted(p.name for p in tmp_path.iterdir()) == before
+    other.close()  # after an abort: nothing to do
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_run_mission_aborts_its_log_when_building_or_flying_fails(tmp_path, monkeypatch):
+    """A failure while the diagram is built or while the dive flies closes the log's file
+    and leaves no dive.mcap (nor its temporary folder)."""
+    import drake_auv.mission.runner as runner
+
+    spec = load_mission("pool", overrides=["limits.max_time_s=2"])
+    site = load_site(spec.site, spec.seed, label=spec.name)
+    real_build = runner.build_mission_diagram
+
+    def failing_build(*args, **kwargs):
+        raise RuntimeError("no diagram")
+
+    monkeypatch.setattr(runner, "build_mission_diagram", failing_build)
+    log = dive_log(tmp_path / "dive.mcap", spec, site)
+    with pytest.raises(RuntimeError, match="no diagram"):
+        run_mission(spec, site, progress=False, mcap=log)
+    assert log.closed and list(tmp_path.iterdir()) == []
+    monkeypatch.setattr(runner, "build_mission_diagram", real_build)
+
+    def probe(context):
+        if context.get_time() > 0.5:
+            raise RuntimeError("sensor fault")
+
+    log = dive_log(tmp_path / "dive.mcap", spec, site)
+    with pytest.raises(RuntimeError, match="sensor fault"):
+        run_mission(spec, site, progress=False, mcap=log, probe=probe)
+    assert log.closed and list(tmp_path.iterdir()) == []
+
+
+def test_message_block_writes_the_records_single_writes_do(tmp_path):
+    from mcap.reader import make_reader
+
+    from drake_auv.rosio.writer import McapLog, MessageBlock
+
+    templates = [("/tf", m.tf_template(m.MAP, (m.BASE, m.TRUTH))),
+                 ("/odometry", m.odometry_template(m.BASE)),
+                 ("/thrust", m.array_template(("a", "b", "c")))]
+    rng = np.random.default_rng(5)
+    ticks = [(0.1 * k, rng.normal(size=14 + 13 + 3).tolist()) for k in range(5)]
+    with McapLog(tmp_path / "block.mcap") as log:
+        block = MessageBlock(log, templates)
+        log.write_cdr("/other", "std_msgs/msg/Int32", m.scalar_cdr("std_msgs/msg/Int32", 3), 0)
+        for t, floats in ticks:
+            block.write(floats, t)
+    with McapLog(tmp_path / "single.mcap") as log:
+        log.write_cdr("/other", "std_msgs/msg/Int32", m.scalar_cdr("std_msgs/msg/Int32", 3), 0)
+        for t, floats in ticks:
+            ns = m.nanoseconds(t)
+            for (topic, template), (first, end) in zip(templates, ((0, 14), (14, 27),
+                                                                   (27, 30))):
+                log.write_cdr(topic, template.typename, template.cdr(
+                    floats[first:end], (ns,) * len(template.stamp_offsets)), t)
+
+    def records(name):
+        with open(tmp_path / name, "rb") as f:
+            return [(channel.topic, message.sequence, message.log_time, message.data)
+                    for _, channel, message in make_reader(f).iter_messages()]
+
+    assert records("block.mcap") == records("single.mcap") and len(records("block.mcap")) == 16
+
+
+def test_an_error_writing_a_chunk_reaches_the_dive_and_drops_the_log(tmp_path, monkeypatch):
+    """A chunk that cannot be written (on the log's writing thread) fails the next write or
+    the close, and the log is then dropped whole."""
+    from drake_auv.rosio import writer
+
+    def full_disk(data):
+        raise OSError("No space left on device")
+
+    monkeypatch.setattr(writer, "CHUNK_BYTES", 256)
+    monkeypatch.setitem(writer.COMPRESSIONS, "zstd", full_disk)
+    with pytest.raises(OSError, match="No space left"):
+        with writer.McapLog(tmp_path / "full.mcap") as log:
+            for k in range(200):
+                log.write_cdr("/x", "std_msgs/msg/Float64",
+                              m.scalar_cdr("std_msgs/msg/Float64", k), 0.1 * k)
+    assert log.closed and list(tmp_path.iterdir()) == []
+    log = writer.McapLog(tmp_path / "late.mcap")
+    log.write_cdr("/x", "std_msgs/msg/Float64", m.scalar_cdr("std_msgs/msg/Float64", 1.0), 0)
+    with pytest.raises(OSError, match="No space left"):
+        log.close()
+    assert log.closed and list(tmp_path.iterdir()) == []

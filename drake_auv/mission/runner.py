@@ -12,6 +12,7 @@ come from the exact point-to-mesh distance, on the true world, and the clearance
 
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import dataclass, field
 
@@ -160,7 +161,8 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
     `plan` (default `plan_mission(spec, site)`), paced at `realtime_rate` times real time
     (0: as fast as possible; pacing changes no result); `probe(root_context)`, when given, is
     called at every simulator step (a benchmark's sampling of memory and wall time); `mcap`:
-    an `rosio.McapLog` the dive is written into (closed, into place, when the dive ends).
+    an `rosio.McapLog` the dive is written into (closed, into place, when the dive ends;
+    aborted, no file left, when building or flying it fails).
 
     `progress`: a `RunProgress` in its `setup` phase (this call's last step of it is the
     Diagram's build; it then runs the `dive` phase, ended at 100 % when the dive ends, and the
@@ -170,46 +172,46 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
     if own:
         display.start("setup", total=1 + (site is None) + (plan is None),
                       note="site" if site is None else "plan" if plan is None else "Diagram")
-    if site is None:
-        with display.step("site"):
-            site = load_site(spec.site, spec.seed, label=spec.name)
-    check_against_site(spec, site)
-    if plan is None:
-        with display.step("plan"):
-            plan = plan_mission(spec, site)
-    with display.step("Diagram"):
-        diagram, handles = build_mission_diagram(site, spec, plan, scene=scene, mcap=mcap)
-        simulator = Simulator(diagram)
-    simulator.set_target_realtime_rate(realtime_rate)
-    context = simulator.get_context()
-    cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
-    supervisor = handles.supervisor
-    spool = LogSpool(handles.logs, LOG_SPOOL_S)
-    display.start("dive", note=f"mission {spec.name}")
+    with mcap if mcap is not None else contextlib.nullcontext():
+        if site is None:
+            with display.step("site"):
+                site = load_site(spec.site, spec.seed, label=spec.name)
+        check_against_site(spec, site)
+        if plan is None:
+            with display.step("plan"):
+                plan = plan_mission(spec, site)
+        with display.step("Diagram"):
+            diagram, handles = build_mission_diagram(site, spec, plan, scene=scene, mcap=mcap)
+            simulator = Simulator(diagram)
+        simulator.set_target_realtime_rate(realtime_rate)
+        context = simulator.get_context()
+        cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
+        supervisor = handles.supervisor
+        spool = LogSpool(handles.logs, LOG_SPOOL_S)
+        display.start("dive", note=f"mission {spec.name}")
 
-    def monitor(root_context) -> EventStatus:
-        if display.due():
-            display.update(dive_share(handles, root_context, cap),
-                           note=f"mission {spec.name}, t = {root_context.get_time():.0f} s")
-        spool.spool(root_context)
-        if probe is not None:
-            probe(root_context)
-        return supervisor.monitor(root_context)
+        def monitor(root_context) -> EventStatus:
+            if display.due():
+                display.update(dive_share(handles, root_context, cap),
+                               note=f"mission {spec.name}, t = {root_context.get_time():.0f} s")
+            spool.spool(root_context)
+            if probe is not None:
+                probe(root_context)
+            return supervisor.monitor(root_context)
 
-    simulator.set_monitor(monitor)
-    try:
-        wall = time.perf_counter()
-        status = simulator.AdvanceTo(cap)
-        wall = time.perf_counter() - wall
-        display.finish(note=f"mission {spec.name}, t = {context.get_time():.0f} s")
-        completed = status.reason() == SimulatorStatus.ReturnReason.kReachedTerminationCondition
-        display.start("results", total=COLLECT_STEPS + 1, note="logs")
-        with display.step("logs"):
-            logs = {name: spool.read(name, context) for name in handles.logs}
-    finally:
-        spool.close()
-        if mcap is not None:
-            mcap.close()
+        simulator.set_monitor(monitor)
+        try:
+            wall = time.perf_counter()
+            status = simulator.AdvanceTo(cap)
+            wall = time.perf_counter() - wall
+            display.finish(note=f"mission {spec.name}, t = {context.get_time():.0f} s")
+            completed = (status.reason()
+                         == SimulatorStatus.ReturnReason.kReachedTerminationCondition)
+            display.start("results", total=COLLECT_STEPS + 1, note="logs")
+            with display.step("logs"):
+                logs = {name: spool.read(name, context) for name in handles.logs}
+        finally:
+            spool.close()
     result = _collect(spec, site, plan, diagram, handles, context, completed, wall, logs,
                       display)
     display.finish(note=f"{len(result.times)} samples")

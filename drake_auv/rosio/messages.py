@@ -105,14 +105,14 @@ class CdrTemplate:
 
     def __init__(self, typename: str, build, n_floats: int, n_stamps: int = 1,
                  n_counts: int = 0):
-        self.typename = typename
+        self.typename, self.n_floats = typename, n_floats
         floats = [float(np.float64(-1.2345678e301) * (1.0 + 1e-9 * k)) for k in range(n_floats)]
         stamps = [(0x5E_C0_00_00 + k, 0x3A_5E_C0_00 + k) for k in range(n_stamps)]
         counts = [0x7C_0A_70_00 + k for k in range(n_counts)]
         data = serialize(build(floats, [make("builtin_interfaces/msg/Time", sec=sec, nanosec=ns)
                                         for sec, ns in stamps], counts), typename)
-        self._floats = [self._find(data, _F64.pack(v)) for v in floats]
-        self._stamps = [self._find(data, _STAMP.pack(*v)) for v in stamps]
+        self.float_runs = _runs([self._find(data, _F64.pack(v)) for v in floats])
+        self.stamp_offsets = [self._find(data, _STAMP.pack(*v)) for v in stamps]
         self._counts = [self._find(data, _U32.pack(v)) for v in counts]
         self.data = bytes(data)
 
@@ -124,13 +124,25 @@ class CdrTemplate:
 
     def cdr(self, floats=(), stamps_ns=(), counts=()) -> bytearray:
         buf = bytearray(self.data)
-        for at, value in zip(self._floats, floats):
-            _F64.pack_into(buf, at, value)
-        for at, ns in zip(self._stamps, stamps_ns):
+        for packer, at, first, end in self.float_runs:
+            packer.pack_into(buf, at, *floats[first:end])
+        for at, ns in zip(self.stamp_offsets, stamps_ns):
             _STAMP.pack_into(buf, at, ns // 1_000_000_000, ns % 1_000_000_000)
         for at, value in zip(self._counts, counts):
             _U32.pack_into(buf, at, value)
         return buf
+
+
+def _runs(offsets) -> list:
+    """[(struct of k float64, offset, first, end)]: the floats first..end-1 lie back to back
+    from `offset` (one `pack_into` each run)."""
+    runs = []
+    for k, at in enumerate(offsets):
+        if runs and at == runs[-1][1] + 8 * (k - runs[-1][2]):
+            runs[-1][3] = k + 1
+        else:
+            runs.append([None, at, k, k + 1])
+    return [(struct.Struct(f"<{end - first}d"), at, first, end) for _, at, first, end in runs]
 
 
 _F64, _STAMP, _U32 = struct.Struct("<d"), struct.Struct("<iI"), struct.Struct("<I")
@@ -303,13 +315,15 @@ def cloud_data(ranges, beams_sensor) -> np.ndarray:
     """The (n,) records (`CLOUD_FIELDS`) of n beams: `ranges` (n,) m, NaN without echo;
     `beams_sensor` (n, 3) unit directions in the sensor frame."""
     ranges = np.asarray(ranges, dtype=float)
-    beams = np.asarray(beams_sensor, dtype=float).reshape(-1, 3)
-    data = np.empty(len(ranges), _CLOUD_DTYPE)
-    points = beams * ranges[:, None]  # NaN rows where no echo
-    data["x"], data["y"], data["z"] = points.T
-    data["range"] = ranges
-    data["beam_x"], data["beam_y"], data["beam_z"] = beams.T
-    return data
+    beams = np.ascontiguousarray(np.asarray(beams_sensor, dtype="<f8").reshape(-1, 3))
+    n = len(ranges)
+    singles = np.empty((n, 4), "<f4")
+    np.multiply(beams, ranges[:, None], out=singles[:, :3], casting="same_kind")  # NaN: no echo
+    singles[:, 3] = ranges
+    data = np.empty((n, _CLOUD_DTYPE.itemsize), np.uint8)
+    data[:, :16] = singles.view(np.uint8)
+    data[:, 16:] = beams.view(np.uint8).reshape(n, 24)
+    return data.view(_CLOUD_DTYPE).reshape(n)
 
 
 def point_cloud(t: float, frame: str, ranges, beams_sensor):
@@ -338,7 +352,7 @@ class CloudWriter:
     def cdr(self, t: float, ranges, beams_sensor) -> bytes:
         data = cloud_data(ranges, beams_sensor)
         head = self._template.cdr((), (nanoseconds(t),), (len(data), data.nbytes))
-        return b"".join((head[:self._prefix_bytes], _U32.pack(data.nbytes), data.tobytes(),
+        return b"".join((head[:self._prefix_bytes], _U32.pack(data.nbytes), data.view(np.uint8),
                          b"\x01" if np.isfinite(data["range"]).all() else b"\x00"))
 
 
@@ -355,9 +369,41 @@ def laser_scan(t: float, frame: str, angles, ranges, max_range: float, period: f
                 intensities=np.zeros(0, np.float32))
 
 
+class ScanWriter:
+    """`laser_scan`'s CDR bytes in `frame` without building the message: the part before
+    `ranges` (the fan, the range limits, `period`) is a `CdrTemplate` (the stamp), rebuilt
+    when the fan changes; `ranges` (float32[]) and the empty `intensities` end the message
+    (4-aligned whatever their length)."""
+
+    def __init__(self, frame: str, period: float):
+        self.frame, self.period = frame, float(period)
+        self._fan = self._template = None
+
+    def cdr(self, t: float, angles, ranges, max_range: float) -> bytes:
+        fan = (float(angles[0]), float(angles[-1]), len(angles), float(max_range))
+        if fan != self._fan:
+            self._fan, angles = fan, np.array(angles, dtype=float)
+            self._template = CdrTemplate("sensor_msgs/msg/LaserScan", lambda f, s, c: laser_scan(
+                s[0], self.frame, angles, np.zeros(0), max_range, self.period), 0, 1)
+        head = self._template.cdr((), (nanoseconds(t),))
+        ranges = np.where(np.isfinite(ranges), ranges, np.inf).astype("<f4")
+        return b"".join((head[:-8], _U32.pack(len(ranges)), ranges.tobytes(), bytes(4)))
+
+
 def scalar(typename: str, value):
     """A std_msgs scalar (`std_msgs/msg/Float64`, `Int32`)."""
     return make(typename, data=value)
+
+
+_SCALARS = {"std_msgs/msg/Int32": struct.Struct("<4si"),
+            "std_msgs/msg/Float64": struct.Struct("<4sd")}
+_LITTLE_ENDIAN_CDR = b"\x00\x01\x00\x00"  # the encapsulation header
+
+
+def scalar_cdr(typename: str, value) -> bytes:
+    """`scalar`'s CDR bytes (`_SCALARS`' types): the header, then the value (at offset 0 of
+    the body, aligned whatever its size)."""
+    return _SCALARS[typename].pack(_LITTLE_ENDIAN_CDR, value)
 
 
 def float_array(values, labels):
@@ -404,14 +450,15 @@ def marker_array_cdr(markers, points) -> bytes:
         msg.points = [cls(*_sentinel(k))]
     data = serialize(make("visualization_msgs/msg/MarkerArray", markers=list(markers)),
                      "visualization_msgs/msg/MarkerArray")
+    pieces, done = [], 0
     for k, array in enumerate(points):
-        mark = _sentinel(k).astype("<f8").tobytes()
-        at = data.index(mark)
+        at = data.index(_sentinel(k).astype("<f8").tobytes(), done)
         count = at - 4 if data[at - 4:at] == b"\x01\x00\x00\x00" else at - 8
         array = np.ascontiguousarray(np.asarray(array, dtype="<f8").reshape(-1, 3))
-        data = (data[:count] + np.uint32(len(array)).astype("<u4").tobytes()
-                + data[count + 4:at] + array.tobytes() + data[at + 24:])
-    return data
+        pieces += [data[done:count], _U32.pack(len(array)), data[count + 4:at],
+                   array.reshape(-1).view(np.uint8)]
+        done = at + 24
+    return b"".join([*pieces, data[done:]])  # one copy of the points
 
 
 def mesh_corners(vertices, faces) -> np.ndarray:

@@ -255,6 +255,8 @@ def _index(reader, path, topics, given, base_frame, max_range) -> LogIndex:
                            pose.orientation.w)))
         elif conn.id in source_of:
             name = source_of[conn.id]
+            if conn.msgtype == RETURNS_TYPES[0]:
+                _check_cloud(msg, f"{path}: {conn.topic} message {counts[name] + 1}")
             stamps[name].append(_ns(msg.header.stamp))
             frames[name].add(_frame(msg.header.frame_id))
             counts[name] += 1
@@ -305,6 +307,45 @@ def _index(reader, path, topics, given, base_frame, max_range) -> LogIndex:
                                        else logged if logged is not None
                                        else max_ranges.get(name, DEFAULT_MAX_RANGE))
     return index
+
+
+_FLOAT_TYPES = (7, 8)  # PointField FLOAT32, FLOAT64
+
+
+def _check_cloud(msg, where: str) -> None:
+    """Raises ValueError (one line, starting with `where`) unless the `PointCloud2` `msg` is
+    one `cloud_beams` reads: fields `x y z` (and `range beam_x beam_y beam_z` when there)
+    floating point (PointField 7 FLOAT32 or 8 FLOAT64), count 1; every field of a known
+    datatype (1-8) and inside `point_step`; `row_step` >= `width * point_step`; `data` of
+    `height * row_step` bytes; `is_bigendian` a boolean."""
+    names = {f.name: f for f in msg.fields}
+    width, height = int(msg.width), int(msg.height)
+    step, row = int(msg.point_step), int(msg.row_step)
+    problem = None
+    missing = [n for n in ("x", "y", "z") if n not in names]
+    beams = [n for n in ("range", "beam_x", "beam_y", "beam_z") if n in names]
+    if missing:
+        problem = f"no field {', '.join(missing)} (x, y, z are needed)"
+    elif msg.is_bigendian not in (True, False, 0, 1):
+        problem = f"is_bigendian {msg.is_bigendian!r} is not a boolean"
+    for f in msg.fields:
+        if problem:
+            break
+        if f.datatype not in _POINT_TYPES:
+            problem = f"field {f.name} has datatype {f.datatype}, not one of 1-8"
+        elif f.name in ("x", "y", "z", *beams) and (f.datatype not in _FLOAT_TYPES
+                                                     or f.count != 1):
+            problem = (f"field {f.name} is datatype {f.datatype} count {f.count}, not "
+                       f"FLOAT32 (7) or FLOAT64 (8) count 1")
+        elif f.offset + np.dtype(_POINT_TYPES[f.datatype]).itemsize * max(f.count, 1) > step:
+            problem = f"field {f.name} at offset {f.offset} overruns point_step {step}"
+    if not problem and row < width * step:
+        problem = f"row_step {row} < width {width} x point_step {step}"
+    if not problem and len(msg.data) != height * row:
+        problem = (f"data has {len(msg.data)} bytes, not height {height} x row_step {row} = "
+                   f"{height * row}")
+    if problem:
+        raise ValueError(f"{where}: a PointCloud2 whose layout cannot be read: {problem}")
 
 
 def cloud_beams(msg) -> tuple[np.ndarray, np.ndarray]:

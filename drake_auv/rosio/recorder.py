@@ -31,7 +31,7 @@ from pydrake.systems.framework import LeafSystem
 
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.rosio import messages as m
-from drake_auv.rosio.writer import McapLog
+from drake_auv.rosio.writer import McapLog, MessageBlock
 from drake_auv.signals import LegSignal, Reference, Response, VehicleState, Water
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.control import rotation_world_body
@@ -96,13 +96,11 @@ class McapRecorder(LeafSystem):
                          in self.sonars.items()], default=1)
         self.world, self.target = world, target
         self.plan = None if plan is None else np.asarray(plan, dtype=float).reshape(-1, 3)
-        # the messages of each tick, serialised once and filled in (`messages.CdrTemplate`)
-        self._templates = dict(
-            tf=m.tf_template(m.MAP, (m.BASE, m.TRUTH)), odometry=m.odometry_template(m.BASE),
-            odometry_truth=m.odometry_template(m.TRUTH), reference=m.pose_template(m.MAP),
-            thrust=m.array_template(THRUSTER_NAMES),
-            current=m.array_template(("east_mps", "north_mps", "up_mps")))
+        # the vehicle's messages of each tick, serialised once and filled in
+        # (`messages.CdrTemplate`, `writer.MessageBlock`); built when the inputs are declared
         self._clouds = {name: m.CloudWriter(name) for name in self.sonars}
+        self._scans = {name: m.ScanWriter(name, self.sonars[name][1])
+                       for name in self.laser_scans}
         log.add_metadata("sensors", {f"{name}_max_range_m": repr(float(r))
                                      for name, (_, _, r) in self.sonars.items()})
         self.state_input = self.DeclareVectorInputPort("state", VehicleState.size())
@@ -124,6 +122,14 @@ class McapRecorder(LeafSystem):
             0.5))) if map_input else None)
         self.water_input = (self.DeclareVectorInputPort("water", Water.size()) if water_input
                             else None)
+        self._vehicle = MessageBlock(log, [
+            (TOPICS["tf"], m.tf_template(m.MAP, (m.BASE, m.TRUTH))),
+            (TOPICS["odometry"], m.odometry_template(m.BASE)),
+            (TOPICS["odometry_truth"], m.odometry_template(m.TRUTH)),
+            (TOPICS["reference"], m.pose_template(m.MAP)),
+            (TOPICS["thrust"], m.array_template(THRUSTER_NAMES)),
+            *([(TOPICS["current"], m.array_template(("east_mps", "north_mps", "up_mps")))]
+              if water_input else [])])
         # The estimated state at the last `depth` ticks: rows [time, 12 state], NaN: none yet.
         self._poses = self.DeclareDiscreteState(np.full(depth * 13, np.nan))
         self._sequences = self.DeclareDiscreteState(np.zeros(max(len(self.sonars), 1)))
@@ -145,15 +151,17 @@ class McapRecorder(LeafSystem):
         if tick == 0:
             self._write_static(t)
         estimated = self.estimated_state_input.Eval(context)
-        poses = context.get_discrete_state(self._poses).get_value().reshape(-1, 13)
-        poses = np.vstack([np.r_[t, estimated][None], poses[:-1]])
+        before = context.get_discrete_state(self._poses).get_value().reshape(-1, 13)
+        poses = np.empty_like(before)
+        poses[0, 0], poses[0, 1:], poses[1:] = t, estimated, before[:-1]
         self._write_vehicle(context, t, tick, estimated)
         sequences = context.get_discrete_state(self._sequences).get_value().copy()
+        written = False
         for k, (name, port) in enumerate(self.returns_inputs.items()):
             returns = port.Eval(context)
             if returns.sequence != sequences[k] and len(returns):
                 self._write_returns(name, returns, poses, t)
-                sequences[k] = returns.sequence
+                sequences[k], written = returns.sequence, True
         if self.section_input is not None:
             section = np.asarray(self.section_input.Eval(context), dtype=float)
             key = (len(section), float(section.sum()) if len(section) else 0.0)
@@ -163,8 +171,8 @@ class McapRecorder(LeafSystem):
                 progress[1:] = key
         if tick % self._every["coverage"] == 0:
             for name, port in self.coverage_inputs.items():
-                self.log.write(coverage_topic(name), "std_msgs/msg/Float64",
-                               m.scalar("std_msgs/msg/Float64", float(port.Eval(context)[0])), t)
+                self._write_scalar(coverage_topic(name), "std_msgs/msg/Float64",
+                                   float(port.Eval(context)[0]), t)
         if self.map_input is not None and tick % self._every["map"] == 0:
             octree = self.map_input.Eval(context).map
             self.log.write_cdr(TOPICS["map"], "visualization_msgs/msg/MarkerArray",
@@ -173,7 +181,8 @@ class McapRecorder(LeafSystem):
                                    (0.2, 0.6, 1.0, 0.8))], [octree.occupied_points()]), t)
         progress[0] = tick + 1
         state.get_mutable_discrete_state(self._poses).set_value(poses.reshape(-1))
-        state.get_mutable_discrete_state(self._sequences).set_value(sequences)
+        if written:
+            state.get_mutable_discrete_state(self._sequences).set_value(sequences)
         state.get_mutable_discrete_state(self._progress).set_value(progress)
 
     def _write_static(self, t: float) -> None:
@@ -196,31 +205,28 @@ class McapRecorder(LeafSystem):
                                     for _, mesh, _ in meshes]), t)
 
     def _write_vehicle(self, context, t: float, tick: int, estimated) -> None:
-        ns = m.nanoseconds(t)
-        poses = []
-        for topic, x in (("odometry", VehicleState(estimated)),
-                         ("odometry_truth", VehicleState(self.state_input.Eval(context)))):
-            pose = (*x.position, *m.quaternion_rpy(*x.attitude))
-            poses += pose
-            self._write_fixed(topic, (*pose, *x.linear_velocity, *x.angular_velocity), ns, t)
-        self._write_fixed("tf", poses, (ns, ns), t)
+        navigation, truth = VehicleState(estimated), VehicleState(self.state_input.Eval(context))
+        # Python floats (numpy's scalars pack slower)
+        pose = (*navigation.position.tolist(), *m.quaternion_rpy(*navigation.attitude.tolist()))
+        pose_truth = (*truth.position.tolist(), *m.quaternion_rpy(*truth.attitude.tolist()))
         reference = Reference(self.reference_input.Eval(context))
-        self._write_fixed("reference", (*reference.position,
-                                        *m.quaternion_rpy(0.0, 0.0, reference.yaw)), ns, t)
-        self._write_fixed("thrust", self.thrust_input.Eval(context), (), t)
+        floats = [*pose, *pose_truth,
+                  *pose, *navigation.linear_velocity.tolist(),
+                  *navigation.angular_velocity.tolist(),
+                  *pose_truth, *truth.linear_velocity.tolist(), *truth.angular_velocity.tolist(),
+                  *reference.position.tolist(), *m.quaternion_rpy(0.0, 0.0, float(reference.yaw)),
+                  *self.thrust_input.Eval(context).tolist()]
         if self.water_input is not None:
-            self._write_fixed("current", Water(self.water_input.Eval(context)).velocity, (), t)
+            floats += Water(self.water_input.Eval(context)).velocity.tolist()
+        self._vehicle.write(floats, t)
         if tick % self._every["mission"] == 0:
-            self.log.write(TOPICS["leg"], "std_msgs/msg/Int32", m.scalar(
-                "std_msgs/msg/Int32", int(LegSignal(self.leg_input.Eval(context)).index)), t)
-            self.log.write(TOPICS["response"], "std_msgs/msg/Int32", m.scalar(
-                "std_msgs/msg/Int32", int(Response(self.response_input.Eval(context)).mode)), t)
+            self._write_scalar(TOPICS["leg"], "std_msgs/msg/Int32",
+                               int(LegSignal(self.leg_input.Eval(context)).index), t)
+            self._write_scalar(TOPICS["response"], "std_msgs/msg/Int32",
+                               int(Response(self.response_input.Eval(context)).mode), t)
 
-    def _write_fixed(self, topic: str, floats, stamps, t: float) -> None:
-        template = self._templates[topic]
-        self.log.write_cdr(TOPICS[topic], template.typename,
-                           template.cdr(floats, stamps if isinstance(stamps, tuple)
-                                        else (stamps,)), t)
+    def _write_scalar(self, topic: str, typename: str, value, t: float) -> None:
+        self.log.write_cdr(topic, typename, m.scalar_cdr(typename, value), t)
 
     def _write_returns(self, name: str, returns: SonarReturns, poses: np.ndarray,
                        now: float) -> None:
@@ -230,14 +236,16 @@ class McapRecorder(LeafSystem):
         is stamped with that tick). Logged at `now`, the tick that received it (as a
         recorder's receive time): in log order, the updates reach a replay in the order the
         mapper recorded them."""
-        mount, period, _ = self.sonars[name]
-        rows = [row for row in poses if row[0] == row[0]]  # NaN: no tick yet
-        rows.sort(key=lambda row: abs(row[0] - returns.time))  # on time first
+        mount = self.sonars[name][0]
+        times = poses[:, 0].tolist()
+        rows = sorted((k for k, time in enumerate(times) if time == time),  # NaN: no tick yet
+                      key=lambda k: abs(times[k] - returns.time))  # on time first
         origin_nav = returns.origin_nav
-        for row in rows:
+        for k in rows:
+            row = poses[k]
             rotation = rotation_world_body(*row[4:7])
             origin = row[1:4] + rotation @ mount.position
-            if max(abs(origin - origin_nav)) < 1e-9:
+            if np.abs(origin - origin_nav).max() < 1e-9:
                 break
         else:
             raise ValueError(f"McapRecorder: {name} returns at {returns.time:.3f} s were not "
@@ -246,9 +254,9 @@ class McapRecorder(LeafSystem):
         beams = np.asarray(returns.directions_nav) @ (rotation @ mount.rotation)
         self.log.write_cdr(points_topic(name), "sensor_msgs/msg/PointCloud2",
                            self._clouds[name].cdr(t, returns.ranges, beams), now)
-        if name in self.laser_scans:
-            self.log.write(scan_topic(name), "sensor_msgs/msg/LaserScan", m.laser_scan(
-                t, name, returns.angles, returns.ranges, returns.max_range, period), now)
+        if name in self._scans:
+            self.log.write_cdr(scan_topic(name), "sensor_msgs/msg/LaserScan", self._scans[
+                name].cdr(t, returns.angles, returns.ranges, returns.max_range), now)
 
 
 def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supervisor,
