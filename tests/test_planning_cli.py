@@ -213,3 +213,17 @@ def test_bad_grids_and_values_give_one_line(tmp_path, capsys, case, extra, messa
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and message in err[0], err
     assert "Traceback" not in err[0]
+
+
+def test_label_runs_draw_every_segment_once_in_its_label():
+    from drake_auv.planning.figures import label_runs
+
+    labels = np.array(list("aabbbaabba"), dtype=object)
+    points = np.column_stack([np.arange(10.0), np.arange(10.0) ** 2, np.zeros(10)])
+    runs = label_runs(Path(points, 0.0, (0.0, 0.0, -1.0), labels))
+    assert set(runs) == {"a", "b"}
+    for name, line in runs.items():
+        drawn = {(line[k, 0], line[k + 1, 0]) for k in range(len(line) - 1)
+                 if np.isfinite(line[k:k + 2]).all()}
+        assert drawn == {(k, k + 1.0) for k in range(9) if labels[k + 1] == name}, name
+        assert np.isfinite(line[[0, -1]]).all() and line.shape[1] == 2

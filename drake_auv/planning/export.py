@@ -28,6 +28,7 @@ REFERENCE_TABLE3 = {
 
 
 ROUTE_TOLERANCE = 0.05  # m: the route's vertices, thinned below the 6 decimals (~0.1 m) kept
+ROUTE_PIECE = 2048  # samples thinned at a time: time linear in the path's length
 
 
 def _waypoint_features(mission, geo: GeoFrame, surface) -> list[dict]:
@@ -61,7 +62,7 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", missions=(),
 
     First the route: one 2D LineString [[lon, lat], ...] (degrees, 6 decimals) through the
     path's samples, those within `ROUTE_TOLERANCE` of the line thinned out (Douglas-Peucker in
-    xy); properties `kind` "route", `name`, `samples`, `length_m` (3D), `depth_min`,
+    xy, `ROUTE_PIECE` samples at a time); properties `kind` "route", `name`, `samples`, `length_m` (3D), `depth_min`,
     `depth_max` (m below the sea surface). Then one Point per item of each of `missions`
     (`VehicleMission`s read back from the files, in the order flown): `kind` "waypoint",
     `file` (its file name), `seq` (1-based order in the file), `item` (waypoint, goto, section
@@ -71,7 +72,8 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", missions=(),
     chooses it). RFC 7946's third coordinate is a height above the WGS 84 ellipsoid, and the
     vehicle's vertical references are depths and altitudes, so they are properties."""
     pts = path.points
-    keep = douglas_peucker(pts[:, :2], ROUTE_TOLERANCE) if len(path) > 1 else np.zeros(2, int)
+    keep = (douglas_peucker(pts[:, :2], ROUTE_TOLERANCE, ROUTE_PIECE) if len(path) > 1
+            else np.zeros(2, int))
     lonlat = np.round(geo.to_lonlat(pts[keep, :2]), 6)  # RFC 7946 section 11.2: about 0.1 m
     route = {"type": "Feature",
              "properties": {"kind": "route", "name": name, "samples": len(path),

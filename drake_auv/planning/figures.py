@@ -113,15 +113,29 @@ def _classification_image(ax, plan, alpha=1.0):
               interpolation="nearest", alpha=alpha)
 
 
-def _path_lines(ax, path, colours=LABEL_COLOURS, widths=None):
-    xy = path.points[:, :2]
-    segs = np.stack([xy[:-1], xy[1:]], axis=1)
+def label_runs(path, dims: int = 2) -> dict[str, np.ndarray]:
+    """Per label, its segments (a segment takes its end sample's label) as one polyline of the
+    first `dims` coordinates, a NaN row between runs: one artist per label, which Agg
+    simplifies and mplot3d projects in one pass (not an artist or a masked array per segment)."""
+    pts = path.points[:, :dims]
     lab = path.labels[1:]
+    out = {}
     for name in dict.fromkeys(lab.tolist()):
-        m = lab == name
-        lw = (widths or {}).get(name, 0.6)
-        ax.add_collection(LineCollection(segs[m], colors=colours.get(name, "k"), linewidths=lw,
-                                         label=name))
+        edge = np.diff(np.concatenate([[0], (lab == name).astype(np.int8), [0]]))
+        start, end = np.flatnonzero(edge == 1), np.flatnonzero(edge == -1)  # segments [s, e)
+        count = end - start + 2  # the run's samples s..e and the NaN row after them
+        run = np.repeat(np.arange(len(start)), count)
+        pos = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        line = pts[np.minimum(start[run] + pos, len(pts) - 1)]
+        line[pos == count[run] - 1] = np.nan
+        out[name] = line[:-1]
+    return out
+
+
+def _path_lines(ax, path, colours=LABEL_COLOURS, widths=None):
+    for name, line in label_runs(path).items():
+        ax.plot(line[:, 0], line[:, 1], color=colours.get(name, "k"),
+                lw=(widths or {}).get(name, 0.6), label=name, scalex=False, scaley=False)
 
 
 def fig_slope(plan, geo=None) -> Figure:
@@ -193,11 +207,8 @@ def fig_path3d(plan, which: str = "path") -> Figure:
     xx, yy = np.meshgrid(b.x[::step], b.y[::step])
     ax.plot_surface(xx, yy, plan.surface.z[::step, ::step], cmap="gist_earth", alpha=0.5,
                     linewidth=0, antialiased=False)
-    pts = path.points
-    for name in dict.fromkeys(path.labels.tolist()):
-        m = path.labels == name
-        seg = np.where(m, pts[:, 2], np.nan)  # break the line where the label changes
-        ax.plot(pts[:, 0], pts[:, 1], seg, color=LABEL_COLOURS.get(name, "k"),
+    for name, line in label_runs(path, 3).items():
+        ax.plot(line[:, 0], line[:, 1], line[:, 2], color=LABEL_COLOURS.get(name, "k"),
                 lw=1.6 if name == "slice" else 0.6, label=name)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
