@@ -58,3 +58,34 @@ def test_both_sensor_models_on_the_caldera_rim():
     assert 0.5 < m["high_slope_fixed_tilt"].view_mean_deg < 10.0  # the rim's slope spread
     assert m["total"].view_mean_deg < m["lawnmower"].view_mean_deg
     assert m["total"].coverage >= 0.95 and m["lawnmower_high_slope"].view_mean_deg > 20.0
+
+
+def test_faces_seen_from_their_side_equal_the_cameras_view():
+    vis = FaceVisibility(RayCaster(bathymetry_to_mesh(random_seabed(5, shape=(30, 40)))))
+    rng = np.random.default_rng(1)
+    origins = np.column_stack([rng.uniform(5, 35, 200), rng.uniform(5, 25, 200),
+                               np.full(200, -38.0)])
+    axes = np.column_stack([rng.normal(0, 0.5, (200, 2)), -np.ones(200)])
+    slots, _, _ = vis.cameras(origins, axes, np.radians(60), 8.0)
+    expected = np.zeros(len(vis.areas), bool)
+    expected[slots] = True
+    assert 0.2 < expected.mean() < 1.0
+    np.testing.assert_array_equal(vis.seen_by(origins, axes, np.radians(60), 8.0, chunk=97),
+                                  expected)
+    some = np.arange(0, len(expected), 7)
+    np.testing.assert_array_equal(vis.seen_by(origins, axes, np.radians(60), 8.0, some),
+                                  expected[some])
+
+
+def test_sampled_coverage_is_near_the_exact_one_within_its_error():
+    plan = plan_coverage(_block(), omega=2.0, compute_metrics=False)
+    exact = evaluate_plan_3d(plan)
+    sampled = evaluate_plan_3d(plan, max_faces=2000)
+    for key, m in exact.items():
+        s = sampled[key]
+        assert m.coverage_se == 0.0 and (s.view_mean_deg, s.samples) == (m.view_mean_deg,
+                                                                         m.samples)
+        if "high_slope" in key:  # 200 high-slope faces, all tested: exact
+            assert (s.coverage, s.coverage_se) == (m.coverage, 0.0)
+        else:  # 2000 of the 15600 other faces
+            assert 0 < s.coverage_se < 0.01 and abs(s.coverage - m.coverage) <= 4 * s.coverage_se

@@ -132,6 +132,47 @@ class FaceVisibility:
             return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64)
         return np.concatenate(out_s), np.concatenate(out_a), np.concatenate(out_p)
 
+    def seen_by(self, origins, axes, aperture: float, max_range: float, slots=None,
+                chunk: int = 16384) -> np.ndarray:
+        """Whether any of the cameras at `origins` looking along `axes` sees each target face
+        of `slots` (all if None): the test of `cameras` pair by pair, the pairs found from the
+        faces' side (a KD-tree of the poses, built here), so a subset of faces costs in
+        proportion to its size. (len(slots),) bool."""
+        origins = np.atleast_2d(np.asarray(origins, dtype=float))
+        axes = np.atleast_2d(np.asarray(axes, dtype=float))
+        axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+        if not (0 < aperture < np.pi):
+            raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
+        if not (np.isfinite(max_range) and max_range > 0):
+            raise ValueError(f"max_range must be > 0 m, got {max_range}")
+        slots = (np.arange(len(self.target_index)) if slots is None
+                 else np.asarray(slots, dtype=np.int64))
+        seen = np.zeros(len(slots), dtype=bool)
+        if len(origins) == 0 or len(slots) == 0:
+            return seen
+        tree = cKDTree(origins, balanced_tree=False, compact_nodes=False)
+        cos_half = np.cos(0.5 * aperture)
+        for c0 in range(0, len(slots), chunk):
+            s = slots[c0:c0 + chunk]
+            lists = tree.query_ball_point(self.centroids[s], max_range, return_sorted=False)
+            counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
+            if counts.sum() == 0:
+                continue
+            pose = np.concatenate([np.asarray(x, dtype=np.int64) for x in lists])
+            face = np.repeat(np.arange(len(s)), counts)
+            v = self.centroids[s[face]] - origins[pose]
+            dist = np.linalg.norm(v, axis=1)
+            u = v / np.maximum(dist, 1e-12)[:, None]
+            keep = ((np.einsum("ij,ij->i", u, axes[pose]) >= cos_half) & (dist <= max_range)
+                    & (np.einsum("ij,ij->i", u, self.normals[s[face]]) < 0))
+            face, pose, u, dist = face[keep], pose[keep], u[keep], dist[keep]
+            if len(face) == 0:
+                continue
+            ranges, hit = self.caster.cast_unit(origins[pose], u, max_range)
+            ok = (hit == self.target_index[s[face]]) | ~(ranges < dist - (1e-3 + 1e-4 * dist))
+            seen[c0 + face[ok]] = True
+        return seen
+
     def beams(self, hits: RayHits, directions):
         """Target faces hit by sonar beams: (slots, angles between beam and inward normal)."""
         directions = np.asarray(directions, dtype=float)
