@@ -232,18 +232,24 @@ VIEWS_3D = {
 }
 
 
-def write_figures(plan, outdir, dpi: int = 110, progress: bool = False,
+def write_figures(plan, outdir, dpi: int = 110, progress=False,
                   geo=None) -> list[FilePath]:
     """Writes every figure of `PLAN_VIEWS` (in `geo`'s CRS, with latitude, longitude and
-    north, when given) and `VIEWS_3D` into `outdir`; returns the files."""
-    from tqdm import tqdm
+    north, when given) and `VIEWS_3D` into `outdir`; returns the files. `progress`: a bar over
+    the figures, or a caller's tqdm bar to advance by one stage per figure."""
+    from drake_auv.planning.stages import next_stage, stage_bar
 
     outdir = FilePath(outdir)
     written = []
     makers = {**{k: (lambda plan, f=f: f(plan, geo)) for k, f in PLAN_VIEWS.items()}, **VIEWS_3D}
-    for name, make in tqdm(makers.items(), desc="figures", disable=not progress, leave=False):
+    bar, owned = stage_bar(progress, len(makers), "figures")
+    for name, make in makers.items():
+        bar.set_postfix_str(name)
         fig = make(plan)
         with replacing(outdir / name) as temporary:
             fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
         written.append(outdir / name)
+        next_stage(bar)
+    if owned:
+        bar.close()
     return written
