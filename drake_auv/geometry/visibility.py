@@ -45,10 +45,15 @@ class FaceVisibility:
         self.centroids = np.asarray(mesh.triangles_center)[self.target_index]
         self.normals = caster.face_normals[self.target_index]
         self.areas = np.asarray(mesh.area_faces)[self.target_index]
-        self._tree = cKDTree(self.centroids)
+        self._tree = None  # of the centroids, built on the first camera query
         # Target slot of each world face (-1: not a target), to map sonar hits.
         self._slot = np.full(num_faces, -1, dtype=np.int64)
         self._slot[self.target_index] = np.arange(len(self.target_index))
+
+    def _centroid_tree(self) -> cKDTree:
+        if self._tree is None:
+            self._tree = cKDTree(self.centroids)
+        return self._tree
 
     def _cone_candidates(self, origin, axis, half: float, max_range: float) -> np.ndarray:
         """Target slots whose centroid may lie in the cone (half angle `half`, length R): those
@@ -59,7 +64,7 @@ class FaceVisibility:
             radius = max_range * np.sqrt(0.25 + np.sin(half) ** 2)
         else:
             centre, radius = origin, max_range
-        return np.asarray(self._tree.query_ball_point(centre, radius), dtype=np.int64)
+        return np.asarray(self._centroid_tree().query_ball_point(centre, radius), dtype=np.int64)
 
     def camera(self, origin, axis, aperture: float, max_range: float):
         """Target faces a camera sees: (slots (k,) into the target faces, angles (k,) rad)."""
@@ -107,7 +112,7 @@ class FaceVisibility:
             centres, radius = origins, max_range
         out_s, out_a, out_p = [], [], []
         for c0 in range(0, len(origins), chunk):
-            lists = self._tree.query_ball_point(centres[c0:c0 + chunk], radius)
+            lists = self._centroid_tree().query_ball_point(centres[c0:c0 + chunk], radius)
             counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
             if counts.sum() == 0:
                 continue

@@ -10,10 +10,10 @@ occlusion (`geometry.visibility`), for the plan and the lawnmower.
 - Coverage: a face is seen from a sample when its centroid lies in the aperture cone, within
   range, the face turns its front to the sensor, and the ray to it meets nothing nearer; the
   share of the group's face area seen at least once. Tested from the faces' side: every face
-  while the high-slope faces and the other faces number at most `MAX_FACES` each (a grid of
-  up to about 50 000 cells: exact), else a fixed uniform sample of `MAX_FACES` of each, the
-  share then a stratified estimate with its standard error `coverage_se` (about 0.03
-  percentage points at 99 % coverage).
+  of a mesh of at most `EXACT_FACES` (a grid of 200 000 cells: exact), else a fixed uniform
+  sample of `SAMPLED_FACES` of the high-slope faces and of the other faces each, the share
+  then a stratified estimate with its standard error `coverage_se` (about 0.03 percentage
+  points at 99 % coverage).
 - Groups: high-slope (slice samples, faces over high-slope cells), planar (planar samples, the
   other valid faces), total and lawnmower (all faces), and the lawnmower's samples on the
   high-slope faces (how well a plain survey sees the walls).
@@ -36,7 +36,8 @@ from drake_auv.planning.slicing import fixed_depression, sensor_axes
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 
 
-MAX_FACES = 100_000  # faces of a stratum whose coverage is found exactly; more are sampled
+EXACT_FACES = 400_000  # a mesh of at most this many faces (200 000 cells) has every face tested
+SAMPLED_FACES = 100_000  # else this many of each stratum (high-slope, other) with more
 SAMPLE_SEED = 0  # the faces sampled: the same for every plan of a grid (not a run's noise)
 
 
@@ -74,10 +75,14 @@ def fixed_tilt_axes(plan, points: np.ndarray, axes: np.ndarray) -> np.ndarray:
     return sensor_axes(-horiz, dep[region])
 
 
-def sampled_faces(strata: np.ndarray, max_faces: int = MAX_FACES) -> np.ndarray:
-    """(F,) bool: the faces whose coverage is tested: every face of a stratum (`strata`, an
-    integer label per face) of at most `max_faces` faces, else `max_faces` of them drawn
-    uniformly without replacement (seed `SAMPLE_SEED`)."""
+def sampled_faces(strata: np.ndarray, max_faces: int = SAMPLED_FACES,
+                  exact_faces: int = EXACT_FACES) -> np.ndarray:
+    """(F,) bool: the faces whose coverage is tested: all of them when there are at most
+    `exact_faces`, else every face of a stratum (`strata`, an integer label per face) of at
+    most `max_faces` faces and `max_faces` of a larger one, drawn uniformly without
+    replacement (seed `SAMPLE_SEED`)."""
+    if len(strata) <= exact_faces:
+        return np.ones(len(strata), dtype=bool)
     rng = np.random.default_rng(SAMPLE_SEED)
     out = np.zeros(len(strata), dtype=bool)
     for k in np.unique(strata):
@@ -107,16 +112,17 @@ def stratified_coverage(seen, areas, strata, sampled, target) -> tuple[float, fl
     return cov, float(np.sqrt(var))
 
 
-def evaluate_plan_3d(plan, max_faces: int = MAX_FACES) -> dict[str, Metrics3D]:
+def evaluate_plan_3d(plan, max_faces: int = SAMPLED_FACES,
+                     exact_faces: int = EXACT_FACES) -> dict[str, Metrics3D]:
     """Occluded 3D metrics of a `CoveragePlan`'s path and lawnmower, per group (keys
     high_slope, high_slope_fixed_tilt (normal-sensor plans only), planar, total, lawnmower,
     lawnmower_high_slope).
 
     Each set of poses (the path's samples of one label, the fixed-tilt slices, the lawnmower)
     is ray-cast once and a group merges its sets. Viewing angles use every sample; coverage
-    tests every face of the high-slope and of the other faces while they number at most
-    `max_faces` each, else a uniform sample of that many (`sampled_faces`), the figure then a
-    stratified estimate with its standard error (`coverage_se`)."""
+    tests every face of a mesh of at most `exact_faces`, else `max_faces` of the high-slope
+    and of the other faces each (`sampled_faces`), the figure then a stratified estimate with
+    its standard error (`coverage_se`)."""
     p = plan.parameters
     aperture, rng = np.radians(p["aperture_deg"]), p["sensor_range"]
     mesh = bathymetry_to_mesh(plan.bathy)
@@ -125,22 +131,23 @@ def evaluate_plan_3d(plan, max_faces: int = MAX_FACES) -> dict[str, Metrics3D]:
     i, j = _grid_cells(plan.bathy, vis.centroids[:, :2])
     high_face = plan.labels.high[i, j]
     strata = high_face.astype(np.int8)
-    sampled = sampled_faces(strata, max_faces)
+    sampled = sampled_faces(strata, max_faces, exact_faces)
     path, lawn = plan.path, plan.lawnmower
-    poses = {lab: (path.points[path.labels == lab], path.sensor_dir[path.labels == lab], None)
-             for lab in dict.fromkeys(path.labels.tolist()) if lab != "transit"}
+    names, code = np.unique(path.labels.astype(str), return_inverse=True)
+    poses = {lab: (path.points[code == k], path.sensor_dir[code == k], None)
+             for k, lab in enumerate(names) if lab != "transit"}
     imaging = list(poses)
     groups = {"high_slope": (["slice"], high_face)}
     if p.get("slice_sensor", "normal") == "normal":
-        m = path.labels == "slice"
+        m = path.labels.astype(str) == "slice"
         poses["fixed_tilt"] = (path.points[m], fixed_tilt_axes(plan, path.points[m],
                                                                path.sensor_dir[m]), high_face)
         groups["high_slope_fixed_tilt"] = (["fixed_tilt"], high_face)
     groups["planar"] = (["planar"], ~high_face)
     groups["total"] = (imaging, None)
     if lawn is not None:
-        poses["lawnmower"] = (lawn.points[lawn.labels != "transit"],
-                              lawn.sensor_dir[lawn.labels != "transit"], None)
+        m = lawn.labels.astype(str) != "transit"
+        poses["lawnmower"] = (lawn.points[m], lawn.sensor_dir[m], None)
         groups["lawnmower"] = (["lawnmower"], None)
         groups["lawnmower_high_slope"] = (["lawnmower"], high_face)
     hits, seen = {}, {}
