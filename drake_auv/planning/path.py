@@ -97,8 +97,14 @@ class Path:
                    np.concatenate([p.labels for p in paths]))
 
     def segment_lengths(self) -> np.ndarray:
-        """(N - 1,) Euclidean distances between consecutive samples, m."""
-        return np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+        """(N - 1,) Euclidean distances between consecutive samples, m (read-only, computed
+        once: the path is immutable, and the metrics and reports ask for them many times)."""
+        seg = self.__dict__.get("_segment_lengths")
+        if seg is None:
+            seg = np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+            seg.setflags(write=False)
+            object.__setattr__(self, "_segment_lengths", seg)
+        return seg
 
     def arc_length(self) -> np.ndarray:
         """(N,) cumulative distance along the path from its first sample, m."""
