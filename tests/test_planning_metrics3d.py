@@ -17,12 +17,16 @@ def _block():
     return Bathymetry(-30.0 + 6.0 * ((np.abs(xx - 50) < 15) & (np.abs(yy - 40) < 10)), (1, 1))
 
 
-def test_batched_cameras_equal_single_ones():
+def _seabed_and_cameras(n: int, seed: int):
+    """Visibility on a random seabed and n cameras 8 m above it looking down and about."""
     vis = FaceVisibility(RayCaster(bathymetry_to_mesh(random_seabed(5, shape=(30, 40)))))
-    rng = np.random.default_rng(0)
-    origins = np.column_stack([rng.uniform(5, 35, 20), rng.uniform(5, 25, 20),
-                               np.full(20, -38.0)])
-    axes = np.column_stack([rng.normal(0, 0.5, (20, 2)), -np.ones(20)])
+    rng = np.random.default_rng(seed)
+    origins = np.column_stack([rng.uniform(5, 35, n), rng.uniform(5, 25, n), np.full(n, -38.0)])
+    return vis, origins, np.column_stack([rng.normal(0, 0.5, (n, 2)), -np.ones(n)])
+
+
+def test_batched_cameras_equal_single_ones():
+    vis, origins, axes = _seabed_and_cameras(20, 0)
     slots, angles, pose = vis.cameras(origins, axes, np.radians(60), 8.0)
     for k in range(20):
         s1, a1 = vis.camera(origins[k], axes[k], np.radians(60), 8.0)
@@ -61,11 +65,7 @@ def test_both_sensor_models_on_the_caldera_rim():
 
 
 def test_faces_seen_from_their_side_equal_the_cameras_view():
-    vis = FaceVisibility(RayCaster(bathymetry_to_mesh(random_seabed(5, shape=(30, 40)))))
-    rng = np.random.default_rng(1)
-    origins = np.column_stack([rng.uniform(5, 35, 200), rng.uniform(5, 25, 200),
-                               np.full(200, -38.0)])
-    axes = np.column_stack([rng.normal(0, 0.5, (200, 2)), -np.ones(200)])
+    vis, origins, axes = _seabed_and_cameras(200, 1)
     slots, _, _ = vis.cameras(origins, axes, np.radians(60), 8.0)
     expected = np.zeros(len(vis.areas), bool)
     expected[slots] = True

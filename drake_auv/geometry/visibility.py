@@ -22,6 +22,17 @@ from scipy.spatial import cKDTree
 from drake_auv.geometry.raycast import RayCaster, RayHits
 
 
+def _poses(origins, axes, aperture: float, max_range: float):
+    """(n, 3) origins and unit axes of camera poses, the aperture and range checked."""
+    origins = np.atleast_2d(np.asarray(origins, dtype=float))
+    axes = np.atleast_2d(np.asarray(axes, dtype=float))
+    if not (0 < aperture < np.pi):
+        raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
+    if not (np.isfinite(max_range) and max_range > 0):
+        raise ValueError(f"max_range must be > 0 m, got {max_range}")
+    return origins, axes / np.linalg.norm(axes, axis=1, keepdims=True)
+
+
 class FaceVisibility:
     """Visibility queries against one world, built once.
 
@@ -97,13 +108,7 @@ class FaceVisibility:
         """`camera` for many poses at once, batched (one KD-tree query and one ray cast per
         chunk of poses): (slots (k,), angles (k,) rad, pose index (k,)) of every face a pose
         sees, a face once per pose that sees it."""
-        origins = np.atleast_2d(np.asarray(origins, dtype=float))
-        axes = np.atleast_2d(np.asarray(axes, dtype=float))
-        axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
-        if not (0 < aperture < np.pi):
-            raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
-        if not (np.isfinite(max_range) and max_range > 0):
-            raise ValueError(f"max_range must be > 0 m, got {max_range}")
+        origins, axes = _poses(origins, axes, aperture, max_range)
         half = 0.5 * aperture
         if half <= np.pi / 4:
             centres = origins + 0.5 * max_range * axes
@@ -143,13 +148,7 @@ class FaceVisibility:
         of `slots` (all if None): the test of `cameras` pair by pair, the pairs found from the
         faces' side (a KD-tree of the poses, built here), so a subset of faces costs in
         proportion to its size. (len(slots),) bool."""
-        origins = np.atleast_2d(np.asarray(origins, dtype=float))
-        axes = np.atleast_2d(np.asarray(axes, dtype=float))
-        axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
-        if not (0 < aperture < np.pi):
-            raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
-        if not (np.isfinite(max_range) and max_range > 0):
-            raise ValueError(f"max_range must be > 0 m, got {max_range}")
+        origins, axes = _poses(origins, axes, aperture, max_range)
         slots = (np.arange(len(self.target_index)) if slots is None
                  else np.asarray(slots, dtype=np.int64))
         seen = np.zeros(len(slots), dtype=bool)
