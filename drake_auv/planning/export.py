@@ -63,8 +63,8 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", missions=(),
 
     First the route: one 2D LineString [[lon, lat], ...] (degrees, 6 decimals) through the
     path's samples, those within `ROUTE_TOLERANCE` of the line thinned out (Douglas-Peucker in
-    xy, `ROUTE_PIECE` samples at a time); properties `kind` "route", `name`, `samples`, `length_m` (3D), `depth_min`,
-    `depth_max` (m below the sea surface). Then one Point per item of each of `missions`
+    xy, `ROUTE_PIECE` samples at a time); properties `kind` "route", `name`, `samples`,
+    `length_m` (3D), `depth_min`, `depth_max` (m below the sea surface). Then one Point per item of each of `missions`
     (`VehicleMission`s read back from the files, in the order flown): `kind` "waypoint",
     `file` (its file name), `seq` (1-based order in the file), `item` (waypoint, goto, section
     or park), `heave` (what the autopilot holds: "altitude" or "depth"), `depth` (m below the
