@@ -119,6 +119,10 @@ def test_douglas_peucker_keeps_corners_and_bounds_the_error():
     assert 2 < len(idx) < 300
     dense = np.vstack([np.linspace(walk[a], walk[b], 50) for a, b in zip(idx[:-1], idx[1:])])
     assert nearest_distance(walk, dense).max() <= 0.5 + 1e-6
+    pieces = douglas_peucker(walk, 0.5, piece=64)  # thinned 64 samples at a time
+    assert set(range(0, 300, 63)) <= set(pieces.tolist()) and len(pieces) < 300
+    dense = np.vstack([np.linspace(walk[a], walk[b], 50) for a, b in zip(pieces[:-1], pieces[1:])])
+    assert nearest_distance(walk, dense).max() <= 0.5 + 1e-6
 
 
 def test_caldera_exports_read_back(tmp_path):

@@ -213,3 +213,50 @@ def test_bad_grids_and_values_give_one_line(tmp_path, capsys, case, extra, messa
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and message in err[0], err
     assert "Traceback" not in err[0]
+
+
+def test_label_runs_draw_every_segment_once_in_its_label():
+    from drake_auv.planning.figures import label_runs
+
+    labels = np.array(list("aabbbaabba"), dtype=object)
+    points = np.column_stack([np.arange(10.0), np.arange(10.0) ** 2, np.zeros(10)])
+    runs = label_runs(Path(points, 0.0, (0.0, 0.0, -1.0), labels))
+    assert set(runs) == {"a", "b"}
+    for name, line in runs.items():
+        drawn = {(line[k, 0], line[k + 1, 0]) for k in range(len(line) - 1)
+                 if np.isfinite(line[k:k + 2]).all()}
+        assert drawn == {(k, k + 1.0) for k in range(9) if labels[k + 1] == name}, name
+        assert np.isfinite(line[[0, -1]]).all() and line.shape[1] == 2
+
+
+class _RecordingBar:
+    """A progress bar that records, at each stage done, its name and the files written."""
+
+    def __init__(self, outdir):
+        self.outdir, self.name, self.done = outdir, None, []
+
+    def set_postfix_str(self, name):
+        self.name = name
+
+    def update(self, n=1):
+        files = sorted(p.name for p in self.outdir.glob("*")) if self.outdir.exists() else []
+        self.done.append((self.name, files))
+
+
+def test_one_progress_bar_ends_when_the_last_file_is_written(tmp_path):
+    from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
+    from drake_auv.planning.export import output_stages, write_outputs
+
+    yy, xx = np.mgrid[0:40, 0:30] * 1.0
+    bathy = Bathymetry(-40.0 + np.clip(xx - 12.0, 0.0, 8.0) * 0.9 + 0.02 * yy, (1.0, 1.0),
+                       (1000.0, 2000.0), "EPSG:32631")
+    out = tmp_path / "out"
+    bar = _RecordingBar(out)
+    plan = plan_coverage(bathy, omega=2.0, progress=bar)
+    assert [name for name, _ in bar.done] == list(PLAN_STAGES)
+    files = write_outputs(plan, out, progress=bar)
+    stages = bar.done[len(PLAN_STAGES):]
+    assert len(stages) == output_stages(("geojson",)) == 4 + 7  # and the 7 figures
+    assert [name for name, _ in stages[:4]] == ["path.csv", "GeoJSON", "3D metrics", "reports"]
+    assert stages[-1][1] == sorted(f.name for f in files)  # 100 % with every file written
+    assert len(stages[-2][1]) == len(files) - 1

@@ -17,12 +17,16 @@ def _block():
     return Bathymetry(-30.0 + 6.0 * ((np.abs(xx - 50) < 15) & (np.abs(yy - 40) < 10)), (1, 1))
 
 
-def test_batched_cameras_equal_single_ones():
+def _seabed_and_cameras(n: int, seed: int):
+    """Visibility on a random seabed and n cameras 8 m above it looking down and about."""
     vis = FaceVisibility(RayCaster(bathymetry_to_mesh(random_seabed(5, shape=(30, 40)))))
-    rng = np.random.default_rng(0)
-    origins = np.column_stack([rng.uniform(5, 35, 20), rng.uniform(5, 25, 20),
-                               np.full(20, -38.0)])
-    axes = np.column_stack([rng.normal(0, 0.5, (20, 2)), -np.ones(20)])
+    rng = np.random.default_rng(seed)
+    origins = np.column_stack([rng.uniform(5, 35, n), rng.uniform(5, 25, n), np.full(n, -38.0)])
+    return vis, origins, np.column_stack([rng.normal(0, 0.5, (n, 2)), -np.ones(n)])
+
+
+def test_batched_cameras_equal_single_ones():
+    vis, origins, axes = _seabed_and_cameras(20, 0)
     slots, angles, pose = vis.cameras(origins, axes, np.radians(60), 8.0)
     for k in range(20):
         s1, a1 = vis.camera(origins[k], axes[k], np.radians(60), 8.0)
@@ -58,3 +62,30 @@ def test_both_sensor_models_on_the_caldera_rim():
     assert 0.5 < m["high_slope_fixed_tilt"].view_mean_deg < 10.0  # the rim's slope spread
     assert m["total"].view_mean_deg < m["lawnmower"].view_mean_deg
     assert m["total"].coverage >= 0.95 and m["lawnmower_high_slope"].view_mean_deg > 20.0
+
+
+def test_faces_seen_from_their_side_equal_the_cameras_view():
+    vis, origins, axes = _seabed_and_cameras(200, 1)
+    slots, _, _ = vis.cameras(origins, axes, np.radians(60), 8.0)
+    expected = np.zeros(len(vis.areas), bool)
+    expected[slots] = True
+    assert 0.2 < expected.mean() < 1.0
+    np.testing.assert_array_equal(vis.seen_by(origins, axes, np.radians(60), 8.0, chunk=97),
+                                  expected)
+    some = np.arange(0, len(expected), 7)
+    np.testing.assert_array_equal(vis.seen_by(origins, axes, np.radians(60), 8.0, some),
+                                  expected[some])
+
+
+def test_sampled_coverage_is_near_the_exact_one_within_its_error():
+    plan = plan_coverage(_block(), omega=2.0, compute_metrics=False)
+    exact = evaluate_plan_3d(plan)
+    sampled = evaluate_plan_3d(plan, max_faces=2000, exact_faces=0)
+    for key, m in exact.items():
+        s = sampled[key]
+        assert m.coverage_se == 0.0 and (s.view_mean_deg, s.samples) == (m.view_mean_deg,
+                                                                         m.samples)
+        if "high_slope" in key:  # 200 high-slope faces, all tested: exact
+            assert (s.coverage, s.coverage_se) == (m.coverage, 0.0)
+        else:  # 2000 of the 15600 other faces
+            assert 0 < s.coverage_se < 0.01 and abs(s.coverage - m.coverage) <= 4 * s.coverage_se

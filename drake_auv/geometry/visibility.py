@@ -22,6 +22,17 @@ from scipy.spatial import cKDTree
 from drake_auv.geometry.raycast import RayCaster, RayHits
 
 
+def _poses(origins, axes, aperture: float, max_range: float):
+    """(n, 3) origins and unit axes of camera poses, the aperture and range checked."""
+    origins = np.atleast_2d(np.asarray(origins, dtype=float))
+    axes = np.atleast_2d(np.asarray(axes, dtype=float))
+    if not (0 < aperture < np.pi):
+        raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
+    if not (np.isfinite(max_range) and max_range > 0):
+        raise ValueError(f"max_range must be > 0 m, got {max_range}")
+    return origins, axes / np.linalg.norm(axes, axis=1, keepdims=True)
+
+
 class FaceVisibility:
     """Visibility queries against one world, built once.
 
@@ -45,10 +56,15 @@ class FaceVisibility:
         self.centroids = np.asarray(mesh.triangles_center)[self.target_index]
         self.normals = caster.face_normals[self.target_index]
         self.areas = np.asarray(mesh.area_faces)[self.target_index]
-        self._tree = cKDTree(self.centroids)
+        self._tree = None  # of the centroids, built on the first camera query
         # Target slot of each world face (-1: not a target), to map sonar hits.
         self._slot = np.full(num_faces, -1, dtype=np.int64)
         self._slot[self.target_index] = np.arange(len(self.target_index))
+
+    def _centroid_tree(self) -> cKDTree:
+        if self._tree is None:
+            self._tree = cKDTree(self.centroids)
+        return self._tree
 
     def _cone_candidates(self, origin, axis, half: float, max_range: float) -> np.ndarray:
         """Target slots whose centroid may lie in the cone (half angle `half`, length R): those
@@ -59,7 +75,7 @@ class FaceVisibility:
             radius = max_range * np.sqrt(0.25 + np.sin(half) ** 2)
         else:
             centre, radius = origin, max_range
-        return np.asarray(self._tree.query_ball_point(centre, radius), dtype=np.int64)
+        return np.asarray(self._centroid_tree().query_ball_point(centre, radius), dtype=np.int64)
 
     def camera(self, origin, axis, aperture: float, max_range: float):
         """Target faces a camera sees: (slots (k,) into the target faces, angles (k,) rad)."""
@@ -92,13 +108,7 @@ class FaceVisibility:
         """`camera` for many poses at once, batched (one KD-tree query and one ray cast per
         chunk of poses): (slots (k,), angles (k,) rad, pose index (k,)) of every face a pose
         sees, a face once per pose that sees it."""
-        origins = np.atleast_2d(np.asarray(origins, dtype=float))
-        axes = np.atleast_2d(np.asarray(axes, dtype=float))
-        axes = axes / np.linalg.norm(axes, axis=1, keepdims=True)
-        if not (0 < aperture < np.pi):
-            raise ValueError(f"aperture must be in (0, 180) deg, got {np.degrees(aperture)} deg")
-        if not (np.isfinite(max_range) and max_range > 0):
-            raise ValueError(f"max_range must be > 0 m, got {max_range}")
+        origins, axes = _poses(origins, axes, aperture, max_range)
         half = 0.5 * aperture
         if half <= np.pi / 4:
             centres = origins + 0.5 * max_range * axes
@@ -107,7 +117,7 @@ class FaceVisibility:
             centres, radius = origins, max_range
         out_s, out_a, out_p = [], [], []
         for c0 in range(0, len(origins), chunk):
-            lists = self._tree.query_ball_point(centres[c0:c0 + chunk], radius)
+            lists = self._centroid_tree().query_ball_point(centres[c0:c0 + chunk], radius)
             counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
             if counts.sum() == 0:
                 continue
@@ -131,6 +141,41 @@ class FaceVisibility:
         if not out_s:
             return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64)
         return np.concatenate(out_s), np.concatenate(out_a), np.concatenate(out_p)
+
+    def seen_by(self, origins, axes, aperture: float, max_range: float, slots=None,
+                chunk: int = 16384) -> np.ndarray:
+        """Whether any of the cameras at `origins` looking along `axes` sees each target face
+        of `slots` (all if None): the test of `cameras` pair by pair, the pairs found from the
+        faces' side (a KD-tree of the poses, built here), so a subset of faces costs in
+        proportion to its size. (len(slots),) bool."""
+        origins, axes = _poses(origins, axes, aperture, max_range)
+        slots = (np.arange(len(self.target_index)) if slots is None
+                 else np.asarray(slots, dtype=np.int64))
+        seen = np.zeros(len(slots), dtype=bool)
+        if len(origins) == 0 or len(slots) == 0:
+            return seen
+        tree = cKDTree(origins, balanced_tree=False, compact_nodes=False)
+        cos_half = np.cos(0.5 * aperture)
+        for c0 in range(0, len(slots), chunk):
+            s = slots[c0:c0 + chunk]
+            lists = tree.query_ball_point(self.centroids[s], max_range, return_sorted=False)
+            counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
+            if counts.sum() == 0:
+                continue
+            pose = np.concatenate([np.asarray(x, dtype=np.int64) for x in lists])
+            face = np.repeat(np.arange(len(s)), counts)
+            v = self.centroids[s[face]] - origins[pose]
+            dist = np.linalg.norm(v, axis=1)
+            u = v / np.maximum(dist, 1e-12)[:, None]
+            keep = ((np.einsum("ij,ij->i", u, axes[pose]) >= cos_half) & (dist <= max_range)
+                    & (np.einsum("ij,ij->i", u, self.normals[s[face]]) < 0))
+            face, pose, u, dist = face[keep], pose[keep], u[keep], dist[keep]
+            if len(face) == 0:
+                continue
+            ranges, hit = self.caster.cast_unit(origins[pose], u, max_range)
+            ok = (hit == self.target_index[s[face]]) | ~(ranges < dist - (1e-3 + 1e-4 * dist))
+            seen[c0 + face[ok]] = True
+        return seen
 
     def beams(self, hits: RayHits, directions):
         """Target faces hit by sonar beams: (slots, angles between beam and inward normal)."""

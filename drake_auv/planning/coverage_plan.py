@@ -22,6 +22,7 @@ from drake_auv.planning.path import Path
 from drake_auv.planning.route import RouteBuilder
 from drake_auv.planning.slicing import (MAX_SLICES, Contour, fixed_depression, order_contours,
                                         slice_levels, slice_region)
+from drake_auv.planning.stages import next_stage, stage_bar
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.resources import check_memory
 from drake_auv.terrain.bathymetry import Bathymetry
@@ -95,6 +96,7 @@ def _exterior_rings(geom) -> list[list[list[float]]]:
     return [np.round(np.asarray(p.exterior.coords), 3).tolist() for p in polys]
 
 
+PLAN_STAGES = ("classify", "decompose", "visit order", "route", "lawnmower", "grid metrics")
 # Bytes a terrain distance sample holds while its KD-tree is built (the x, y, z grids, their
 # (n, 3) stack, the tree's index), and about what a path sample holds (position, sensor axis,
 # heading, label, and their resampled copies).
@@ -154,10 +156,9 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
             spacing is divided by its coverage factor (`planning.orders`); None: 100 %.
         baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
         compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
-        progress: show a tqdm bar over the stages.
+        progress: show a progress bar over the `PLAN_STAGES`, or a caller's tqdm bar to
+            advance by them (`planning.stages`).
     """
-    from tqdm import tqdm
-
     check_sensor_parameters(omega, aperture_deg, overlap)
     survey = None
     if order is not None:
@@ -189,14 +190,16 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     nogo = None
     if no_go is not None:
         bathy, nogo = _apply_no_go(bathy, no_go, omega)
+    bar, owned = stage_bar(progress, len(PLAN_STAGES))
+    bar.set_postfix_str(PLAN_STAGES[0])
     labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
+    next_stage(bar, PLAN_STAGES[1])
     surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0))
     spacing = lane_spacing(omega, aperture_deg, overlap) / (1.0 if survey is None else survey.coverage)
     # every high-slope region's slicing planes, refused (too many) before any route is built
     levels = {r: slice_levels(surface, labels.regions == r, labels.slope, spacing,
                               slice_spacing, slice_count)
               for r in range(1, labels.n_regions + 1)}
-    bar = tqdm(total=6, initial=1, desc="plan", disable=not progress, leave=False)
     planar = labels.planar
     if planar.any():
         angle = (best_sweep_angle(bathy, planar, spacing) if sweep_angle_deg is None
@@ -204,7 +207,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     else:
         angle = 0.0 if sweep_angle_deg is None else np.radians(float(sweep_angle_deg))
     dec = decompose(bathy, planar, angle)
-    bar.update()
+    next_stage(bar, PLAN_STAGES[2])
     # Graph over planar cells (0..C-1) and high-slope regions (C..C+R-1).
     n_cells = len(dec.cells)
     adjacency = dec.adjacency() + [[] for _ in range(labels.n_regions)]
@@ -218,7 +221,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         positions += list(np.asarray(bathy.origin) + rc[:, ::-1] * np.asarray(bathy.spacing))
     positions = np.array(positions).reshape(-1, 2)
     order = exhaustive_walk(adjacency, positions, 0)
-    bar.update()
+    next_stage(bar, PLAN_STAGES[3])
     route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
     contours_done: list[Contour] = []
     visit = []
@@ -244,7 +247,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         for c in order_contours(per_level, start):
             route.add_oriented(c.path, c.sensor_dir, "slice")
             contours_done.append(c)
-    bar.update()
+    next_stage(bar, PLAN_STAGES[4])
     path = route.build()
     lawn = None
     if baseline:
@@ -252,7 +255,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
                               lane_spacing_m=spacing,
                               sample_spacing=ds, surface=surface, min_depth=min_depth,
                               nogo=nogo)
-    bar.update()
+    next_stage(bar, PLAN_STAGES[5])
     params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
                   slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
                   slice_spacing=slice_spacing, slice_count=slice_count, lane_spacing=spacing,
@@ -269,6 +272,7 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
 
         plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
                             evaluate_plan(plan), surface)
-    bar.update()
-    bar.close()
+    next_stage(bar)
+    if owned:
+        bar.close()
     return plan

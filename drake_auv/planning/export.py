@@ -17,6 +17,7 @@ from drake_auv.output_files import write_json, write_text
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.missions import douglas_peucker
 from drake_auv.planning.path import Path
+from drake_auv.planning.stages import next_stage, stage_bar
 
 # The reference's Table 3 (Santorini caldera ROI, Omega = 2 m, 60 degree camera).
 REFERENCE_TABLE3 = {
@@ -28,6 +29,7 @@ REFERENCE_TABLE3 = {
 
 
 ROUTE_TOLERANCE = 0.05  # m: the route's vertices, thinned below the 6 decimals (~0.1 m) kept
+ROUTE_PIECE = 2048  # samples thinned at a time: time linear in the path's length
 
 
 def _waypoint_features(mission, geo: GeoFrame, surface) -> list[dict]:
@@ -61,8 +63,8 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", missions=(),
 
     First the route: one 2D LineString [[lon, lat], ...] (degrees, 6 decimals) through the
     path's samples, those within `ROUTE_TOLERANCE` of the line thinned out (Douglas-Peucker in
-    xy); properties `kind` "route", `name`, `samples`, `length_m` (3D), `depth_min`,
-    `depth_max` (m below the sea surface). Then one Point per item of each of `missions`
+    xy, `ROUTE_PIECE` samples at a time); properties `kind` "route", `name`, `samples`,
+    `length_m` (3D), `depth_min`, `depth_max` (m below the sea surface). Then one Point per item of each of `missions`
     (`VehicleMission`s read back from the files, in the order flown): `kind` "waypoint",
     `file` (its file name), `seq` (1-based order in the file), `item` (waypoint, goto, section
     or park), `heave` (what the autopilot holds: "altitude" or "depth"), `depth` (m below the
@@ -71,7 +73,8 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", missions=(),
     chooses it). RFC 7946's third coordinate is a height above the WGS 84 ellipsoid, and the
     vehicle's vertical references are depths and altitudes, so they are properties."""
     pts = path.points
-    keep = douglas_peucker(pts[:, :2], ROUTE_TOLERANCE) if len(path) > 1 else np.zeros(2, int)
+    keep = (douglas_peucker(pts[:, :2], ROUTE_TOLERANCE, ROUTE_PIECE) if len(path) > 1
+            else np.zeros(2, int))
     lonlat = np.round(geo.to_lonlat(pts[keep, :2]), 6)  # RFC 7946 section 11.2: about 0.1 m
     route = {"type": "Feature",
              "properties": {"kind": "route", "name": name, "samples": len(path),
@@ -389,7 +392,16 @@ def check_exports(bathy, exports=None, origin_lonlat=None, max_items: int = 700,
     return tuple(exports), GeoFrame(bathy, origin_lonlat) if exports or georeferenced else None
 
 
-def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
+def output_stages(exports: tuple[str, ...], figures: bool = True, metrics_3d=True) -> int:
+    """The stages `write_outputs` counts on a progress bar: path.csv, each export, the 3D
+    metrics (when computed), the reports and each figure."""
+    from drake_auv.planning.figures import PLAN_VIEWS, VIEWS_3D
+
+    return (2 + len(exports) + (metrics_3d is True)
+            + (len(PLAN_VIEWS) + len(VIEWS_3D) if figures else 0))
+
+
+def write_outputs(plan, outdir, figures: bool = True, progress=False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
                   metrics_3d=True, max_items: int = 700, ardusub_frames: str = "terrain",
@@ -399,6 +411,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     `figures`) the PNG figures into `outdir`; returns the files written.
 
     Args:
+        progress: a progress bar over the `output_stages`, or a caller's tqdm bar to advance
+            by them (`planning.stages`: one display that ends when the last file is written).
         exports: any of "cola2" (mission.xml), "qgc" (mission.plan, or mission_1.plan, ...
             past `max_items`; report.json gains exports.qgc), "geojson" (path.geojson: the
             route and the waypoints of the vehicle files written with it; lawnmower.geojson;
@@ -422,11 +436,14 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     outdir = FilePath(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     written, extras, missions = [], {}, []
+    bar, owned = stage_bar(progress, output_stages(exports, figures, metrics_3d), "outputs")
+    bar.set_postfix_str("path.csv")
     plan.path.to_csv(outdir / "path.csv")
     written.append(outdir / "path.csv")
     if "cola2" in exports:
         from drake_auv.planning.cola2 import export_cola2, read_cola2
 
+        next_stage(bar, "mission.xml")
         extras["cola2"] = export_cola2(plan.path, plan.surface, plan.parameters["omega"],
                                        plan.parameters["min_depth"], geo, outdir / "mission.xml",
                                        surge_velocity, tolerance_xy, heave_in_3d)
@@ -435,12 +452,14 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     if "qgc" in exports:
         from drake_auv.planning.qgc import read_qgc_plan, write_qgc
 
+        next_stage(bar, "mission.plan")
         files, extras["qgc"] = write_qgc(plan, geo, outdir, max_items=max_items,
                                          frames=ardusub_frames, speed=surge_velocity,
                                          acceptance_radius=tolerance_xy)
         written += files
         missions += [read_qgc_plan(f) for f in files]
     if "geojson" in exports:
+        next_stage(bar, "GeoJSON")
         write_geojson(plan.path, geo, outdir / "path.geojson", "coverage path", missions,
                       plan.surface)
         written.append(outdir / "path.geojson")
@@ -451,7 +470,9 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     if metrics_3d is True:
         from drake_auv.planning.metrics3d import evaluate_plan_3d
 
+        next_stage(bar, "3D metrics")
         m3d = evaluate_plan_3d(plan)
+    next_stage(bar, "reports")
     rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
     markdown = _markdown(plan, m3d, rep)
     if current is not None:
@@ -462,8 +483,11 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool = False,
     write_text(outdir / "report.md", markdown)
     write_json(outdir / "report.json", rep)
     written += [outdir / "report.md", outdir / "report.json"]
+    next_stage(bar)
     if figures:
         from drake_auv.planning.figures import write_figures
 
-        written += write_figures(plan, outdir, progress=progress, geo=geo)
+        written += write_figures(plan, outdir, progress=bar, geo=geo)
+    if owned:
+        bar.close()
     return written

@@ -113,15 +113,29 @@ def _classification_image(ax, plan, alpha=1.0):
               interpolation="nearest", alpha=alpha)
 
 
-def _path_lines(ax, path, colours=LABEL_COLOURS, widths=None):
-    xy = path.points[:, :2]
-    segs = np.stack([xy[:-1], xy[1:]], axis=1)
+def label_runs(path, dims: int = 2) -> dict[str, np.ndarray]:
+    """Per label, its segments (a segment takes its end sample's label) as one polyline of the
+    first `dims` coordinates, a NaN row between runs: one artist per label, which Agg
+    simplifies and mplot3d projects in one pass (not an artist or a masked array per segment)."""
+    pts = path.points[:, :dims]
     lab = path.labels[1:]
+    out = {}
     for name in dict.fromkeys(lab.tolist()):
-        m = lab == name
-        lw = (widths or {}).get(name, 0.6)
-        ax.add_collection(LineCollection(segs[m], colors=colours.get(name, "k"), linewidths=lw,
-                                         label=name))
+        edge = np.diff(np.concatenate([[0], (lab == name).astype(np.int8), [0]]))
+        start, end = np.flatnonzero(edge == 1), np.flatnonzero(edge == -1)  # segments [s, e)
+        count = end - start + 2  # the run's samples s..e and the NaN row after them
+        run = np.repeat(np.arange(len(start)), count)
+        pos = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        line = pts[np.minimum(start[run] + pos, len(pts) - 1)]
+        line[pos == count[run] - 1] = np.nan
+        out[name] = line[:-1]
+    return out
+
+
+def _path_lines(ax, path, colours=LABEL_COLOURS, widths=None):
+    for name, line in label_runs(path).items():
+        ax.plot(line[:, 0], line[:, 1], color=colours.get(name, "k"),
+                lw=(widths or {}).get(name, 0.6), label=name, scalex=False, scaley=False)
 
 
 def fig_slope(plan, geo=None) -> Figure:
@@ -193,11 +207,8 @@ def fig_path3d(plan, which: str = "path") -> Figure:
     xx, yy = np.meshgrid(b.x[::step], b.y[::step])
     ax.plot_surface(xx, yy, plan.surface.z[::step, ::step], cmap="gist_earth", alpha=0.5,
                     linewidth=0, antialiased=False)
-    pts = path.points
-    for name in dict.fromkeys(path.labels.tolist()):
-        m = path.labels == name
-        seg = np.where(m, pts[:, 2], np.nan)  # break the line where the label changes
-        ax.plot(pts[:, 0], pts[:, 1], seg, color=LABEL_COLOURS.get(name, "k"),
+    for name, line in label_runs(path, 3).items():
+        ax.plot(line[:, 0], line[:, 1], line[:, 2], color=LABEL_COLOURS.get(name, "k"),
                 lw=1.6 if name == "slice" else 0.6, label=name)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -221,18 +232,24 @@ VIEWS_3D = {
 }
 
 
-def write_figures(plan, outdir, dpi: int = 110, progress: bool = False,
+def write_figures(plan, outdir, dpi: int = 110, progress=False,
                   geo=None) -> list[FilePath]:
     """Writes every figure of `PLAN_VIEWS` (in `geo`'s CRS, with latitude, longitude and
-    north, when given) and `VIEWS_3D` into `outdir`; returns the files."""
-    from tqdm import tqdm
+    north, when given) and `VIEWS_3D` into `outdir`; returns the files. `progress`: a bar over
+    the figures, or a caller's tqdm bar to advance by one stage per figure."""
+    from drake_auv.planning.stages import next_stage, stage_bar
 
     outdir = FilePath(outdir)
     written = []
     makers = {**{k: (lambda plan, f=f: f(plan, geo)) for k, f in PLAN_VIEWS.items()}, **VIEWS_3D}
-    for name, make in tqdm(makers.items(), desc="figures", disable=not progress, leave=False):
+    bar, owned = stage_bar(progress, len(makers), "figures")
+    for name, make in makers.items():
+        bar.set_postfix_str(name)
         fig = make(plan)
         with replacing(outdir / name) as temporary:
             fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
         written.append(outdir / name)
+        next_stage(bar)
+    if owned:
+        bar.close()
     return written

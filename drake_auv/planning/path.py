@@ -8,6 +8,7 @@ Frames: world, z up, metres; heading is the yaw of the body x axis about world z
 from __future__ import annotations
 
 import csv
+import io
 from dataclasses import dataclass, field
 from pathlib import Path as FilePath
 
@@ -96,8 +97,14 @@ class Path:
                    np.concatenate([p.labels for p in paths]))
 
     def segment_lengths(self) -> np.ndarray:
-        """(N - 1,) Euclidean distances between consecutive samples, m."""
-        return np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+        """(N - 1,) Euclidean distances between consecutive samples, m (read-only, computed
+        once: the path is immutable, and the metrics and reports ask for them many times)."""
+        seg = self.__dict__.get("_segment_lengths")
+        if seg is None:
+            seg = np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+            seg.setflags(write=False)
+            object.__setattr__(self, "_segment_lengths", seg)
+        return seg
 
     def arc_length(self) -> np.ndarray:
         """(N,) cumulative distance along the path from its first sample, m."""
@@ -205,13 +212,24 @@ class Path:
             trajectory.ConcatenateInTime(part)
         return trajectory
 
-    def to_csv(self, filename) -> None:
-        """Writes one row per sample with the columns x, y, z, heading, sensor_x/y/z, label."""
+    def to_csv(self, filename, chunk: int = 65536) -> None:
+        """Writes one row per sample with the columns x, y, z, heading, sensor_x/y/z, label
+        (numbers with 6 decimals; the bytes `csv.writer` writes, formatted `chunk` rows at a
+        time in one string operation rather than a call per row)."""
+        values = np.column_stack([self.points, self.heading, self.sensor_dir]).astype(object)
+        names, code = np.unique(self.labels.astype(str), return_inverse=True)
+        quoted = []
+        for name in names:  # each label as csv.writer quotes it
+            buf = io.StringIO()
+            csv.writer(buf).writerow([name])
+            quoted.append(buf.getvalue()[:-2])
+        quoted = np.array(quoted, dtype=object)
+        row = ",".join(["%.6f"] * 7) + ",%s\r\n"
         with open_replacing(filename, "w", newline="") as f:
-            writer = csv.writer(f)
-            writer.writerow(_CSV_FIELDS)
-            for p, h, s, lab in zip(self.points, self.heading, self.sensor_dir, self.labels):
-                writer.writerow([*(f"{v:.6f}" for v in (*p, h, *s)), lab])
+            csv.writer(f).writerow(_CSV_FIELDS)
+            for k in range(0, len(values), chunk):
+                block = np.column_stack([values[k:k + chunk], quoted[code[k:k + chunk]]])
+                f.write((row * len(block)) % tuple(block.ravel().tolist()))
 
     @classmethod
     def from_csv(cls, filename) -> "Path":
