@@ -190,16 +190,17 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     nogo = None
     if no_go is not None:
         bathy, nogo = _apply_no_go(bathy, no_go, omega)
-    bar, owned = stage_bar(progress, len(PLAN_STAGES))
-    bar.set_postfix_str(PLAN_STAGES[0])
     labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
-    next_stage(bar, PLAN_STAGES[1])
     surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0))
     spacing = lane_spacing(omega, aperture_deg, overlap) / (1.0 if survey is None else survey.coverage)
-    # every high-slope region's slicing planes, refused (too many) before any route is built
+    # every high-slope region's slicing planes, refused (too many) before any route is built,
+    # and so before the bar starts: a refusal stays one line
     levels = {r: slice_levels(surface, labels.regions == r, labels.slope, spacing,
                               slice_spacing, slice_count)
               for r in range(1, labels.n_regions + 1)}
+    bar, owned = stage_bar(progress, len(PLAN_STAGES))
+    bar.set_postfix_str(PLAN_STAGES[0])
+    next_stage(bar, PLAN_STAGES[1])  # classified (with the slicing planes)
     planar = labels.planar
     if planar.any():
         angle = (best_sweep_angle(bathy, planar, spacing) if sweep_angle_deg is None
