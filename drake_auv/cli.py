@@ -59,9 +59,14 @@ def os_error_line(err: OSError) -> str:
 
 
 def _one_line_warning(command: str):
+    """A warning as one line of its own, the progress bars on its stream cleared around it."""
     def show(message, category, filename, lineno, file=None, line=None):
+        from tqdm import tqdm
+
         text = " ".join(str(message).split())
-        print(f"drake-auv {command}: warning: {text}", file=sys.stderr if file is None else file)
+        stream = sys.stderr if file is None else file
+        with tqdm.external_write_mode(file=stream):
+            print(f"drake-auv {command}: warning: {text}", file=stream)
     return show
 
 

@@ -35,6 +35,7 @@ def refuse(argv, capsys) -> str:
     lines = err.strip().splitlines()
     assert code == 2, (code, err[-2000:])
     assert len(lines) == 1 and lines[0].strip() and "Traceback" not in err, err[-2000:]
+    assert lines[0].startswith("drake-auv"), lines[0][:300]  # nothing before it (a bar)
     assert len(lines[0]) < 1000, lines[0][:300]
     assert elapsed < REFUSAL_S, f"refused after {elapsed:.1f} s"
     return lines[0]

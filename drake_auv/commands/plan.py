@@ -122,12 +122,11 @@ def run(args) -> int:
     output_folder(args.out, "-o", 20 * MiB)  # path.csv, reports, figures, exports
     check_plan_options([("--aperture", args.aperture, "aperture_deg"),
                         ("--overlap", args.overlap, "overlap"), ("--speed", args.speed, "speed")])
-    from tqdm import tqdm
-
     from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
     from drake_auv.planning.export import (check_exports, export_warnings, mission_time_line,
                                            output_stages, parse_exports, table3_markdown,
                                            upload_line, write_outputs)
+    from drake_auv.planning.stages import StageBar
     from drake_auv.terrain.roi import parse_roi
 
     exports = parse_exports(args.export) if args.export is not None else None
@@ -177,24 +176,23 @@ def run(args) -> int:
             no_go = shapely.union_all([read_zones(f, bathy) for f in args.no_go])
     stages = len(PLAN_STAGES) + output_stages(exports, not args.no_figures,
                                               not args.no_3d_metrics)
-    bar = tqdm(total=stages, desc="plan", unit="stage", leave=False)  # one bar, to the last file
-    plan = plan_coverage(bathy, roi=roi, omega=args.omega, aperture_deg=args.aperture,
-                         overlap=args.overlap, slope_threshold=args.slope_threshold,
-                         sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
-                         slice_count=args.slice_count, slice_sensor=args.slice_sensor,
-                         min_area=args.min_area, min_depth=args.min_depth, no_go=no_go,
-                         order=args.order, progress=bar)
-    flow = None
-    if current is not None:
-        from drake_auv.planning.current import current_report
+    with StageBar(stages) as bar:  # one bar, to the last file
+        plan = plan_coverage(bathy, roi=roi, omega=args.omega, aperture_deg=args.aperture,
+                             overlap=args.overlap, slope_threshold=args.slope_threshold,
+                             sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
+                             slice_count=args.slice_count, slice_sensor=args.slice_sensor,
+                             min_area=args.min_area, min_depth=args.min_depth, no_go=no_go,
+                             order=args.order, progress=bar)
+        flow = None
+        if current is not None:
+            from drake_auv.planning.current import current_report
 
-        flow = current_report(plan.path, current, args.speed)
-    files = write_outputs(plan, args.out, figures=not args.no_figures, progress=bar,
-                          exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
-                          metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
-                          ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d,
-                          reference_table=args.reference_table, current=flow)
-    bar.close()
+            flow = current_report(plan.path, current, args.speed)
+        files = write_outputs(plan, args.out, figures=not args.no_figures, progress=bar,
+                              exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
+                              metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
+                              ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d,
+                              reference_table=args.reference_table, current=flow)
     report = json.loads((FilePath(args.out) / "report.json").read_text())
     if plan.metrics is not None:
         print(table3_markdown(plan.metrics))
