@@ -127,7 +127,10 @@ class ReplanningCost:
             route = np.where(self.keep, 0.0, gap * gap)
         lag = self.s_ref - s
         np.maximum(lag, 0.0, out=lag)
-        obstacle, bound = None, self.max_clearance
+        step = trajectories[..., 1:, :] - trajectories[..., :-1, :]
+        gap = np.einsum("...k,...k->...", step, step)  # in place: (sqrt(gap) - spacing)^2
+        np.sqrt(gap, out=gap)
+        obstacle, d, bound = None, None, self.max_clearance
         if self.slice_map.within(trajectories, bound):
             if self.current is None:
                 d = self.slice_map.clearance(trajectories, bound)
@@ -138,16 +141,12 @@ class ReplanningCost:
                 obstacle = p.clearance + p.current_margin_s * np.maximum(push, 0.0)
                 np.minimum(obstacle, bound, out=obstacle)
                 obstacle -= d
-            crossing = self.slice_map.crossing(trajectories, d, bound)
             np.maximum(obstacle, 0.0, out=obstacle)
             obstacle *= obstacle
-        else:
-            crossing = self.slice_map.crossing(trajectories, np.full(shape, np.inf), bound)
-        step = trajectories[..., 1:, :] - trajectories[..., :-1, :]
+        crossing = self.slice_map.crossing(trajectories, bound if d is None else d, bound,
+                                           (step, gap))
         spacing = np.empty(shape)
         spacing[..., 0] = 0.0
-        gap = np.einsum("...k,...k->...", step, step)  # in place: (sqrt(gap) - spacing)^2
-        np.sqrt(gap, out=gap)
         effort = None
         if self.current is not None:  # |t_i - c_i / v|^2, t_i the step's unit direction
             relative = step / np.maximum(gap, 1e-9)[..., None] - self._water

@@ -219,8 +219,9 @@ class SliceMap:
         self.resolution = resolution
         self.clearance_bound = float(clearance)
         self._voxels = unique(encode(np.floor(occupied / resolution)))
-        # Depths where `clearance` (the slab's) is exact up to `clearance_bound`.
-        self._exact_z = (z_range[0] - margin, z_range[1] + margin)
+        # The slab's depths: a point's `clearance` is exact up to its depth's distance to
+        # their edge (and to `clearance_bound`).
+        self._slab_z = (z_range[0] - clearance - margin, z_range[1] + clearance + margin)
         z = occupied[:, 2]
         if metric == "3d":
             self.dims = 3
@@ -295,33 +296,48 @@ class SliceMap:
             to[near] = (self.slab_tree_3d.data[index] - flat[near]) / dist[:, None]
         return d.reshape(points.shape[:-1]), to.reshape(points.shape)
 
-    def crossing(self, trajectories: np.ndarray, clearance: np.ndarray | None = None,
-                 bound: float = 0.0) -> np.ndarray:
+    def crossing(self, trajectories: np.ndarray, clearance: np.ndarray | float = 0.0,
+                 bound: float = np.inf, segments: tuple | None = None) -> np.ndarray:
         """(..., N) the length (m) of the segment from point i - 1 to point i of each of
         `trajectories` (..., N, 3) inside counted voxels (0 at i = 0), sampled every
         1/`SWEEP_SAMPLES` of a voxel edge; the first point's own voxel does not count (the
         vehicle is there: a voxel of noise, or drift, must not wall it in).
 
-        `clearance` (..., N), the points' `clearance` up to `bound` (inf beyond), rules out
-        the segments that cannot reach a voxel: every point of a segment of length L lies
-        within L/2 of one end, and a voxel's points within half its diagonal of its centre,
-        so a segment is sampled only when an end lies within L/2 + that of a counted voxel
-        centre (or beyond where `clearance` is exact: `bound`, or off the slab's depths)."""
+        `clearance` (..., N), the points' `clearance` up to `bound` (inf beyond), or a lower
+        bound of them all (`bound` where `within` found no point within it; 0: unknown,
+        every segment sampled), rules out the segments that cannot reach a voxel: every point of a segment of length L lies within L/2 of one end, and a
+        voxel's points within half its diagonal of its centre, so a segment is sampled only
+        when an end lies within L/2 + that of a counted voxel centre (or where `clearance`
+        may not be exact that near: beyond `bound`, or closer to the edge of the slab's
+        depths, beyond which are voxels it does not hold). `segments`: the
+        trajectories' steps (..., N - 1, 3) and their lengths (..., N - 1), when known."""
         shape = trajectories.shape
         out = np.zeros(shape[:-1])
         if not len(self._voxels) or shape[-2] < 2:
             return out
         flat = trajectories.reshape(-1, shape[-2], 3)
-        step = np.diff(flat, axis=1)
-        length = np.sqrt(np.einsum("...k,...k->...", step, step))  # (K, N - 1)
-        candidate = np.ones(length.shape, bool)
-        if clearance is not None:
-            d = clearance.reshape(len(flat), -1)
-            reach = 0.5 * length + 0.5 * math.sqrt(3.0) * self.resolution
-            z = flat[..., 2]
-            exact = (z >= self._exact_z[0]) & (z <= self._exact_z[1])
-            candidate = ((np.minimum(d[:, :-1], d[:, 1:]) <= reach) | (reach >= bound)
-                         | ~exact[:, :-1] | ~exact[:, 1:])
+        if segments is None:
+            step = np.diff(flat, axis=1)
+            length = np.sqrt(np.einsum("...k,...k->...", step, step))
+        else:
+            step, length = segments[0].reshape(flat.shape[0], -1, 3), segments[1].reshape(
+                flat.shape[0], -1)
+        half_diagonal = 0.5 * math.sqrt(3.0) * self.resolution
+        longest = 0.5 * float(length.max()) + half_diagonal
+        z = flat[..., 2]
+        # No segment reaches a voxel (the common case): a few reductions.
+        inside_slab = False
+        if longest < bound and float(np.min(clearance)) > longest:
+            inside_slab = bool(z.min() - self._slab_z[0] > longest
+                               and self._slab_z[1] - z.max() > longest)
+            if inside_slab:
+                return out
+        d = np.broadcast_to(clearance, shape[:-1]).reshape(len(flat), -1)
+        reach = 0.5 * length + half_diagonal
+        candidate = (np.minimum(d[:, :-1], d[:, 1:]) <= reach) | (reach >= bound)
+        if not inside_slab:
+            edge = np.minimum(z - self._slab_z[0], self._slab_z[1] - z)
+            candidate |= reach >= np.minimum(edge[:, :-1], edge[:, 1:])
         k, i = np.nonzero(candidate)
         if not len(k):
             return out

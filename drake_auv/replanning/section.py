@@ -210,6 +210,14 @@ def warm_start(position, previous: np.ndarray, route: Polyline, section_points: 
     return resample_polyline(np.vstack([x, ahead, extra]), spacing)
 
 
+def _crossing(slice_map: SliceMap, trajectory: np.ndarray) -> np.ndarray:
+    """`SliceMap.crossing` of one trajectory (N, 3), its clearance ruling out the segments
+    far from every voxel."""
+    bound = slice_map.clearance_bound
+    return slice_map.crossing(trajectory[None], slice_map.clearance(trajectory[None], bound),
+                              bound)[0]
+
+
 @lru_cache(maxsize=64)
 def _matrices(num_points: int) -> StompMatrices:
     return StompMatrices(num_points, free_end=True)
@@ -337,7 +345,7 @@ def replan_section(position, waypoints, next_index: int, occupied,
                          resolution=resolution)
     # A warm start through a mapped surface (the map has grown since it was planned: a loop
     # through a structure whose faces are now seen) is dropped for the straight seed.
-    first = 0 if len(seeds) == 1 or slice_map.crossing(seeds[1][None]).any() else 1
+    first = 0 if len(seeds) == 1 or _crossing(slice_map, seeds[1]).any() else 1
     theta0 = seeds[first]
     if water is not None:
         water = water[len(seeds[0]):] if first else water[:len(seeds[0])]
@@ -360,7 +368,7 @@ def replan_section(position, waypoints, next_index: int, occupied,
         final_cost, iterations = result.cost, result.iterations
         # Never through a mapped surface: when STOMP found no way around one (a seed
         # through the structure), the plan stops short of it and the next step replans.
-        inside = slice_map.crossing(trajectory[None])[0]
+        inside = _crossing(slice_map, trajectory)
         if inside.any():
             trajectory = trajectory[:int(np.argmax(inside > 0))]
             if len(trajectory) < 3:
