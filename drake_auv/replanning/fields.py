@@ -16,9 +16,10 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from drake_auv.mapping.lattice import decode, encode, in_box, in_sorted
+from drake_auv.mapping.lattice import decode, encode, in_box, in_sorted, unique
 
 DEPTH_MARGIN = 1.0  # m, how far rollouts may stray from the section's depths (see SliceMap)
+SWEEP_SAMPLES = 4  # samples per voxel edge along a segment in `SliceMap.crossing`
 
 
 def _kdtree(points: np.ndarray) -> cKDTree:
@@ -199,7 +200,12 @@ class SliceMap:
       section's depths, the only ones that can be nearer than `clearance` to a point of the
       section (rollouts stay within `margin` of its depths: the depth cost holds them); a 2D
       distance transform of that slab rules most points out, a 3D KD-tree measures the rest;
-    - `band_points` / `nearest_band`: the band's voxels, for the yaw that faces them.
+    - `band_points` / `nearest_band`: the band's voxels, for the yaw that faces them;
+    - crossing: how much of each segment between consecutive trajectory points runs inside a
+      counted voxel of the box. The sonars map a structure's faces, not its inside, so the
+      middle of a 5 m block is 2.5 m from the nearest voxel and the clearance alone prices it
+      like open water near a wall; a path into it must cross a face, which this sees.
+    `clearance_bound` is the clearance it was built for: the largest the cost may ask.
     """
 
     def __init__(self, occupied: np.ndarray, z_range: tuple[float, float], depth_band: float,
@@ -210,6 +216,12 @@ class SliceMap:
         if log_odds is not None:  # `compress` selects rows 2x faster than a boolean index
             occupied = np.compress(np.asarray(log_odds, dtype=float) >= min_log_odds,
                                    occupied, axis=0)
+        self.resolution = resolution
+        self.clearance_bound = float(clearance)
+        self._voxels = unique(encode(np.floor(occupied / resolution)))
+        # The slab's depths: a point's `clearance` is exact up to its depth's distance to
+        # their edge (and to `clearance_bound`).
+        self._slab_z = (z_range[0] - clearance - margin, z_range[1] + clearance + margin)
         z = occupied[:, 2]
         if metric == "3d":
             self.dims = 3
@@ -234,7 +246,6 @@ class SliceMap:
             slab) else None
         self.slab_tree_3d = _kdtree(slab) if len(slab) else None
         self._tube = None
-        self.resolution = resolution
         # The offset is finite everywhere (a band voxel in reach: the 3D tree's, or a column
         # on the 2D field's grid) or inf everywhere.
         self.offset_mapped = self.band_tree is not None and (
@@ -284,6 +295,61 @@ class SliceMap:
             near, dist, index = near[found], dist[found], index[found]
             to[near] = (self.slab_tree_3d.data[index] - flat[near]) / dist[:, None]
         return d.reshape(points.shape[:-1]), to.reshape(points.shape)
+
+    def crossing(self, trajectories: np.ndarray, clearance: np.ndarray | float = 0.0,
+                 bound: float = np.inf, segments: tuple | None = None) -> np.ndarray:
+        """(..., N) the length (m) of the segment from point i - 1 to point i of each of
+        `trajectories` (..., N, 3) inside counted voxels (0 at i = 0), sampled every
+        1/`SWEEP_SAMPLES` of a voxel edge; the first point's own voxel does not count (the
+        vehicle is there: a voxel of noise, or drift, must not wall it in).
+
+        `clearance` (..., N), the points' `clearance` up to `bound` (inf beyond), or a lower
+        bound of them all (`bound` where `within` found no point within it; 0: unknown,
+        every segment sampled), rules out the segments that cannot reach a voxel: every point of a segment of length L lies within L/2 of one end, and a
+        voxel's points within half its diagonal of its centre, so a segment is sampled only
+        when an end lies within L/2 + that of a counted voxel centre (or where `clearance`
+        may not be exact that near: beyond `bound`, or closer to the edge of the slab's
+        depths, beyond which are voxels it does not hold). `segments`: the
+        trajectories' steps (..., N - 1, 3) and their lengths (..., N - 1), when known."""
+        shape = trajectories.shape
+        out = np.zeros(shape[:-1])
+        if not len(self._voxels) or shape[-2] < 2:
+            return out
+        flat = trajectories.reshape(-1, shape[-2], 3)
+        if segments is None:
+            step = np.diff(flat, axis=1)
+            length = np.sqrt(np.einsum("...k,...k->...", step, step))
+        else:
+            step, length = segments[0].reshape(flat.shape[0], -1, 3), segments[1].reshape(
+                flat.shape[0], -1)
+        half_diagonal = 0.5 * math.sqrt(3.0) * self.resolution
+        longest = 0.5 * float(length.max()) + half_diagonal
+        z = flat[..., 2]
+        # No segment reaches a voxel (the common case): a few reductions.
+        inside_slab = False
+        if longest < bound and float(np.min(clearance)) > longest:
+            inside_slab = bool(z.min() - self._slab_z[0] > longest
+                               and self._slab_z[1] - z.max() > longest)
+            if inside_slab:
+                return out
+        d = np.broadcast_to(clearance, shape[:-1]).reshape(len(flat), -1)
+        reach = 0.5 * length + half_diagonal
+        candidate = (np.minimum(d[:, :-1], d[:, 1:]) <= reach) | (reach >= bound)
+        if not inside_slab:
+            edge = np.minimum(z - self._slab_z[0], self._slab_z[1] - z)
+            candidate |= reach >= np.minimum(edge[:, :-1], edge[:, 1:])
+        k, i = np.nonzero(candidate)
+        if not len(k):
+            return out
+        m = max(1, math.ceil(SWEEP_SAMPLES * float(length[k, i].max()) / self.resolution))
+        f = (np.arange(m) + 0.5) / m
+        samples = flat[k, i][:, None, :] + f[None, :, None] * step[k, i][:, None, :]
+        codes = encode(np.floor(samples.reshape(-1, 3) / self.resolution)).reshape(-1, m)
+        start = encode(np.floor(flat[:, 0] / self.resolution))[k]
+        hit = in_sorted(self._voxels, codes.ravel()).reshape(codes.shape)
+        hit &= codes != start[:, None]
+        out.reshape(len(flat), -1)[k, i + 1] = hit.sum(axis=1) * length[k, i] / m
+        return out
 
     def offset(self, points: np.ndarray) -> np.ndarray:
         """Distance from `points` (..., 3) to the band's voxels (horizontal or 3D), m; inf

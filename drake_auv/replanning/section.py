@@ -37,7 +37,7 @@ import numpy as np
 from drake_auv.mapping.lattice import in_box
 from drake_auv.params import nested, param, validate
 from drake_auv.planning.polyline import Polyline, arc_length, length, project, resample
-from drake_auv.replanning.cost import ReplanningCost
+from drake_auv.replanning.cost import ReplanningCost, inflated_clearance
 from drake_auv.replanning.fields import DEPTH_MARGIN, SliceMap, TubeNodes
 from drake_auv.replanning.stomp import StompMatrices, StompParameters, stomp
 
@@ -67,6 +67,9 @@ class ReplanningParameters:
         huber: |d - Omega| beyond which the offset cost grows linearly, m (> 0).
         offset_weight, obstacle_weight, depth_weight, route_weight, progress_weight,
         terminal_weight, spacing_weight: cost weights (>= 0), per trajectory point.
+        crossing_weight: weight of the crossing term (>= 0), per metre of a segment between
+            trajectory points inside a mapped voxel: 10^4, so one face crossed (0.5 m) costs
+            more than a section's other terms together (tens to hundreds a point).
         current_aware: with a forecast current, the cost knows it (`ReplanningCost`: effort in
             the velocity through the water, clearance inflated where the current pushes
             towards the structure); False: the current-blind cost of still water.
@@ -95,6 +98,7 @@ class ReplanningParameters:
     progress_weight: float = param(0.1, low=0.0)
     terminal_weight: float = param(3.0, low=0.0)
     spacing_weight: float = param(10.0, low=0.0)
+    crossing_weight: float = param(1.0e4, low=0.0)
     current_aware: bool = param(True, kind="bool", key="current_aware")
     current_weight: float = param(0.5, low=0.0)
     current_margin_s: float = param(5.0, low=0.0, high=60.0, unit="s")
@@ -141,19 +145,28 @@ def passed_index(position, waypoints, next_index: int, window: int,
     those whose arclength on the polyline w_(next-1) .. w_(next+window) is at most the
     vehicle's projection on it plus `capture_radius` (m). With a wrong prior map the vehicle
     flies parallel to the nominal path, metres from its waypoints, and may never come near
-    them: its projection still advances with it."""
+    them: its projection still advances with it. When every waypoint of the window is
+    passed the window slides on from the last one, so a vehicle carried more than `window`
+    waypoints along (a long replanning period, or a current) leaves none behind it as the
+    section's target."""
     x = _check_position(position)
     waypoints = np.asarray(waypoints, dtype=float)
     next_index = int(next_index)
-    first = max(next_index - 1, 0)
-    local = waypoints[first:min(next_index + window + 1, len(waypoints))]
-    if len(local) < 2:
-        return next_index
-    s_x, _ = project(x[None], local)
-    if s_x[0] <= 0.0:  # level with or before the polyline's start: passed only when near
-        return next_index + int(np.linalg.norm(x - waypoints[next_index]) <= capture_radius)
-    s_w = arc_length(local)[next_index - first:]
-    return next_index + int(np.count_nonzero(s_w <= s_x[0] + capture_radius))
+    while next_index < len(waypoints):
+        first = max(next_index - 1, 0)
+        stop = min(next_index + window + 1, len(waypoints))
+        local = waypoints[first:stop]
+        if len(local) < 2:
+            return next_index
+        s_x, _ = project(x[None], local)
+        if s_x[0] <= 0.0:  # level with or before the polyline's start: passed only when near
+            return next_index + int(np.linalg.norm(x - waypoints[next_index]) <= capture_radius)
+        s_w = arc_length(local)[next_index - first:]
+        passed = int(np.count_nonzero(s_w <= s_x[0] + capture_radius))
+        if next_index + passed < stop:
+            return next_index + passed
+        next_index = stop  # all passed: the window slides on from its last waypoint
+    return next_index
 
 
 def resample_polyline(points, spacing: float) -> np.ndarray:
@@ -195,6 +208,14 @@ def warm_start(position, previous: np.ndarray, route: Polyline, section_points: 
     s_end = route.project(ahead[-1:])[0][0] if len(ahead) else 0.0
     extra = section_points[waypoint_s > s_end + spacing]
     return resample_polyline(np.vstack([x, ahead, extra]), spacing)
+
+
+def _crossing(slice_map: SliceMap, trajectory: np.ndarray) -> np.ndarray:
+    """`SliceMap.crossing` of one trajectory (N, 3), its clearance ruling out the segments
+    far from every voxel."""
+    bound = slice_map.clearance_bound
+    return slice_map.crossing(trajectory[None], slice_map.clearance(trajectory[None], bound),
+                              bound)[0]
 
 
 @lru_cache(maxsize=64)
@@ -277,10 +298,21 @@ def replan_section(position, waypoints, next_index: int, occupied,
     pts = np.vstack([x, section])
     keep = (np.ones(len(waypoints), bool) if keep_offset is None
             else np.asarray(keep_offset, dtype=bool))[idx]
-    clearance = params.clearance  # inflated by the current where it pushes (the cost's)
-    if current is not None:
-        clearance += params.current_margin_s * float(
-            np.linalg.norm(current(pts), axis=1).max())
+    # The path of the progress and route terms: from the vehicle through the section and on
+    # through the next 3 waypoints, so that the section's end is not the end of progress.
+    route = Polyline(np.vstack([x, waypoints[int(idx[0]):min(int(idx[-1]) + 4,
+                                                            len(waypoints))]]))
+    waypoint_s = np.append(route.s0, route.length)[1:len(idx) + 1]
+    # STOMP's seeds: the straight one through the section's waypoints, and the last step's
+    # trajectory (`warm_start`), which must not pass through a mapped surface (below).
+    seeds = [initial_trajectory(x, section, params.spacing)]
+    if optimizer == "stomp" and previous is not None and len(previous) >= 2:
+        seeds.append(warm_start(x, np.asarray(previous, dtype=float), route, section,
+                                waypoint_s, params.spacing))
+    # The forecast at the seeds' points: the cost's current, and the clearance it inflates
+    # to, out to which the map is gathered (the same numbers: `inflated_clearance`).
+    water = None if current is None else np.asarray(current(np.vstack(seeds)), dtype=float)
+    clearance = inflated_clearance(params, water)
     # Within reach: where the trajectory may go (the points plus the margin), plus the
     # offset's range (Omega + 1 m) or the clearance, and the depths of the offset band and
     # of the clearance slab. A section without offset (lanes, transits) needs only the
@@ -292,8 +324,9 @@ def replan_section(position, waypoints, next_index: int, occupied,
             z_reach = max(z_reach, reach)
     else:
         reach, z_reach = params.margin + clearance, clearance + DEPTH_MARGIN
-    lo = pts.min(axis=0) - [reach, reach, z_reach]
-    hi = pts.max(axis=0) + [reach, reach, z_reach]
+    extent = np.vstack([pts, *seeds])
+    lo = extent.min(axis=0) - [reach, reach, z_reach]
+    hi = extent.max(axis=0) + [reach, reach, z_reach]
     start = time.perf_counter()
     resolution = 0.5
     if hasattr(occupied, "occupied_points"):
@@ -310,22 +343,20 @@ def replan_section(position, waypoints, next_index: int, occupied,
                          clearance, metric=params.offset_metric, log_odds=log_odds,
                          min_log_odds=params.min_log_odds, box=(lo, hi),
                          resolution=resolution)
-    # The path of the progress and route terms: from the vehicle through the section and on
-    # through the next 3 waypoints, so that the section's end is not the end of progress.
-    route = Polyline(np.vstack([x, waypoints[int(idx[0]):min(int(idx[-1]) + 4,
-                                                            len(waypoints))]]))
-    waypoint_s = np.append(route.s0, route.length)[1:len(idx) + 1]
-    if optimizer == "stomp" and previous is not None and len(previous) >= 2:
-        theta0 = warm_start(x, np.asarray(previous, dtype=float), route, section, waypoint_s,
-                            params.spacing)
-    else:
-        theta0 = initial_trajectory(x, section, params.spacing)
-    # A trajectory point keeps the offset when the waypoint it leads to does.
-    keep_points = keep[np.minimum(np.searchsorted(waypoint_s, route.project(theta0)[0]),
-                                  len(keep) - 1)]
+    # A warm start through a mapped surface (the map has grown since it was planned: a loop
+    # through a structure whose faces are now seen) is dropped for the straight seed.
+    first = 0 if len(seeds) == 1 or _crossing(slice_map, seeds[1]).any() else 1
+    theta0 = seeds[first]
+    if water is not None:
+        water = water[len(seeds[0]):] if first else water[:len(seeds[0])]
+
+    def keeps(points):  # a trajectory point keeps the offset when the waypoint it leads to does
+        return keep[np.minimum(np.searchsorted(waypoint_s, route.project(points)[0]),
+                               len(keep) - 1)]
+
+    keep_points = keeps(theta0)
     cost = ReplanningCost(slice_map, route, theta0, params, keep_points,
-                          goal=float(waypoint_s[-1]),
-                          current=None if current is None else current(theta0), speed=speed)
+                          goal=float(waypoint_s[-1]), current=water, speed=speed)
     nodes = None
     if optimizer == "stomp":
         if keep_points.any():  # the rollouts' reach: twice the largest per-point noise
@@ -335,6 +366,14 @@ def replan_section(position, waypoints, next_index: int, occupied,
                        free_end=True)
         trajectory, initial_cost = result.trajectory, result.initial_cost
         final_cost, iterations = result.cost, result.iterations
+        # Never through a mapped surface: when STOMP found no way around one (a seed
+        # through the structure), the plan stops short of it and the next step replans.
+        inside = _crossing(slice_map, trajectory)
+        if inside.any():
+            trajectory = trajectory[:int(np.argmax(inside > 0))]
+            if len(trajectory) < 3:
+                trajectory = resample_polyline(trajectory, params.spacing)
+            keep_points = keeps(trajectory)
     else:
         trajectory, iterations = theta0, 0
         initial_cost = final_cost = float(cost(theta0[None]).sum())
