@@ -107,6 +107,7 @@ ALLOWED = {
     "following/behaviours.py": "the follower's RANSAC: seeded by the `following` stream",
     "perception/profile_estimation.py": "RANSAC: the caller's generator (seed 0 alone)",
     "reconstruction/scoring.py": "the scoring's samples: fixed, the same for every run",
+    "planning/metrics3d.py": "the 3D metrics' faces sampled on large meshes: fixed, every plan",
     "scenarios.py": "the boulder's shape: the site, the same for every run",
     "terrain/synthetic.py": "synthetic seabeds: the site, seeded by the command",
 }
