@@ -47,7 +47,7 @@ from drake_auv.mission.steps.step import LOG_PERIOD, Wiring, terrain_elevation
 from drake_auv.mission.steps.survey import connect_replanner
 from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
-from drake_auv.ocean.system import Ocean
+from drake_auv.ocean.system import TURBULENCE_PERIOD_S, Ocean
 from drake_auv.random_streams import generator
 from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar
@@ -174,8 +174,10 @@ def add_ocean(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpe
     model.check((bounds[0, 0], bounds[0, 1], bounds[1, 0], bounds[1, 1]), -bounds[0, 2],
                 cap if np.isfinite(cap) else 0.0,
                 plan.nominal.points if plan.nominal is not None else None)
-    ocean = builder.AddNamedSystem("ocean", Ocean(model, seed=spec.seed,
-                                                  period=vehicle.dynamics.time_step))
+    step = vehicle.dynamics.time_step  # the turbulence updated every whole number of steps
+    ocean = builder.AddNamedSystem("ocean", Ocean(
+        model, seed=spec.seed, period=step,
+        turbulence_period=max(1, round(TURBULENCE_PERIOD_S / step)) * step))
     builder.Connect(vehicle.dynamics.state_output, ocean.state_input)
     builder.Connect(ocean.water_output, vehicle.dynamics.water_input)
     builder.Connect(ocean.water_output, vehicle.navigation.water_input)

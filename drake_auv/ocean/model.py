@@ -62,15 +62,21 @@ class OceanModel:
               ) -> tuple[np.ndarray, np.ndarray]:
         """World-frame water velocity (n, 3) m/s and acceleration (n, 3) m/s^2 at time `t`
         (s) and `positions` (n, 3), m; `deviation` the turbulence state (2,)."""
+        both = self.sample(t, positions, deviation)
+        return both[:, :3], both[:, 3:]
+
+    def sample(self, t: float, positions, deviation=(0.0, 0.0)) -> np.ndarray:
+        """`water` as one array (n, 6): velocity then acceleration (the `Ocean` system's
+        sample, built with few array operations)."""
         positions = np.asarray(positions, dtype=float).reshape(-1, 3)
-        current, rate = self.horizontal(t, deviation)
-        factor = self.profile.factor_at(positions[:, 2:3])
-        velocity = np.concatenate([factor * current, np.zeros_like(factor)], axis=1)
-        acceleration = np.concatenate([factor * rate, np.zeros_like(factor)], axis=1)
-        for part in (self.gridded, self.waves):
-            if part is not None:
-                clock = self.start_s + t if part is self.gridded else t
-                v, a = part.water(clock, positions)
-                velocity += v
-                acceleration += a
-        return velocity, acceleration
+        both = np.zeros((positions.shape[0], 6))  # f(z) [U_turb, 0, its rate, 0], then ...
+        both[:, :2], both[:, 3:5] = self.horizontal(t, deviation)
+        if not self.profile.uniform:
+            both *= self.profile.factor_at(positions[:, 2:3])
+        if self.gridded is not None:
+            v, a = self.gridded.water(self.start_s + t, positions)
+            both[:, :3] += v
+            both[:, 3:] += a
+        if self.waves is not None:
+            both += self.waves.sample(t, positions)
+        return both
