@@ -164,16 +164,17 @@ def add_ocean(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpe
     """The sea of `spec.ocean` (None: still water, nothing added): the `Ocean` system at the
     vehicle's true position, feeding the dynamics' relative-velocity hydrodynamics and the
     navigation (which dead-reckons through the water when `dvl` loses the bottom). The sea's
-    files are checked against the site, the dive's span and the nominal route first (one
-    line). Returns the Ocean or None."""
+    files are checked against the site, the dive's span (from its start to its time cap,
+    `MissionPlan.time_cap`) and the nominal route first (one line). Returns the Ocean or
+    None."""
     if spec.ocean is None:
         return None
     model = spec.ocean.model(generator(spec.seed, "ocean.waves"), site.crs, site.origin)
     bounds = site.world.bounds
-    cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
-    model.check((bounds[0, 0], bounds[0, 1], bounds[1, 0], bounds[1, 1]), -bounds[0, 2],
-                cap if np.isfinite(cap) else 0.0,
-                plan.nominal.points if plan.nominal is not None else None)
+    cap, source = plan.time_cap(spec)
+    model.check((bounds[0, 0], bounds[0, 1], bounds[1, 0], bounds[1, 1]), -bounds[0, 2], cap,
+                plan.nominal.points if plan.nominal is not None else None,
+                f"its time cap, {cap:g} s: {source}")
     step = vehicle.dynamics.time_step  # the turbulence updated every whole number of steps
     ocean = builder.AddNamedSystem("ocean", Ocean(
         model, seed=spec.seed, period=step,

@@ -150,7 +150,7 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
     simulator = Simulator(diagram)
     simulator.set_target_realtime_rate(realtime_rate)
     context = simulator.get_context()
-    cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
+    cap, _ = plan.time_cap(spec)
     bar = tqdm(total=int(np.ceil(cap)), unit="s sim", desc=f"mission {spec.name}",
                disable=not progress)
     supervisor = handles.supervisor

@@ -36,15 +36,17 @@ class OceanModel:
         self.start_s = float(start_s)
         self._mean_velocity = self.mean.velocity()
 
-    def check(self, box, deepest_m: float, duration_s: float, route=None) -> None:
+    def check(self, box, deepest_m: float, duration_s: float, route=None,
+              span: str = "") -> None:
         """Refuses (one line) a dive the sea's files do not cover: the site's local box
         (xmin, ymin, xmax, ymax, m), its deepest point (m), the dive's `duration_s` from
-        t = 0 and, for a gridded file, the `route`'s local points (n, 3) in water cells."""
+        t = 0 (`span`: what sets it, for the refusal) and, for a gridded file, the `route`'s
+        local points (n, 3) in water cells."""
         end_s = self.start_s + duration_s
         if isinstance(self.tides, TidalSeries):
-            self.tides.check_span(self.start_s, end_s)
+            self.tides.check_span(self.start_s, end_s, span)
         if self.gridded is not None:
-            self.gridded.check_coverage(box, deepest_m, self.start_s, end_s)
+            self.gridded.check_coverage(box, deepest_m, self.start_s, end_s, span)
             if route is not None:
                 self.gridded.check_route(route, self.start_s, end_s)
 

@@ -137,12 +137,14 @@ class TidalSeries:
                              f"{MAX_CURRENT_MPS:g} m/s; must be in [0, {MAX_CURRENT_MPS:g}] m/s")
         return cls(clock, velocity, label)
 
-    def check_span(self, start_s: float, end_s: float) -> None:
-        """Refuses a dive [start_s, end_s] (s since 1970 UTC) outside the series."""
+    def check_span(self, start_s: float, end_s: float, span: str = "") -> None:
+        """Refuses a dive [start_s, end_s] (s since 1970 UTC) outside the series; `span`:
+        what sets the dive's end, named in the refusal."""
         if start_s < self.clock_s[0] or end_s > self.clock_s[-1]:
             raise ValueError(f"{self.label}: covers {format_utc(self.clock_s[0])} to "
                              f"{format_utc(self.clock_s[-1])}, not the dive's "
-                             f"{format_utc(start_s)} to {format_utc(end_s)}")
+                             f"{format_utc(start_s)} to {format_utc(end_s)}"
+                             + (f" ({span})" if span else ""))
 
     def velocity(self, clock_s: float) -> tuple[np.ndarray, np.ndarray]:
         """World-frame horizontal velocity (2,) m/s and its time derivative (2,) m/s^2;
