@@ -187,6 +187,52 @@ def test_a_step_the_vehicle_closes_is_not_a_fault(speed, response):
         assert 5.0 <= t <= 5.6
 
 
+@pytest.mark.parametrize("speed, response", [(0.3, "none"), (1.5, "back_off")])
+def test_a_reference_that_starts_again_from_a_swept_vehicle_is_a_fault(speed, response):
+    """The reference starts again 1 m ahead of the vehicle every period, moving at 0.3 m/s
+    (a replanner's sections): its error never passes 2 m. Flying at 0.3 m/s the vehicle does
+    what it is told; carried at 1.5 m/s (a current beyond the thrusters) it moves 6 m in a
+    window that the reference did not command: a tracking fault after `tracking_s`."""
+    sup, simulator, context, x = _supervisor()
+    online = OnlineMap(0.5)  # one return 3 m west of the vehicle: room to back off
+    online.catch_up(ScanLog().append(ScanBatch.make(0.0, "multibeam", (0.0, 0.0, -5.0),
+                                                    [[-1.0, 0.0, 0.0]], [3.0], 20.0)))
+    sup.map_input.FixValue(context, online)
+    for k, t in enumerate(np.arange(0.0, 12.01, 0.5)):
+        x[0] = speed * t
+        sup.state_input.FixValue(context, x)
+        sup.reference_input.FixValue(context, np.r_[x[0] + 1.0, 0.0, -5.0, 0.0,
+                                                    0.3, 0.0, 0.0, 0.0])
+        sup.returns_inputs["multibeam"].FixValue(context, _returns(t, True, 2 + k))
+        simulator.AdvanceTo(t + 0.1)
+        if _mode(sup, context)[0] != "none":
+            break
+    assert _mode(sup, context)[0] == response
+    if response != "none":
+        assert SafetyRules().tracking_s <= t <= SafetyRules().tracking_s + 0.5
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no survey samples: null statistics
+def test_a_current_the_thrusters_cannot_hold_is_a_tracking_fault():
+    """2.5 m/s onto the breakwater (the thrusters hold 1.02 m/s across the hull and 1.44 m/s
+    along it, docs/vehicle.md) sweeps the vehicle towards the blocks while the replanner's
+    sections start again from it once a second: the supervisor backs off within two tracking
+    windows. In the mission's own sea (0.3 m/s onshore, tide, turbulence, swell) the whole
+    dive flies without a response."""
+    from drake_auv.mission.report import summarise
+    from drake_auv.mission.runner import run_mission
+
+    swept = run_mission(load_mission("breakwater_current", overrides=[
+        "ocean.current.speed_mps=2.5", "limits.max_time_s=12"]), progress=False)
+    first = summarise(swept)["responses"][0]
+    assert first["cause"] == "tracking_error" and first["response"] == "back_off"
+    assert first["start_s"] <= 2 * SafetyRules().tracking_s
+    calm = run_mission(load_mission("breakwater_current"), progress=False)
+    summary = summarise(calm)
+    assert summary["responses"] == [] and not summary["mission"]["aborted"]
+    assert calm.completed
+
+
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no survey samples: null statistics
 def test_a_navigation_jump_in_a_dive_ends_it_with_an_abort():
     from drake_auv.mission.report import summarise

@@ -13,6 +13,13 @@ Detection (never from the true world or the injected fault itself):
   (COLA2 holds a section's final depth from its first instant: a 9 m step on a steep wall) is
   an error the healthy vehicle closes at its own speed: the window starts again, no fault. A
   failed thruster or a current the thrusters cannot hold leaves the error standing or growing.
+  A reference that starts again from the vehicle (the replanner's sections, once a second,
+  and the other behaviours that plan from the estimated pose) keeps that error small however
+  far the vehicle is carried, so the supervisor also sums the motion the reference did not
+  command (the estimated displacement minus the reference's velocity times the time) over
+  windows of `tracking_s`: more than `tracking_error_m` in a window, while the error to the
+  reference did not shrink at `closing_speed`, is the same fault (0.4 m/s of uncommanded
+  motion held for the window: the vehicle is being swept, not flying its leg).
 - navigation jump: the estimated position moved more than `jump_m` in one supervisor period
   (the vehicle flies at most ~0.5 m/s: 0.25 m a period).
 
@@ -74,6 +81,15 @@ def closing(rules: SafetyRules, error0: float, error: float, elapsed: float) -> 
     """Whether a tracking error of `error0` m `elapsed` s ago, `error` m now, shrank at
     `closing_speed` or faster (the vehicle flying to a reference that stepped away)."""
     return error0 - error >= rules.closing_speed * elapsed
+
+
+def drifting(rules: SafetyRules, drift, error0: float, error: float, elapsed: float) -> bool:
+    """Whether a window of `elapsed` s (at least `tracking_s`) whose uncommanded motion was
+    `drift` (3,) m, the tracking error `error0` m at its start and `error` m now, is a
+    tracking fault: the vehicle carried more than `tracking_error_m` where its reference did
+    not send it, without closing on that reference."""
+    return (float(np.linalg.norm(drift)) > rules.tracking_error_m
+            and not closing(rules, error0, error, elapsed))
 
 
 def relied_sensors(behaviour: str) -> tuple[str, ...]:
