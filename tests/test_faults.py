@@ -187,22 +187,26 @@ def test_a_step_the_vehicle_closes_is_not_a_fault(speed, response):
         assert 5.0 <= t <= 5.6
 
 
-@pytest.mark.parametrize("speed, response", [(0.3, "none"), (1.5, "back_off")])
-def test_a_reference_that_starts_again_from_a_swept_vehicle_is_a_fault(speed, response):
-    """The reference starts again 1 m ahead of the vehicle every period, moving at 0.3 m/s
-    (a replanner's sections): its error never passes 2 m. Flying at 0.3 m/s the vehicle does
-    what it is told; carried at 1.5 m/s (a current beyond the thrusters) it moves 6 m in a
-    window that the reference did not command: a tracking fault after `tracking_s`."""
+@pytest.mark.parametrize("swept, commanded, response", [
+    (0.0, 0.3, "none"), (0.0, 0.0, "none"), (1.5, 0.3, "back_off")])
+def test_a_reference_that_starts_again_from_a_swept_vehicle_is_a_fault(swept, commanded,
+                                                                       response):
+    """The reference starts again 1 m ahead (+x) of the vehicle every period (a replanner's
+    sections, a profile follower's reference), moving at `commanded` m/s: its error never
+    passes 2 m. Flying along x at 0.3 m/s the vehicle does what it is told, by the
+    reference's velocity or by its position ahead; carried sideways at 1.5 m/s (a current
+    beyond the thrusters) it moves 6 m in a window that the reference did not command: a
+    tracking fault after `tracking_s`."""
     sup, simulator, context, x = _supervisor()
     online = OnlineMap(0.5)  # one return 3 m west of the vehicle: room to back off
     online.catch_up(ScanLog().append(ScanBatch.make(0.0, "multibeam", (0.0, 0.0, -5.0),
                                                     [[-1.0, 0.0, 0.0]], [3.0], 20.0)))
     sup.map_input.FixValue(context, online)
     for k, t in enumerate(np.arange(0.0, 12.01, 0.5)):
-        x[0] = speed * t
+        x[0], x[1] = 0.3 * t, swept * t
         sup.state_input.FixValue(context, x)
-        sup.reference_input.FixValue(context, np.r_[x[0] + 1.0, 0.0, -5.0, 0.0,
-                                                    0.3, 0.0, 0.0, 0.0])
+        sup.reference_input.FixValue(context, np.r_[x[0] + 1.0, x[1], -5.0, 0.0,
+                                                    commanded, 0.0, 0.0, 0.0])
         sup.returns_inputs["multibeam"].FixValue(context, _returns(t, True, 2 + k))
         simulator.AdvanceTo(t + 0.1)
         if _mode(sup, context)[0] != "none":

@@ -16,10 +16,11 @@ Detection (never from the true world or the injected fault itself):
   A reference that starts again from the vehicle (the replanner's sections, once a second,
   and the other behaviours that plan from the estimated pose) keeps that error small however
   far the vehicle is carried, so the supervisor also sums the motion the reference did not
-  command (the estimated displacement minus the reference's velocity times the time) over
-  windows of `tracking_s`: more than `tracking_error_m` in a window, while the error to the
-  reference did not shrink at `closing_speed`, is the same fault (0.4 m/s of uncommanded
-  motion held for the window: the vehicle is being swept, not flying its leg).
+  command (`uncommanded`: the estimated displacement minus the reference's velocity times the
+  time, less any part towards the reference, which its position commands, up to the distance
+  to it) over windows of `tracking_s`: more than `tracking_error_m` in a window, while the
+  error to the reference did not shrink at `closing_speed`, is the same fault (0.4 m/s of
+  uncommanded motion held for the window: the vehicle is being swept, not flying its leg).
 - navigation jump: the estimated position moved more than `jump_m` in one supervisor period
   (the vehicle flies at most ~0.5 m/s: 0.25 m a period).
 
@@ -81,6 +82,19 @@ def closing(rules: SafetyRules, error0: float, error: float, elapsed: float) -> 
     """Whether a tracking error of `error0` m `elapsed` s ago, `error` m now, shrank at
     `closing_speed` or faster (the vehicle flying to a reference that stepped away)."""
     return error0 - error >= rules.closing_speed * elapsed
+
+
+def uncommanded(moved, velocity, dt: float, towards) -> np.ndarray:
+    """The part (3,) m of a displacement `moved` (3,) over `dt` s that the reference did not
+    command: less its velocity (3,) m/s times `dt`, and less the rest's part along `towards`
+    (3,), the vector from where the vehicle was to the reference, up to its length (a
+    reference moved ahead of the vehicle commands the motion towards it)."""
+    rest = np.asarray(moved, dtype=float) - np.asarray(velocity, dtype=float) * dt
+    distance = float(np.linalg.norm(towards))
+    if distance > 0.0:
+        along = float(rest @ towards) / distance
+        rest = rest - min(max(along, 0.0), distance) / distance * np.asarray(towards)
+    return rest
 
 
 def drifting(rules: SafetyRules, drift, error0: float, error: float, elapsed: float) -> bool:

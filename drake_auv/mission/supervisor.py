@@ -36,7 +36,7 @@ from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mission.legs import Leg, advance_progress, goal_reached, start_progress
 from drake_auv.mission.safety import (CAUSES, RESPONSES, SENSORS, SafetyRules, abort_target,
                                       back_off_target, closing, drifting, relied_sensors,
-                                      response_record, response_reference)
+                                      response_record, response_reference, uncommanded)
 from drake_auv.signals import (BehaviourStatus, LegProgress, LegSignal, Reference, Response,
                                VehicleState, Watch)
 from drake_auv.sonar.returns import SonarReturns
@@ -152,7 +152,8 @@ class MissionSupervisor(LeafSystem):
             tracking = since >= 0 and t - since >= self.rules.tracking_s
             watch.tracking_since_s, watch.tracking_error0_m = since, error0
             # the motion the reference did not command, over windows of tracking_s
-            watch.drift = watch.drift + moved - reference.velocity * self.period
+            watch.drift = watch.drift + uncommanded(moved, reference.velocity, self.period,
+                                                    reference.position - position + moved)
             elapsed = t - watch.drift_since_s
             if elapsed >= self.rules.tracking_s:
                 tracking |= drifting(self.rules, watch.drift, watch.drift_error0_m, error,
