@@ -147,11 +147,11 @@ Response = _signal(
 Watch = _signal(
     "Watch", ("multibeam_hit_s", "profiler_hit_s", "tracking_since_s", "tracking_error0_m",
               "x", "y", "z", "drift_since_s", "drift_error0_m", "drift_x", "drift_y",
-              "drift_z"),
-    "The supervisor's `watch` group (12): last return time of each sonar (s), tracking error "
+              "drift_z", "drift_windows"),
+    "The supervisor's `watch` group (13): last return time of each sonar (s), tracking error "
     "above threshold since (s, -1: not) and what it was then (m), previous estimated position "
-    "(m), the drift window's start (s) and tracking error then (m), and the motion the "
-    "reference did not command since then (world, m).",
+    "(m), the drift window's start (s) and tracking error then (m), the motion the reference "
+    "did not command since then (world, m) and how many windows in a row drifted.",
     position=("x", "z"), drift=("drift_x", "drift_z"))
 LegProgress = _signal(
     "LegProgress", ("bearing", "turned", "start_x", "start_y"),

@@ -18,9 +18,11 @@ Detection (never from the true world or the injected fault itself):
   far the vehicle is carried, so the supervisor also sums the motion the reference did not
   command (`uncommanded`: the estimated displacement minus the reference's velocity times the
   time, less any part towards the reference, which its position commands, up to the distance
-  to it) over windows of `tracking_s`: more than `tracking_error_m` in a window, while the
-  error to the reference did not shrink at `closing_speed`, is the same fault (0.4 m/s of
-  uncommanded motion held for the window: the vehicle is being swept, not flying its leg).
+  to it) over windows of `tracking_s`: more than `tracking_error_m` in `DRIFT_WINDOWS`
+  windows in a row, while the error to the reference did not shrink at `closing_speed`, is
+  the same fault (0.4 m/s of uncommanded motion held for 10 s: the vehicle is being swept,
+  not flying its leg; one window is a transient, such as a vehicle accelerating from rest
+  behind a reference that already commands its speed).
 - navigation jump: the estimated position moved more than `jump_m` in one supervisor period
   (the vehicle flies at most ~0.5 m/s: 0.25 m a period).
 
@@ -51,6 +53,7 @@ from drake_auv.signals import Reference, Response, VehicleState
 RESPONSES = ("none", "hold", "back_off", "abort")
 CAUSES = ("none", "sonar_silent", "tracking_error", "navigation_jump")
 SENSORS = ("multibeam", "profiler")
+DRIFT_WINDOWS = 2  # windows in a row of uncommanded motion that make a tracking fault
 
 
 _POSITIVE = dict(low=0.0, low_open=True)

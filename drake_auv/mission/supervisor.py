@@ -34,9 +34,10 @@ from pydrake.systems.framework import EventStatus, InputPortIndex, LeafSystem
 
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mission.legs import Leg, advance_progress, goal_reached, start_progress
-from drake_auv.mission.safety import (CAUSES, RESPONSES, SENSORS, SafetyRules, abort_target,
-                                      back_off_target, closing, drifting, relied_sensors,
-                                      response_record, response_reference, uncommanded)
+from drake_auv.mission.safety import (CAUSES, DRIFT_WINDOWS, RESPONSES, SENSORS, SafetyRules,
+                                      abort_target, back_off_target, closing, drifting,
+                                      relied_sensors, response_record, response_reference,
+                                      uncommanded)
 from drake_auv.signals import (BehaviourStatus, LegProgress, LegSignal, Reference, Response,
                                VehicleState, Watch)
 from drake_auv.sonar.returns import SonarReturns
@@ -155,9 +156,10 @@ class MissionSupervisor(LeafSystem):
             watch.drift = watch.drift + uncommanded(moved, reference.velocity, self.period,
                                                     reference.position - position + moved)
             elapsed = t - watch.drift_since_s
-            if elapsed >= self.rules.tracking_s:
-                tracking |= drifting(self.rules, watch.drift, watch.drift_error0_m, error,
-                                     elapsed)
+            if elapsed >= self.rules.tracking_s:  # two windows in a row: not a transient
+                watch.drift_windows = (watch.drift_windows + 1 if drifting(
+                    self.rules, watch.drift, watch.drift_error0_m, error, elapsed) else 0)
+                tracking |= watch.drift_windows >= DRIFT_WINDOWS
                 watch.drift_since_s, watch.drift_error0_m, watch.drift = t, error, 0.0
         return watch[:], jumped, tracking
 
