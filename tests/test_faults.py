@@ -187,20 +187,21 @@ def test_a_step_the_vehicle_closes_is_not_a_fault(speed, response):
         assert 5.0 <= t <= 5.6
 
 
-@pytest.mark.parametrize("swept, commanded, response", [
-    (0.0, 0.3, "none"), (0.0, 0.0, "none"), (1.5, 0.3, "abort")])
-def test_a_reference_that_starts_again_from_a_swept_vehicle_is_a_fault(swept, commanded,
+@pytest.mark.parametrize("vx, vy, commanded, response", [
+    (0.3, 0.0, 0.3, "none"), (0.3, 0.0, 0.0, "none"), (0.1, 0.0, 0.3, "none"),
+    (0.3, 1.5, 0.3, "abort"), (-1.0, 0.0, 0.3, "abort")])
+def test_a_reference_that_starts_again_from_a_swept_vehicle_is_a_fault(vx, vy, commanded,
                                                                        response):
     """The reference starts again 1 m ahead (+x) of the vehicle every period (a replanner's
-    sections, a profile follower's reference), moving at `commanded` m/s: its error never
-    passes 2 m. Flying along x at 0.3 m/s the vehicle does what it is told, by the
-    reference's velocity or by its position ahead; carried sideways at 1.5 m/s (a current
-    beyond the thrusters) it moves 6 m in a window that the reference did not command: a
-    tracking fault after two such windows (one is a transient), answered by an abort (the
-    map is empty)."""
+    sections, a profile follower's or an autopilot's reference), commanding `commanded` m/s
+    along +x: its error never passes 2 m. Flying along x the vehicle does what it is told, by
+    the reference's velocity or its position ahead, or more slowly (accelerating); carried
+    sideways at 1.5 m/s or backwards at 1 m/s (a current beyond the thrusters) it moves 5 m
+    or more in a window that the reference did not command: a tracking fault after two such
+    windows (one is a transient), answered by an abort (the map is empty)."""
     sup, simulator, context, x = _supervisor()
     for k, t in enumerate(np.arange(0.0, 20.01, 0.5)):
-        x[0], x[1] = 0.3 * t, swept * t
+        x[0], x[1] = vx * t, vy * t
         sup.state_input.FixValue(context, x)
         sup.reference_input.FixValue(context, np.r_[x[0] + 1.0, x[1], -5.0, 0.0,
                                                     commanded, 0.0, 0.0, 0.0])

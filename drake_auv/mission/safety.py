@@ -16,13 +16,12 @@ Detection (never from the true world or the injected fault itself):
   A reference that starts again from the vehicle (the replanner's sections, once a second,
   and the other behaviours that plan from the estimated pose) keeps that error small however
   far the vehicle is carried, so the supervisor also sums the motion the reference did not
-  command (`uncommanded`: the estimated displacement minus the reference's velocity times the
-  time, less any part towards the reference, which its position commands, up to the distance
-  to it) over windows of `tracking_s`: more than `tracking_error_m` in `DRIFT_WINDOWS`
+  command (`uncommanded`: the estimated displacement less what the reference's velocity
+  commands, forwards at up to its speed, and less any part towards the reference, which its
+  position commands, up to the distance to it) over windows of `tracking_s`: more than `tracking_error_m` in `DRIFT_WINDOWS`
   windows in a row, while the error to the reference did not shrink at `closing_speed`, is
   the same fault (0.4 m/s of uncommanded motion held for 10 s: the vehicle is being swept,
-  not flying its leg; one window is a transient, such as a vehicle accelerating from rest
-  behind a reference that already commands its speed).
+  not flying its leg; one window is a transient, such as a turn onto a new track).
 - navigation jump: the estimated position moved more than `jump_m` in one supervisor period
   (the vehicle flies at most ~0.5 m/s: 0.25 m a period).
 
@@ -89,10 +88,17 @@ def closing(rules: SafetyRules, error0: float, error: float, elapsed: float) -> 
 
 def uncommanded(moved, velocity, dt: float, towards) -> np.ndarray:
     """The part (3,) m of a displacement `moved` (3,) over `dt` s that the reference did not
-    command: less its velocity (3,) m/s times `dt`, and less the rest's part along `towards`
-    (3,), the vector from where the vehicle was to the reference, up to its length (a
-    reference moved ahead of the vehicle commands the motion towards it)."""
-    rest = np.asarray(moved, dtype=float) - np.asarray(velocity, dtype=float) * dt
+    command. Along its velocity (3,) m/s only what is backwards or beyond the velocity times
+    `dt` counts (a vehicle slower than its reference, accelerating or turning to its track,
+    is flying it); of the rest, the part along `towards` (3,), the vector from where the
+    vehicle was to the reference, up to its length, is commanded too (a reference moved
+    ahead of the vehicle commands the motion towards it)."""
+    rest = np.asarray(moved, dtype=float)
+    speed = float(np.linalg.norm(velocity))
+    if speed > 0.0:
+        direction = np.asarray(velocity, dtype=float) / speed
+        along = float(rest @ direction)
+        rest = rest - min(max(along, 0.0), speed * dt) * direction
     distance = float(np.linalg.norm(towards))
     if distance > 0.0:
         along = float(rest @ towards) / distance
