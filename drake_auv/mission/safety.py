@@ -18,10 +18,11 @@ Detection (never from the true world or the injected fault itself):
   far the vehicle is carried, so the supervisor also sums the motion the reference did not
   command (`uncommanded`: the estimated displacement less what the reference's velocity
   commands, forwards at up to its speed, and less any part towards the reference, which its
-  position commands, up to the distance to it) over windows of `tracking_s`: more than `tracking_error_m` in `DRIFT_WINDOWS`
-  windows in a row, while the error to the reference did not shrink at `closing_speed`, is
-  the same fault (0.4 m/s of uncommanded motion held for 10 s: the vehicle is being swept,
-  not flying its leg; one window is a transient, such as a turn onto a new track).
+  position commands, up to the distance to it) over windows of `tracking_s`: more than
+  `tracking_error_m` in `DRIFT_WINDOWS` windows in a row, while the error to the reference
+  did not shrink at `closing_speed`, is the same fault (0.4 m/s of uncommanded motion held
+  for 10 s: the vehicle is being swept, not flying its leg; one window is a transient, such
+  as a turn onto a new track).
 - navigation jump: the estimated position moved more than `jump_m` in one supervisor period
   (the vehicle flies at most ~0.5 m/s: 0.25 m a period).
 
