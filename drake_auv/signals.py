@@ -146,11 +146,13 @@ Response = _signal(
     start=("x0", "z0"), target=("x1", "z1"))
 Watch = _signal(
     "Watch", ("multibeam_hit_s", "profiler_hit_s", "tracking_since_s", "tracking_error0_m",
-              "x", "y", "z"),
-    "The supervisor's `watch` group (7): last return time of each sonar (s), tracking error "
+              "x", "y", "z", "drift_since_s", "drift_error0_m", "drift_x", "drift_y",
+              "drift_z", "drift_windows"),
+    "The supervisor's `watch` group (13): last return time of each sonar (s), tracking error "
     "above threshold since (s, -1: not) and what it was then (m), previous estimated position "
-    "(m).",
-    position=("x", "z"))
+    "(m), the drift window's start (s) and tracking error then (m), the motion the reference "
+    "did not command since then (world, m) and how many windows in a row drifted.",
+    position=("x", "z"), drift=("drift_x", "drift_z"))
 LegProgress = _signal(
     "LegProgress", ("bearing", "turned", "start_x", "start_y"),
     "A leg's progress record (4): last bearing from the loops' centre and the angle turned "

@@ -15,8 +15,8 @@ from drake_auv.mission.config import MissionFileError, load_mission, mission_fro
     mission_to_dict
 from drake_auv.mission.faults import NavigationJump, SonarSilence, ThrusterFailure, silenced
 from drake_auv.mission.legs import Leg
-from drake_auv.mission.safety import (RESPONSES, SafetyRules, abort_target, back_off_target,
-                                      response_reference)
+from drake_auv.mission.safety import (CAUSES, RESPONSES, SafetyRules, abort_target,
+                                      back_off_target, response_reference)
 from drake_auv.mission.supervisor import MissionSupervisor
 from drake_auv.sonar.returns import SonarReturns
 
@@ -185,6 +185,55 @@ def test_a_step_the_vehicle_closes_is_not_a_fault(speed, response):
     assert np.linalg.norm(x[:3] - (0.0, 0.0, -14.0)) > 2.0
     if response != "none":
         assert 5.0 <= t <= 5.6
+
+
+@pytest.mark.parametrize("vx, vy, commanded, response", [
+    (0.3, 0.0, 0.3, "none"), (0.3, 0.0, 0.0, "none"), (0.1, 0.0, 0.3, "none"),
+    (0.3, 1.5, 0.3, "abort"), (-1.0, 0.0, 0.3, "abort")])
+def test_a_reference_that_starts_again_from_a_swept_vehicle_is_a_fault(vx, vy, commanded,
+                                                                       response):
+    """The reference starts again 1 m ahead (+x) of the vehicle every period (a replanner's
+    sections, a profile follower's or an autopilot's reference), commanding `commanded` m/s
+    along +x: its error never passes 2 m. Flying along x the vehicle does what it is told, by
+    the reference's velocity or its position ahead, or more slowly (accelerating); carried
+    sideways at 1.5 m/s or backwards at 1 m/s (a current beyond the thrusters) it moves 5 m
+    or more in a window that the reference did not command: a tracking fault after two such
+    windows (one is a transient), answered by an abort (the map is empty)."""
+    sup, simulator, context, x = _supervisor()
+    for k, t in enumerate(np.arange(0.0, 20.01, 0.5)):
+        x[0], x[1] = vx * t, vy * t
+        sup.state_input.FixValue(context, x)
+        sup.reference_input.FixValue(context, np.r_[x[0] + 1.0, x[1], -5.0, 0.0,
+                                                    commanded, 0.0, 0.0, 0.0])
+        sup.returns_inputs["multibeam"].FixValue(context, _returns(t, True, 2 + k))
+        simulator.AdvanceTo(t + 0.1)
+        if _mode(sup, context)[0] != "none":
+            break
+    assert _mode(sup, context)[0] == response
+    if response != "none":
+        assert t == 2 * SafetyRules().tracking_s
+        assert CAUSES[int(sup.response_output.Eval(context)[1])] == "tracking_error"
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no survey samples: null statistics
+def test_a_current_the_thrusters_cannot_hold_is_a_tracking_fault():
+    """2.5 m/s onto the breakwater (the thrusters hold 1.02 m/s across the hull and 1.44 m/s
+    along it, docs/vehicle.md) sweeps the vehicle towards the blocks while the replanner's
+    sections start again from it once a second: the supervisor backs off after two tracking
+    windows. In the mission's own sea (0.3 m/s onshore, tide, turbulence, swell) the whole
+    dive flies without a response."""
+    from drake_auv.mission.report import summarise
+    from drake_auv.mission.runner import run_mission
+
+    swept = run_mission(load_mission("breakwater_current", overrides=[
+        "ocean.current.speed_mps=2.5", "limits.max_time_s=15"]), progress=False)
+    first = summarise(swept)["responses"][0]
+    assert first["cause"] == "tracking_error" and first["response"] == "back_off"
+    assert first["start_s"] <= 2 * SafetyRules().tracking_s
+    calm = run_mission(load_mission("breakwater_current"), progress=False)
+    summary = summarise(calm)
+    assert summary["responses"] == [] and not summary["mission"]["aborted"]
+    assert calm.completed
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no survey samples: null statistics

@@ -1,6 +1,7 @@
 """The sea in the mission Diagram: a still sea adds nothing; a gridded CF current drives the
 dive, and `trajectory.csv`'s current columns are that file interpolated along the true track;
-a sea the file does not cover is refused before any simulation."""
+a sea the file does not cover is refused before any simulation, over the dive's whole span
+(up to its time cap, the legs' budgets without `limits.max_time_s`)."""
 
 import csv
 
@@ -11,9 +12,11 @@ from scipy.interpolate import RegularGridInterpolator
 
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.diagram import build_mission_diagram
+from drake_auv.mission.plan import plan_mission
 from drake_auv.mission.report import write_trajectory
 from drake_auv.mission.runner import run_mission
 from drake_auv.mission.site import load_site
+from drake_auv.ocean.clock import format_utc, parse_utc
 
 HOURS = np.array([0.0, 0.5, 1.0])
 DEPTH = np.array([0.0, 20.0, 60.0])
@@ -90,3 +93,32 @@ def test_a_file_that_does_not_cover_the_site_is_refused_before_the_dive(tmp_path
     spec = _boulder(f"ocean.file={tmp_path / 'current.nc'}", "limits.max_time_s=7200")
     with pytest.raises(ValueError, match="time"):
         build_mission_diagram(load_site(spec.site, spec.seed), spec)
+
+
+def test_a_dive_without_a_time_cap_is_checked_up_to_its_legs_budgets(tmp_path):
+    """With `limits.max_time_s` null the dive may fly until its legs' time budgets summed: a
+    tide series must cover all of that, not only the start, and the refusal says what the
+    span was; a cap shorter than the series is enough."""
+    start = parse_utc("2024-03-01T00:00:00Z")
+
+    def pool(end_s: float, *overrides):
+        path = tmp_path / f"tide_{end_s:.0f}.csv"
+        path.write_text(f"time_utc,east_mps,north_mps\n{format_utc(start)},0.0,0.1\n"
+                        f"{format_utc(start + end_s)},0.1,0.0\n")
+        return load_mission("pool", overrides=[f"ocean.tides={path}",
+                                               "ocean.start_utc=2024-03-01T00:00:00Z",
+                                               *overrides])
+
+    spec = pool(3600.0)
+    site = load_site(spec.site, spec.seed)
+    plan = plan_mission(spec, site)
+    cap, source = plan.time_cap(spec)
+    assert spec.limits.max_time_s is None and cap == plan.budget > 120.0
+    assert "budgets" in source
+    build_mission_diagram(site, pool(cap + 60.0), plan)  # covered up to the cap
+    with pytest.raises(ValueError, match=rf"not the dive's .* \(its time cap, {cap:g} s: the "
+                                         r"legs' time budgets summed \(limits.max_time_s is"):
+        build_mission_diagram(site, pool(cap - 60.0), plan)
+    build_mission_diagram(site, pool(cap - 60.0, f"limits.max_time_s={cap - 90.0}"), plan)
+    with pytest.raises(ValueError, match=r"\(its time cap, [0-9.]+ s: limits.max_time_s\)"):
+        build_mission_diagram(site, pool(cap - 60.0, f"limits.max_time_s={cap - 30.0}"), plan)

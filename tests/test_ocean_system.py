@@ -91,7 +91,7 @@ def test_turbulence_lives_in_the_context_and_is_seeded():
     assert not np.allclose(other.turbulence(other.CreateDefaultContext()), start)
 
 
-def test_still_turbulence_declares_no_update():
+def test_still_turbulence_draws_nothing_and_a_period_is_whole_steps():
     ocean = Ocean(OceanModel(MeanCurrent(0.1, 0.0)))
     context, simulator = _initialized(ocean, _state())
     simulator.AdvanceTo(1.0)
@@ -102,3 +102,6 @@ def test_still_turbulence_declares_no_update():
     context, simulator = _initialized(turbulent, _state())
     simulator.AdvanceTo(1.0)
     assert context.get_discrete_state(1).GetAtIndex(0) == 4  # at 0, 0.25, 0.5, 0.75 s
+    with pytest.raises(ValueError, match=r"turbulence_period = 0.12 s is not a whole number of "
+                                         r"periods \(0.05 s\)"):
+        Ocean(OceanModel(turbulence=Turbulence(speed_sd_mps=0.1)), turbulence_period=0.12)

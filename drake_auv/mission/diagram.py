@@ -47,7 +47,7 @@ from drake_auv.mission.steps.step import LOG_PERIOD, Wiring, terrain_elevation
 from drake_auv.mission.steps.survey import connect_replanner
 from drake_auv.mission.site import Site
 from drake_auv.mission.supervisor import MissionSupervisor
-from drake_auv.ocean.system import Ocean
+from drake_auv.ocean.system import TURBULENCE_PERIOD_S, Ocean
 from drake_auv.random_streams import generator
 from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar
@@ -164,18 +164,21 @@ def add_ocean(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpe
     """The sea of `spec.ocean` (None: still water, nothing added): the `Ocean` system at the
     vehicle's true position, feeding the dynamics' relative-velocity hydrodynamics and the
     navigation (which dead-reckons through the water when `dvl` loses the bottom). The sea's
-    files are checked against the site, the dive's span and the nominal route first (one
-    line). Returns the Ocean or None."""
+    files are checked against the site, the dive's span (from its start to its time cap,
+    `MissionPlan.time_cap`) and the nominal route first (one line). Returns the Ocean or
+    None."""
     if spec.ocean is None:
         return None
     model = spec.ocean.model(generator(spec.seed, "ocean.waves"), site.crs, site.origin)
     bounds = site.world.bounds
-    cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
-    model.check((bounds[0, 0], bounds[0, 1], bounds[1, 0], bounds[1, 1]), -bounds[0, 2],
-                cap if np.isfinite(cap) else 0.0,
-                plan.nominal.points if plan.nominal is not None else None)
-    ocean = builder.AddNamedSystem("ocean", Ocean(model, seed=spec.seed,
-                                                  period=vehicle.dynamics.time_step))
+    cap, source = plan.time_cap(spec)
+    model.check((bounds[0, 0], bounds[0, 1], bounds[1, 0], bounds[1, 1]), -bounds[0, 2], cap,
+                plan.nominal.points if plan.nominal is not None else None,
+                f"its time cap, {cap:g} s: {source}")
+    step = vehicle.dynamics.time_step  # the turbulence updated every whole number of steps
+    ocean = builder.AddNamedSystem("ocean", Ocean(
+        model, seed=spec.seed, period=step,
+        turbulence_period=max(1, round(TURBULENCE_PERIOD_S / step)) * step))
     builder.Connect(vehicle.dynamics.state_output, ocean.state_input)
     builder.Connect(ocean.water_output, vehicle.dynamics.water_input)
     builder.Connect(ocean.water_output, vehicle.navigation.water_input)

@@ -54,6 +54,16 @@ class MissionPlan:
     start_state: np.ndarray
     budget: float = field(default=0.0)
 
+    def time_cap(self, spec: MissionSpec) -> tuple[float, str]:
+        """The dive's simulated time cap, s (the runner stops there, and the sea's files are
+        checked over it), and where it comes from: `limits.max_time_s`, or when that is null
+        the legs' time budgets summed (each its nominal duration times `limits.time_margin`,
+        plus slack)."""
+        if spec.limits.max_time_s is not None:
+            return float(spec.limits.max_time_s), "limits.max_time_s"
+        return float(self.budget), ("the legs' time budgets summed (limits.max_time_s is "
+                                    "null)")
+
     def legs_of(self, behaviour: str) -> dict[int, object]:
         """{leg index: parameters} of the legs `behaviour` flies (empty: none)."""
         return self.behaviours.get(behaviour, {})

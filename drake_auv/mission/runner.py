@@ -185,7 +185,7 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
             simulator = Simulator(diagram)
         simulator.set_target_realtime_rate(realtime_rate)
         context = simulator.get_context()
-        cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
+        cap, _ = plan.time_cap(spec)
         supervisor = handles.supervisor
         spool = LogSpool(handles.logs, LOG_SPOOL_S)
         display.start("dive", note=f"mission {spec.name}")

@@ -13,6 +13,16 @@ Detection (never from the true world or the injected fault itself):
   (COLA2 holds a section's final depth from its first instant: a 9 m step on a steep wall) is
   an error the healthy vehicle closes at its own speed: the window starts again, no fault. A
   failed thruster or a current the thrusters cannot hold leaves the error standing or growing.
+  A reference that starts again from the vehicle (the replanner's sections, once a second,
+  and the other behaviours that plan from the estimated pose) keeps that error small however
+  far the vehicle is carried, so the supervisor also sums the motion the reference did not
+  command (`uncommanded`: the estimated displacement less what the reference's velocity
+  commands, forwards at up to its speed, and less any part towards the reference, which its
+  position commands, up to the distance to it) over windows of `tracking_s`: more than
+  `tracking_error_m` in `DRIFT_WINDOWS` windows in a row, while the error to the reference
+  did not shrink at `closing_speed`, is the same fault (0.4 m/s of uncommanded motion held
+  for 10 s: the vehicle is being swept, not flying its leg; one window is a transient, such
+  as a turn onto a new track).
 - navigation jump: the estimated position moved more than `jump_m` in one supervisor period
   (the vehicle flies at most ~0.5 m/s: 0.25 m a period).
 
@@ -43,6 +53,7 @@ from drake_auv.signals import Reference, Response, VehicleState
 RESPONSES = ("none", "hold", "back_off", "abort")
 CAUSES = ("none", "sonar_silent", "tracking_error", "navigation_jump")
 SENSORS = ("multibeam", "profiler")
+DRIFT_WINDOWS = 2  # windows in a row of uncommanded motion that make a tracking fault
 
 
 _POSITIVE = dict(low=0.0, low_open=True)
@@ -74,6 +85,35 @@ def closing(rules: SafetyRules, error0: float, error: float, elapsed: float) -> 
     """Whether a tracking error of `error0` m `elapsed` s ago, `error` m now, shrank at
     `closing_speed` or faster (the vehicle flying to a reference that stepped away)."""
     return error0 - error >= rules.closing_speed * elapsed
+
+
+def uncommanded(moved, velocity, dt: float, towards) -> np.ndarray:
+    """The part (3,) m of a displacement `moved` (3,) over `dt` s that the reference did not
+    command. Along its velocity (3,) m/s only what is backwards or beyond the velocity times
+    `dt` counts (a vehicle slower than its reference, accelerating or turning to its track,
+    is flying it); of the rest, the part along `towards` (3,), the vector from where the
+    vehicle was to the reference, up to its length, is commanded too (a reference moved
+    ahead of the vehicle commands the motion towards it)."""
+    rest = np.asarray(moved, dtype=float)
+    speed = float(np.linalg.norm(velocity))
+    if speed > 0.0:
+        direction = np.asarray(velocity, dtype=float) / speed
+        along = float(rest @ direction)
+        rest = rest - min(max(along, 0.0), speed * dt) * direction
+    distance = float(np.linalg.norm(towards))
+    if distance > 0.0:
+        along = float(rest @ towards) / distance
+        rest = rest - min(max(along, 0.0), distance) / distance * np.asarray(towards)
+    return rest
+
+
+def drifting(rules: SafetyRules, drift, error0: float, error: float, elapsed: float) -> bool:
+    """Whether a window of `elapsed` s (at least `tracking_s`) whose uncommanded motion was
+    `drift` (3,) m, the tracking error `error0` m at its start and `error` m now, is a
+    tracking fault: the vehicle carried more than `tracking_error_m` where its reference did
+    not send it, without closing on that reference."""
+    return (float(np.linalg.norm(drift)) > rules.tracking_error_m
+            and not closing(rules, error0, error, elapsed))
 
 
 def relied_sensors(behaviour: str) -> tuple[str, ...]:

@@ -35,9 +35,10 @@ from pydrake.systems.framework import EventStatus, InputPortIndex, LeafSystem
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mission.legs import (Leg, advance_progress, goal_reached, leg_share,
                                     start_progress)
-from drake_auv.mission.safety import (CAUSES, RESPONSES, SENSORS, SafetyRules, abort_target,
-                                      back_off_target, closing, relied_sensors,
-                                      response_record, response_reference)
+from drake_auv.mission.safety import (CAUSES, DRIFT_WINDOWS, RESPONSES, SENSORS, SafetyRules,
+                                      abort_target, back_off_target, closing, drifting,
+                                      relied_sensors, response_record, response_reference,
+                                      uncommanded)
 from drake_auv.signals import (BehaviourStatus, LegProgress, LegSignal, Reference, Response,
                                VehicleState, Watch)
 from drake_auv.sonar.returns import SonarReturns
@@ -70,6 +71,7 @@ class MissionSupervisor(LeafSystem):
         self.legs = tuple(legs)
         # the legs' time budgets summed before each leg, and all of them
         self._budgets = np.r_[0.0, np.cumsum([leg.max_duration for leg in self.legs])]
+        self.period = float(period)
         self.behaviour_ports = dict(behaviour_ports)
         self.rules = rules if rules is not None else SafetyRules()
         self.state_input = self.DeclareVectorInputPort("estimated_state", VehicleState.size())
@@ -123,6 +125,7 @@ class MissionSupervisor(LeafSystem):
         watch.multibeam_hit_s = watch.profiler_hit_s = t
         watch.tracking_since_s = -1.0
         watch.position = VehicleState(x).position
+        watch.drift_since_s = t
         discrete_state.set_value(self._watch, watch[:])
 
     def _watched(self, context, t: float, x: np.ndarray) -> tuple[np.ndarray, bool, bool]:
@@ -137,7 +140,8 @@ class MissionSupervisor(LeafSystem):
                 if returns.sequence > 0 and len(returns) > 0:  # beams fired, echo or not
                     field = f"{name}_hit_s"
                     setattr(watch, field, max(getattr(watch, field), returns.time))
-        jumped = bool(np.linalg.norm(position - watch.position) > self.rules.jump_m)
+        moved = position - watch.position
+        jumped = bool(np.linalg.norm(moved) > self.rules.jump_m)
         watch.position = position
         tracking = False
         if self.reference_input.HasValue(context):
@@ -151,6 +155,15 @@ class MissionSupervisor(LeafSystem):
                 since, error0 = t, error  # a new window (or a step being flown: a fresh one)
             tracking = since >= 0 and t - since >= self.rules.tracking_s
             watch.tracking_since_s, watch.tracking_error0_m = since, error0
+            # the motion the reference did not command, over windows of tracking_s
+            watch.drift = watch.drift + uncommanded(moved, reference.velocity, self.period,
+                                                    reference.position - position + moved)
+            elapsed = t - watch.drift_since_s
+            if elapsed >= self.rules.tracking_s:  # two windows in a row: not a transient
+                watch.drift_windows = (watch.drift_windows + 1 if drifting(
+                    self.rules, watch.drift, watch.drift_error0_m, error, elapsed) else 0)
+                tracking |= watch.drift_windows >= DRIFT_WINDOWS
+                watch.drift_since_s, watch.drift_error0_m, watch.drift = t, error, 0.0
         return watch[:], jumped, tracking
 
     def _respond(self, context, t: float, x: np.ndarray, watch: np.ndarray, jumped: bool,

@@ -85,6 +85,11 @@ class VerticalProfile:
             raise ValueError(f"boundary_layer_m = {self.boundary_layer_m!r} without "
                              "seabed_depth_m or deeper than it; must be in (0, seabed_depth_m] m")
 
+    @property
+    def uniform(self) -> bool:
+        """Neither a table nor a power law: the factor is 1 at every depth."""
+        return self.depth_m is None and self.seabed_depth_m is None
+
     def factor_at(self, z) -> np.ndarray:
         """The factor at world heights `z` (m, z up), same shape."""
         z = np.asarray(z, dtype=float)

@@ -122,13 +122,16 @@ class GriddedCurrent:
         xy_local = np.asarray(xy_local, dtype=float)
         return xy_local if self._to_grid is None else self._to_grid(xy_local)
 
-    def check_coverage(self, box, deepest_m: float, start_s: float, end_s: float) -> None:
+    def check_coverage(self, box, deepest_m: float, start_s: float, end_s: float,
+                       span: str = "") -> None:
         """Refuses (one line) a site box (xmin, ymin, xmax, ymax, local m), a deepest depth
-        (m) or a dive [start_s, end_s] (s since 1970 UTC) the grid does not cover."""
+        (m) or a dive [start_s, end_s] (s since 1970 UTC; `span`: what sets its end, named
+        in the refusal) the grid does not cover."""
         if start_s < self.clock_s[0] or end_s > self.clock_s[-1]:
             raise ValueError(f"{self.label}: covers {format_utc(self.clock_s[0])} to "
                              f"{format_utc(self.clock_s[-1])}, not the dive's "
-                             f"{format_utc(start_s)} to {format_utc(end_s)}; must cover the "
+                             f"{format_utc(start_s)} to {format_utc(end_s)}"
+                             + (f" ({span})" if span else "") + "; must cover the "
                              "dive's time span (see ocean.start_utc)")
         if deepest_m > self.depth_m[-1]:
             raise ValueError(f"{self.label}: reaches {self.depth_m[-1]:g} m deep, not the "

@@ -36,15 +36,17 @@ class OceanModel:
         self.start_s = float(start_s)
         self._mean_velocity = self.mean.velocity()
 
-    def check(self, box, deepest_m: float, duration_s: float, route=None) -> None:
+    def check(self, box, deepest_m: float, duration_s: float, route=None,
+              span: str = "") -> None:
         """Refuses (one line) a dive the sea's files do not cover: the site's local box
         (xmin, ymin, xmax, ymax, m), its deepest point (m), the dive's `duration_s` from
-        t = 0 and, for a gridded file, the `route`'s local points (n, 3) in water cells."""
+        t = 0 (`span`: what sets it, for the refusal) and, for a gridded file, the `route`'s
+        local points (n, 3) in water cells."""
         end_s = self.start_s + duration_s
         if isinstance(self.tides, TidalSeries):
-            self.tides.check_span(self.start_s, end_s)
+            self.tides.check_span(self.start_s, end_s, span)
         if self.gridded is not None:
-            self.gridded.check_coverage(box, deepest_m, self.start_s, end_s)
+            self.gridded.check_coverage(box, deepest_m, self.start_s, end_s, span)
             if route is not None:
                 self.gridded.check_route(route, self.start_s, end_s)
 
@@ -62,15 +64,21 @@ class OceanModel:
               ) -> tuple[np.ndarray, np.ndarray]:
         """World-frame water velocity (n, 3) m/s and acceleration (n, 3) m/s^2 at time `t`
         (s) and `positions` (n, 3), m; `deviation` the turbulence state (2,)."""
+        both = self.sample(t, positions, deviation)
+        return both[:, :3], both[:, 3:]
+
+    def sample(self, t: float, positions, deviation=(0.0, 0.0)) -> np.ndarray:
+        """`water` as one array (n, 6): velocity then acceleration (the `Ocean` system's
+        sample, built with few array operations)."""
         positions = np.asarray(positions, dtype=float).reshape(-1, 3)
-        current, rate = self.horizontal(t, deviation)
-        factor = self.profile.factor_at(positions[:, 2:3])
-        velocity = np.concatenate([factor * current, np.zeros_like(factor)], axis=1)
-        acceleration = np.concatenate([factor * rate, np.zeros_like(factor)], axis=1)
-        for part in (self.gridded, self.waves):
-            if part is not None:
-                clock = self.start_s + t if part is self.gridded else t
-                v, a = part.water(clock, positions)
-                velocity += v
-                acceleration += a
-        return velocity, acceleration
+        both = np.zeros((positions.shape[0], 6))  # f(z) [U_turb, 0, its rate, 0], then ...
+        both[:, :2], both[:, 3:5] = self.horizontal(t, deviation)
+        if not self.profile.uniform:
+            both *= self.profile.factor_at(positions[:, 2:3])
+        if self.gridded is not None:
+            v, a = self.gridded.water(self.start_s + t, positions)
+            both[:, :3] += v
+            both[:, 3:] += a
+        if self.waves is not None:
+            both += self.waves.sample(t, positions)
+        return both

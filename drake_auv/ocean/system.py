@@ -11,8 +11,9 @@ it (the dynamics, the navigation, the log). The vehicle moves a few centimetres 
 is the position's lag. An initialization event samples t = 0.
 
 The turbulence deviation (2: speed m/s, direction rad) is the group `turbulence`, advanced
-every `turbulence_period` seconds by the exact Ornstein-Uhlenbeck transition (its statistics
-do not depend on the period) and drawn at the start from its stationary law. Update k takes
+every `turbulence_period` seconds (a whole number of periods, by the same update: one event
+per step) by the exact Ornstein-Uhlenbeck transition (its statistics do not depend on the
+period) and drawn at the start from its stationary law. Update k takes
 its normal draws from the run's `ocean.turbulence` stream (`drake_auv.random_streams`),
 child k // 1024: a draw depends on (seed, k) alone, k is the group `draws`, and no generator
 lives in the Context.
@@ -49,19 +50,22 @@ class Ocean(LeafSystem):
     def __init__(self, model: OceanModel, seed: int = 0, period: float = OCEAN_PERIOD_S,
                  turbulence_period: float = TURBULENCE_PERIOD_S):
         """`seed`: the run's seed; `period`: s between samples of the water (the dynamics'
-        step); `turbulence_period`: s between turbulence updates."""
+        step); `turbulence_period`: s between turbulence updates, a whole number of periods."""
         super().__init__()
         self.model, self.seed = model, int(seed)
         self.period, self.turbulence_period = float(period), float(turbulence_period)
+        # the turbulence advances in the water's update, every `_every`-th one
+        self._every = max(1, round(self.turbulence_period / self.period))
+        if abs(self._every * self.period - self.turbulence_period) > 1e-9 * self.period:
+            raise ValueError(f"turbulence_period = {turbulence_period!r} s is not a whole "
+                             f"number of periods ({period!r} s); must be k * period, k >= 1")
+        self._transition = model.turbulence.transition(self.turbulence_period)
         self.state_input = self.DeclareVectorInputPort("state", VehicleState.size())
         initial = (model.turbulence.initial(generator(seed, "ocean.turbulence", 0))
                    if model.turbulence.enabled else np.zeros(TURBULENCE_SIZE))
         self._turbulence = self.DeclareDiscreteState(BasicVector(initial))
         self._draws = self.DeclareDiscreteState(1)
         self._water = self.DeclareDiscreteState(Water.size())
-        if model.turbulence.enabled:
-            self.DeclarePeriodicDiscreteUpdateEvent(self.turbulence_period, 0.0,
-                                                    self._update_turbulence)
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize_water)
         self.DeclarePeriodicDiscreteUpdateEvent(self.period, 0.0, self._update_water)
         self.water_output = self.DeclareStateOutputPort("water", self._water)
@@ -72,23 +76,22 @@ class Ocean(LeafSystem):
 
     def _sample(self, context, t: float) -> np.ndarray:
         """The water (6,) at time `t` at the vehicle's position now."""
-        position = VehicleState(self.state_input.Eval(context)).position
-        velocity, acceleration = self.model.water(
-            t, position[None, :], context.get_discrete_state(self._turbulence).get_value())
-        return np.concatenate([velocity[0], acceleration[0]])
+        return self.model.sample(t, self.state_input.Eval(context)[:3],
+                                 context.get_discrete_state(self._turbulence).get_value())[0]
 
     def _initialize_water(self, context, discrete_state):
         discrete_state.set_value(self._water, self._sample(context, context.get_time()))
         return EventStatus.Succeeded()
 
     def _update_water(self, context, discrete_state):
-        discrete_state.set_value(self._water,
-                                 self._sample(context, context.get_time() + self.period))
-
-    def _update_turbulence(self, context, discrete_state):
-        k = int(context.get_discrete_state(self._draws).GetAtIndex(0))
-        deviation = context.get_discrete_state(self._turbulence).get_value()
-        discrete_state.set_value(self._turbulence, self.model.turbulence.advance(
-            deviation, self.turbulence_period, _normals(self.seed, k // DRAW_BLOCK)[
-                k % DRAW_BLOCK]))
-        discrete_state.set_value(self._draws, [k + 1])
+        """The water of the next step and, every `turbulence_period`, the turbulence's next
+        deviation (the water sampled with the deviation held until now)."""
+        t = context.get_time()
+        discrete_state.set_value(self._water, self._sample(context, t + self.period))
+        if self.model.turbulence.enabled and round(t / self.period) % self._every == 0:
+            k = int(context.get_discrete_state(self._draws).GetAtIndex(0))
+            decay, spread = self._transition
+            discrete_state.set_value(self._turbulence, decay * context.get_discrete_state(
+                self._turbulence).get_value() + spread * _normals(self.seed, k // DRAW_BLOCK)[
+                    k % DRAW_BLOCK])
+            discrete_state.set_value(self._draws, [k + 1])

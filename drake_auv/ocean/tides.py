@@ -78,18 +78,19 @@ class TidalHarmonics:
         self._amplitude = np.array([c.amplitude_mps for c in self.constituents])
         self._omega = np.array([c.omega() for c in self.constituents])
         self._phase = np.radians([c.phase_deg for c in self.constituents])
+        # the flood axis while a constituent's signed speed s >= 0, else minus the ebb axis:
+        # s times it is |s| along the axis the water flows towards
         self._flood = towards_unit(np.array([c.flood_towards_deg for c in self.constituents]))
-        self._ebb = towards_unit(np.array([c.ebb_deg() for c in self.constituents]))
+        self._ebb_reversed = -towards_unit(np.array([c.ebb_deg() for c in self.constituents]))
+        self._rate_gain = -self._amplitude * self._omega
 
     def velocity(self, clock_s: float) -> tuple[np.ndarray, np.ndarray]:
         """World-frame horizontal velocity (2,) m/s and its time derivative (2,) m/s^2 at
         `clock_s` (s since 1970 UTC)."""
         angle = self._omega * (clock_s - self.epoch_s) - self._phase
         speed = self._amplitude * np.cos(angle)
-        rate = -self._amplitude * self._omega * np.sin(angle)
-        flood = speed >= 0.0
-        axis = np.where(flood[:, None], self._flood, self._ebb)
-        return np.abs(speed) @ axis, (np.where(flood, rate, -rate)) @ axis
+        axis = np.where((speed >= 0.0)[:, None], self._flood, self._ebb_reversed)
+        return speed @ axis, (self._rate_gain * np.sin(angle)) @ axis
 
 
 class TidalSeries:
@@ -136,12 +137,14 @@ class TidalSeries:
                              f"{MAX_CURRENT_MPS:g} m/s; must be in [0, {MAX_CURRENT_MPS:g}] m/s")
         return cls(clock, velocity, label)
 
-    def check_span(self, start_s: float, end_s: float) -> None:
-        """Refuses a dive [start_s, end_s] (s since 1970 UTC) outside the series."""
+    def check_span(self, start_s: float, end_s: float, span: str = "") -> None:
+        """Refuses a dive [start_s, end_s] (s since 1970 UTC) outside the series; `span`:
+        what sets the dive's end, named in the refusal."""
         if start_s < self.clock_s[0] or end_s > self.clock_s[-1]:
             raise ValueError(f"{self.label}: covers {format_utc(self.clock_s[0])} to "
                              f"{format_utc(self.clock_s[-1])}, not the dive's "
-                             f"{format_utc(start_s)} to {format_utc(end_s)}")
+                             f"{format_utc(start_s)} to {format_utc(end_s)}"
+                             + (f" ({span})" if span else ""))
 
     def velocity(self, clock_s: float) -> tuple[np.ndarray, np.ndarray]:
         """World-frame horizontal velocity (2,) m/s and its time derivative (2,) m/s^2;

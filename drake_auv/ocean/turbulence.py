@@ -60,9 +60,14 @@ class Turbulence:
     def advance(self, deviation, dt: float, normals) -> np.ndarray:
         """The exact OU transition over `dt` seconds of `deviation` (2,) or (m, 2), given
         its standard normal draws `normals` (same shape)."""
-        decay = math.exp(-dt / self.time_constant_s)
-        spread = self.sd() * math.sqrt(-math.expm1(-2.0 * dt / self.time_constant_s))
+        decay, spread = self.transition(dt)
         return decay * np.asarray(deviation, dtype=float) + spread * np.asarray(normals)
+
+    def transition(self, dt: float) -> tuple[float, np.ndarray]:
+        """The exact OU transition's coefficients over `dt` seconds: the deviation's decay
+        and the standard deviations (2,) its normal draws are scaled by."""
+        return (math.exp(-dt / self.time_constant_s),
+                self.sd() * math.sqrt(-math.expm1(-2.0 * dt / self.time_constant_s)))
 
 
 def perturb(velocity, rate, deviation) -> tuple[np.ndarray, np.ndarray]:
@@ -72,13 +77,16 @@ def perturb(velocity, rate, deviation) -> tuple[np.ndarray, np.ndarray]:
     d/dt[(S + ds) e(theta + dtheta)] = S' e + (S + ds) theta' e', e(a) = (sin a, cos a).
     A still current (S = 0) takes the speed deviation towards north."""
     east, north = float(velocity[0]), float(velocity[1])
+    d_speed, d_heading = float(deviation[0]), float(deviation[1])
     speed = math.hypot(east, north)
-    heading = math.atan2(east, north) + deviation[1]  # clockwise from north
-    along = np.array([math.sin(heading), math.cos(heading)])
-    across = np.array([math.cos(heading), -math.sin(heading)])
+    heading = math.atan2(east, north) + d_heading  # clockwise from north
+    sin, cos = math.sin(heading), math.cos(heading)  # along = (sin, cos), across = (cos, -sin)
     if speed == 0.0:
-        return deviation[0] * along, np.asarray(rate, dtype=float).copy()
-    speed_rate = (east * rate[0] + north * rate[1]) / speed
-    heading_rate = (north * rate[0] - east * rate[1]) / speed ** 2
-    total = speed + deviation[0]
-    return total * along, speed_rate * along + total * heading_rate * across
+        return np.array([d_speed * sin, d_speed * cos]), np.asarray(rate, dtype=float).copy()
+    rate_east, rate_north = float(rate[0]), float(rate[1])
+    speed_rate = (east * rate_east + north * rate_north) / speed
+    heading_rate = (north * rate_east - east * rate_north) / speed ** 2
+    total = speed + d_speed
+    turn = total * heading_rate
+    return (np.array([total * sin, total * cos]),
+            np.array([speed_rate * sin + turn * cos, speed_rate * cos - turn * sin]))

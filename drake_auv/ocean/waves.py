@@ -134,21 +134,30 @@ class WaveField:
     def water(self, t: float, positions) -> tuple[np.ndarray, np.ndarray]:
         """Orbital velocity (n, 3) m/s and its time derivative (n, 3) m/s^2 at time `t` (s)
         and world positions (n, 3) (x east, y north, z up)."""
-        positions = np.atleast_2d(np.asarray(positions, dtype=float))
+        both = self.sample(t, positions)
+        return both[:, :3], both[:, 3:]
+
+    def sample(self, t: float, positions) -> np.ndarray:
+        """`water` as one array (n, 6): velocity then acceleration (the `Ocean` system's
+        sample)."""
+        positions = np.asarray(positions, dtype=float).reshape(-1, 3)
         h = self.spectrum.depth_m
         z = np.minimum(positions[:, 2:3], 0.0)
         if h is not None:
-            z = np.maximum(z, -h)
+            np.maximum(z, -h, out=z)
+        psi = self._phase(t, positions)
+        terms = np.empty((positions.shape[0], 4, self.k.size))  # [C cos, S sin, C sin, S cos]
+        np.cos(psi, out=terms[:, 0])
+        np.sin(psi, out=terms[:, 1])
+        terms[:, 2], terms[:, 3] = terms[:, 1], terms[:, 0]
         grow = np.exp(z * self.k)  # (n, components)
         if h is None:
-            c = s = grow
+            terms *= grow[:, None]  # C = S = grow
         else:
             mirror = np.exp(-(z + 2.0 * h) * self.k)
-            c, s = grow + mirror, grow - mirror  # C and S without q
-        psi = self._phase(t, positions)
-        cos, sin = np.cos(psi), np.sin(psi)
-        both = np.concatenate([c * cos, s * sin, c * sin, s * cos], axis=1) @ self._gains
-        return both[:, :3], both[:, 3:]
+            terms[:, 0::2] *= (grow + mirror)[:, None]  # C and S without q
+            terms[:, 1::2] *= (grow - mirror)[:, None]
+        return terms.reshape(positions.shape[0], -1) @ self._gains
 
 
 def _spreading_draw(s: float, rng: np.random.Generator, n: int) -> np.ndarray:

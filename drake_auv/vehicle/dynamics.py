@@ -10,12 +10,14 @@ extrapolates it over the next) and the time each thruster's command has spent at
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.framework import LeafSystem
 
-from drake_auv.signals import VehicleState, Water
+from drake_auv.signals import VehicleState
 from drake_auv.vehicle.model import (NUM_THRUSTERS, STATE_SIZE, WATER_SIZE, Girona500Model,
                                      Girona500Params)
 
@@ -71,12 +73,11 @@ class Girona500Dynamics(LeafSystem):
         command = self.thrust_input.Eval(context)
         water = previous = None
         if self.water_input.HasValue(context):
-            water = Water(self.water_input.Eval(context))
+            water = self.water_input.Eval(context)  # `signals.Water`
             previous = context.get_discrete_state(self._water).get_value()
-            previous = None if np.isnan(previous[0]) else previous
-            discrete_state.set_value(self._water, water.acceleration)
-        x = self.model.step(x, command, self.time_step, None if water is None else water[:],
-                            previous)
+            previous = None if math.isnan(previous[0]) else previous
+            discrete_state.set_value(self._water, water[3:])  # its acceleration
+        x = self.model.step(x, command, self.time_step, water, previous)
         discrete_state.set_value(self._state, x[:STATE_SIZE])
         discrete_state.set_value(self._thrust, x[STATE_SIZE:])
         saturation = context.get_discrete_state(self._saturation).get_value().copy()

@@ -381,9 +381,10 @@ class Girona500Model:
             w1 = w2 = w4 = None
         else:
             vx, vy, vz, ax, ay, az = np.asarray(water, dtype=float).tolist()
-            jx, jy, jz = (0.0, 0.0, 0.0) if previous_acceleration is None else (
-                (np.asarray(water[3:6], dtype=float)
-                 - np.asarray(previous_acceleration, dtype=float)) / dt).tolist()
+            jx = jy = jz = 0.0  # the water's jerk, m/s^3
+            if previous_acceleration is not None:
+                px, py, pz = np.asarray(previous_acceleration, dtype=float).tolist()
+                jx, jy, jz = (ax - px) / dt, (ay - py) / dt, (az - pz) / dt
             h = 0.5 * dt
             w1 = (vx, vy, vz, ax, ay, az)
             w2 = (vx + (ax + 0.5 * h * jx) * h, vy + (ay + 0.5 * h * jy) * h,

@@ -52,9 +52,10 @@ class Navigation(LeafSystem):
         return NavigationError(context.get_discrete_state(self._xd).get_value())
 
     def _update_error(self, context, discrete_state):
-        water = self.water_input.Eval(context) if self.water_input.HasValue(context) else None
         lock = (not self.bottom_lock_input.HasValue(context)
                 or self.bottom_lock_input.Eval(context)[0] > 0.5)
+        water = (self.water_input.Eval(context)  # read only while the DVL tracks the water
+                 if not lock and self.water_input.HasValue(context) else None)
         discrete_state.set_value(self._xd, update_error(
             self.params, self._error(context)[:], self.true_state_input.Eval(context), water,
             lock))
