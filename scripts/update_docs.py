@@ -39,18 +39,45 @@ FIGURES = ("plan", "coverage", "distance")
 TUTORIAL = ROOT / "examples" / "tutorial_bring_your_own_site.ipynb"
 TUTORIAL_TIMEOUT_S = 600  # per cell: the dive's cell is the longest
 MACHINE_DEPENDENT = ("timing",)  # top-level keys of report.json left out of the committed copy
+# The demo's wall-clock times on the machine that made the figures, with that machine: the
+# README quotes them under `measured.` keys (a figure of that machine, not of the code).
+TIMING = ROOT / "docs" / "demo_timing.json"
 MARKER = re.compile(
     r"(<!-- report:(?P<key>[\w.]+):(?P<fmt>\w+) -->)(?P<text>.*?)(<!-- /report -->)", re.DOTALL)
 FORMATS = {
     "pct": lambda v: f"{100 * v:.1f} %",  # a fraction as a percentage
     "m": lambda v: f"{v:.2f} m",
     "contact": lambda v: "contact" if v else "no contact",
+    "s": lambda v: f"{v:.0f} s",
+    "text": str,
 }
 
 
 def documents() -> list[Path]:
     """The files whose markers `make docs` rewrites."""
     return [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def machine() -> dict:
+    """This machine, its load and its software, beside the times measured on it."""
+    import datetime
+    import os
+    import platform
+    from importlib.metadata import version
+
+    cpu = next((line.split(":", 1)[1].strip() for line in
+                Path("/proc/cpuinfo").read_text().splitlines()
+                if line.startswith("model name")), platform.processor() or platform.machine())
+    return dict(machine=f"{cpu}, {os.cpu_count()} cores",
+                date=datetime.date.today().isoformat(),
+                load_average=round(os.getloadavg()[0], 1),
+                python=platform.python_version(), drake=version("drake"))
+
+
+def documented_report() -> dict:
+    """What the docs' marked numbers read: the committed demo report, and under `measured`
+    the demo's wall-clock times on the machine that made it (`TIMING`)."""
+    return dict(json.loads(REPORT.read_text()), measured=json.loads(TIMING.read_text()))
 
 
 def lookup(report: dict, key: str):
@@ -138,10 +165,15 @@ def execute_notebook(notebook: Path, workdir: Path, timeout_s: float = TUTORIAL_
     nb = nbformat.read(notebook, as_version=4)
     with tempfile.TemporaryDirectory() as kernels:
         write_kernel_spec(Path(kernels) / "python3")  # this interpreter's python -m ipykernel
-        km = KernelManager(kernel_name="python3",
+        # over local sockets (no TCP port, nothing to encrypt), shut down when done
+        km = KernelManager(kernel_name="python3", transport="ipc", ip=str(Path(kernels) / "ipc"),
                            kernel_spec_manager=KernelSpecManager(kernel_dirs=[kernels]))
-        NotebookClient(nb, km=km, timeout=timeout_s,
-                       resources={"metadata": {"path": str(workdir)}}).execute()
+        try:
+            NotebookClient(nb, km=km, timeout=timeout_s,
+                           resources={"metadata": {"path": str(workdir)}}).execute()
+        finally:
+            if km.has_kernel:
+                km.shutdown_kernel(now=True)
     nbformat.write(nb, workdir / notebook.name)
     return nb
 
@@ -165,6 +197,8 @@ def main(argv=None) -> int:
     report = json.loads(report_file.read_text())
     committed = {k: v for k, v in report.items() if k not in MACHINE_DEPENDENT}
     REPORT.write_text(json.dumps(committed, indent=2) + "\n")
+    TIMING.write_text(json.dumps(dict(machine(), **report["timing"]), indent=2) + "\n")
+    report = documented_report()
     for name in FIGURES:
         shutil.copyfile(out / f"{name}.png", ROOT / "docs" / f"demo_{name}.png")
     for doc in documents():
