@@ -18,18 +18,18 @@ import time
 
 import numpy as np
 
-from drake_auv.planning import Path
+from drake_auv.planning import PlannedPath
 
 SIM_SECONDS = 600.0
 
 
-def lawnmower() -> Path:
+def lawnmower() -> PlannedPath:
     """Lanes of 50 m, 5 m apart, at -10 m: long enough for 600 s at 0.5 m/s."""
     points = []
     for i in range(7):
         xs = (0.0, 50.0) if i % 2 == 0 else (50.0, 0.0)
         points += [(xs[0], 5.0 * i, -10.0), (xs[1], 5.0 * i, -10.0)]
-    return Path(np.array(points), 0.0, (0.0, 0.0, -1.0)).resample(1.0)
+    return PlannedPath(np.array(points), 0.0, (0.0, 0.0, -1.0)).resample(1.0)
 
 
 def vehicle_real_time_factor(scene=None) -> float:

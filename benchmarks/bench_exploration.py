@@ -26,11 +26,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(FilePath(__file__).resolve().parents[1] / "examples"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
 from _reference import machine  # noqa: E402
 from drake_auv.campaign.grid import parse_seeds  # noqa: E402
 from drake_auv.commands.outputs import output_folder  # noqa: E402
@@ -81,13 +81,13 @@ def main(argv=None) -> int:
     parser.add_argument("--jobs", type=int, default=1, help="dives at once (1)")
     parser.add_argument("--reuse", action="store_true",
                         help="read back dives whose report.json holds the same configuration")
-    parser.add_argument("--out", type=FilePath, default=FilePath("out/exploration"))
-    parser.add_argument("--markdown", type=FilePath, default=None,
+    parser.add_argument("--out", type=Path, default=Path("out/exploration"))
+    parser.add_argument("--markdown", type=Path, default=None,
                         help="default: --out/bench_exploration_<mission>.md")
-    parser.add_argument("--json", type=FilePath, default=None,
+    parser.add_argument("--json", type=Path, default=None,
                         help="also write the per-dive rows, by mode, to this file")
-    parser.add_argument("--figure", type=FilePath,
-                        default=FilePath("docs/exploration_ablation.png"))
+    parser.add_argument("--figure", type=Path,
+                        default=Path("docs/exploration_ablation.png"))
     parser.add_argument("--strategies", default=",".join(STRATEGIES),
                         help="comma-separated, of " + ", ".join(STRATEGIES) + " (all)")
     parser.add_argument("--wreck-seeds", default="0:1",

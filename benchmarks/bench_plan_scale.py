@@ -29,7 +29,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 from scipy import ndimage
@@ -39,7 +39,7 @@ from _reference import SIM_SECONDS, machine, vehicle_real_time_factor  # noqa: E
 from drake_auv.terrain.bathymetry import Bathymetry  # noqa: E402
 from drake_auv.terrain.readers import write_geotiff  # noqa: E402
 
-ROOT = FilePath(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[1]
 TILE = ROOT / "drake_auv/data/monterey/MontereyBay.R_-121.815_-121.805_36.790_36.800.epsg3857.tif"
 CHILD = ("import resource, sys; from drake_auv.cli import main; code = main(sys.argv[1:]); "
          "r = resource.getrusage(resource.RUSAGE_SELF); "
@@ -67,7 +67,7 @@ def plan_run(grid, out) -> dict:
         raise SystemExit(f"plan {grid} failed:\n{done.stderr[-2000:]}")
     cpu, rss = next(line.split()[1:] for line in done.stderr.splitlines()
                     if line.startswith("RUSAGE"))
-    report = json.loads((FilePath(out) / "report.json").read_text())
+    report = json.loads((Path(out) / "report.json").read_text())
     return {"wall": wall, "cpu": float(cpu), "peak_mib": int(rss) / 1024, "report": report}
 
 
@@ -89,10 +89,10 @@ def phases(grid) -> dict:
         timed("plan_coverage (with the grid metrics)", lambda: plan_coverage(read_bathymetry(grid)))
         plan = out["plan_coverage (with the grid metrics)"]
         _, geo = check_exports(plan.bathy)
-        timed("path.csv", lambda: plan.path.to_csv(FilePath(tmp) / "path.csv"))
+        timed("path.csv", lambda: plan.path.to_csv(Path(tmp) / "path.csv"))
         timed("GeoJSON (route, lawnmower)", lambda: (
-            write_geojson(plan.path, geo, FilePath(tmp) / "p.geojson"),
-            write_geojson(plan.lawnmower, geo, FilePath(tmp) / "l.geojson")))
+            write_geojson(plan.path, geo, Path(tmp) / "p.geojson"),
+            write_geojson(plan.lawnmower, geo, Path(tmp) / "l.geojson")))
         timed("3D metrics", lambda: evaluate_plan_3d(plan))
         timed("figures", lambda: write_figures(plan, tmp, geo=geo))
         print(f"  path {len(plan.path)} samples, lawnmower {len(plan.lawnmower)}, "
@@ -110,12 +110,12 @@ def main() -> None:
     print(machine())
     refs = [vehicle_real_time_factor()]
     with tempfile.TemporaryDirectory() as tmp:
-        grid = FilePath(tmp) / "site.tif"
+        grid = Path(tmp) / "site.tif"
         write_geotiff(site(args.site_cells), grid)
-        runs = {"Monterey tile": plan_run(TILE, FilePath(tmp) / "tile")}
+        runs = {"Monterey tile": plan_run(TILE, Path(tmp) / "tile")}
         refs.append(vehicle_real_time_factor())
         runs[f"site {args.site_cells} x {args.site_cells} at 1 m"] = plan_run(
-            grid, FilePath(tmp) / "site")
+            grid, Path(tmp) / "site")
         refs.append(vehicle_real_time_factor())
         factor = statistics.median(refs)
         print(f"reference (vehicle alone, 600 s lawnmower, before / between / after): "

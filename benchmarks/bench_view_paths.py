@@ -49,7 +49,7 @@ import math
 import os
 import sys
 import time
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -120,7 +120,7 @@ def load_query(file) -> Query:
                  candidates, int(limit))
 
 
-def record(mission: str, seeds, max_time: float, out: FilePath) -> int:
+def record(mission: str, seeds, max_time: float, out: Path) -> int:
     """Flies `mission` for `seeds`, `plan_path` wrapped to `save_query` every call (with the
     step's candidate viewpoints: `candidate_viewpoints` wrapped too); returns the number of
     queries written."""
@@ -485,9 +485,9 @@ def main(argv=None) -> int:
     rec.add_argument("--seeds", default="0:1", help="A:B, seeds A .. B-1 (default 0:1)")
     rec.add_argument("--max-time", type=float, default=1800.0,
                      help="limits.max_time_s (1800)")
-    rec.add_argument("--out", type=FilePath, default=FilePath("out/view_paths"))
+    rec.add_argument("--out", type=Path, default=Path("out/view_paths"))
     cmp = sub.add_parser("compare", help="replay the recorded queries with each planner")
-    cmp.add_argument("--queries", type=FilePath, default=FilePath("out/view_paths"))
+    cmp.add_argument("--queries", type=Path, default=Path("out/view_paths"))
     cmp.add_argument("--planners", default=DEFAULT_PLANNERS,
                      help=f"OMPL NAME:ms,... (default {DEFAULT_PLANNERS}); none without ompl")
     cmp.add_argument("--check-step", type=float, default=CHECK_STEP,
@@ -498,7 +498,7 @@ def main(argv=None) -> int:
     cmp.add_argument("--candidate-limit-ms", type=float, default=100.0,
                      help="time limit per candidate, ms (100)")
     cmp.add_argument("--seed", type=int, default=0, help="OMPL's seed of seeds (0)")
-    cmp.add_argument("--markdown", type=FilePath, default=None)
+    cmp.add_argument("--markdown", type=Path, default=None)
     args = parser.parse_args(argv)
     runs = [args] if args.command else [parser.parse_args(["record"]),
                                         parser.parse_args(["compare"])]

@@ -33,7 +33,7 @@ PARTIAL = ".partial-"  # the temporary folders' names: `.NAME.partial-XXXXXXXX`
 
 @contextlib.contextmanager
 def replacing(path, sync: bool = False):
-    """Yields a temporary `Path` to write `path`'s content to; renames it onto `path` when the
+    """Yields a temporary `PlannedPath` to write `path`'s content to; renames it onto `path` when the
     block ends without an error (`sync`: flushed to the disk first, the folder too)."""
     target = Path(path)
     work = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}{PARTIAL}"))

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -28,7 +28,7 @@ from drake_auv.geometry.raycast import RayCaster
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 
-DATA_DIR = FilePath(__file__).resolve().parent / "data"
+DATA_DIR = Path(__file__).resolve().parent / "data"
 MONTEREY_TILE = "MontereyBay.R_-121.825_-121.815_36.790_36.800.epsg3857.tif"
 
 

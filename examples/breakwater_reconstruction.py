@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
@@ -66,7 +66,7 @@ def main(argv=None) -> None:
     parser.add_argument("--set", dest="extra", action="append", default=[],
                         help="extra mission overrides for both runs, e.g. sonar_noise=realistic")
     args = parser.parse_args(argv)
-    out = FilePath(args.out)
+    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows = {name: [] for name in RUNS}
     panels = []

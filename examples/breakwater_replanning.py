@@ -16,7 +16,7 @@ range. The same mission is flown twice per seed: with the replanner (octree map 
 from __future__ import annotations
 
 import argparse
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import matplotlib
 import numpy as np
@@ -120,7 +120,7 @@ def main(argv=None):
     parser.add_argument("--rollouts", type=int, default=10, help="STOMP rollouts (10)")
     parser.add_argument("--iterations", type=int, default=40, help="STOMP iteration cap (40)")
     parser.add_argument("--voxel", type=float, default=0.5, help="octree voxel edge, m (0.5)")
-    parser.add_argument("--out", type=FilePath, default=FilePath("out/breakwater"))
+    parser.add_argument("--out", type=Path, default=Path("out/breakwater"))
     args = parser.parse_args(argv)
     if args.seeds < 1:
         raise ValueError(f"--seeds must be >= 1, got {args.seeds}")

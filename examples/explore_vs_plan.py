@@ -20,7 +20,7 @@ import argparse
 import json
 import multiprocessing
 import warnings
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
@@ -51,7 +51,7 @@ def run_or_load(task: tuple) -> dict:
     back instead of flying the dive again."""
     mission, seed, overrides, folder, reuse = task
     spec = load_mission(mission, seed=seed, overrides=list(overrides))
-    report = FilePath(folder) / "report.json"
+    report = Path(folder) / "report.json"
     if reuse and report.is_file():
         summary = json.loads(report.read_text())
         if summary.get("config") == json.loads(json.dumps(_rounded(mission_to_dict(spec)))):
@@ -157,8 +157,8 @@ def main(argv=None):
     parser.add_argument("--jobs", type=int, default=1, help="dives at once (1)")
     parser.add_argument("--reuse", action="store_true",
                         help="read back dives whose report.json holds the same configuration")
-    parser.add_argument("--out", type=FilePath, default=FilePath("out/exploration"))
-    parser.add_argument("--figure", type=FilePath, default=FilePath("docs/explore_vs_plan.png"))
+    parser.add_argument("--out", type=Path, default=Path("out/exploration"))
+    parser.add_argument("--figure", type=Path, default=Path("docs/explore_vs_plan.png"))
     args = parser.parse_args(argv)
     try:
         seeds = parse_seeds(args.seeds)

@@ -14,7 +14,7 @@ it with `drake-auv run`, as a user would, into `--out/run` (report, figures, rec
 from __future__ import annotations
 
 import argparse
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 import yaml
@@ -26,11 +26,11 @@ ORIGIN = (431000.0, 4071000.0)  # the sonar contact, eastings / northings, m
 REGION_MARGIN = 4.0  # m around the wreck's extent in the region box
 
 
-def write_wreck_mission(folder, seed: int = 0, max_time_s: float = 1800.0) -> FilePath:
+def write_wreck_mission(folder, seed: int = 0, max_time_s: float = 1800.0) -> Path:
     """Writes the wreck site's files and its explore mission into `folder`; returns the
     mission file. The region is the wreck's bounds widened by `REGION_MARGIN` (the contact's
     uncertainty), its top clipped below the surface, its floor the lowest seabed under it."""
-    folder = FilePath(folder)
+    folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     world, target = wreck_site(seed=0, origin=ORIGIN)
     world.export(folder / "world.ply")
@@ -60,7 +60,7 @@ def write_wreck_mission(folder, seed: int = 0, max_time_s: float = 1800.0) -> Fi
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0, help="mission seed (0)")
-    parser.add_argument("--out", type=FilePath, default=FilePath("out/explore_wreck"))
+    parser.add_argument("--out", type=Path, default=Path("out/explore_wreck"))
     parser.add_argument("--no-run", action="store_true", help="write the site and mission only")
     args = parser.parse_args(argv)
     try:  # before anything is written

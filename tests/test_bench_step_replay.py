@@ -16,7 +16,7 @@ import bench_step_replay as bench  # noqa: E402
 import drake_auv.replanning.replanner as replanner_module  # noqa: E402
 from drake_auv.mapping.mapper import OnlineMap  # noqa: E402
 from drake_auv.mapping.scan_log import ScanBatch, ScanLog  # noqa: E402
-from drake_auv.planning.path import Path as PlannedPath  # noqa: E402
+from drake_auv.planning.path import PlannedPath  # noqa: E402
 from drake_auv.replanning import section as section_module  # noqa: E402
 from drake_auv.replanning.replanner import Replanner  # noqa: E402
 

@@ -7,7 +7,7 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import TrajectorySource
 
 from drake_auv.vehicle.diagram import add_girona500
-from drake_auv.planning import Path
+from drake_auv.planning import PlannedPath
 from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
@@ -26,7 +26,7 @@ def _flown_coverage(spacing: float, lanes: int = 4, length: float = 20.0) -> flo
         y = (k + 0.5) * spacing
         xs = (-3.0, length + 3.0) if k % 2 == 0 else (length + 3.0, -3.0)
         points += [(xs[0], y, -12.0 + ALTITUDE), (xs[1], y, -12.0 + ALTITUDE)]
-    path = Path(np.array(points), 0.0, (0.0, 0.0, -1.0)).resample(0.5)
+    path = PlannedPath(np.array(points), 0.0, (0.0, 0.0, -1.0)).resample(0.5)
     trajectory = path.to_trajectory(0.5)
     builder = DiagramBuilder()
     start = np.zeros(12)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drake_auv.planning.path import Path as SurveyPath
+from drake_auv.planning.path import PlannedPath
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "custom_controller.py"
 spec = importlib.util.spec_from_file_location("custom_controller", EXAMPLE)
@@ -20,7 +20,7 @@ def seabed(x, y):
 
 
 def follower_at(t, leg=(3.0, 100.0)):
-    path = SurveyPath(np.array([[0.0, 0.0, -20.0], [10.0, 0.0, -20.0]]), 0.0, (0.0, 1.0, 0.0))
+    path = PlannedPath(np.array([[0.0, 0.0, -20.0], [10.0, 0.0, -20.0]]), 0.0, (0.0, 1.0, 0.0))
     follower = example.ConstantAltitudeFollower(path, seabed, 5.0, 0.5, legs=(3,))
     context = follower.CreateDefaultContext()
     follower.leg_input.FixValue(context, list(leg))

@@ -5,7 +5,7 @@ sections' semantics and replay: tests/test_cola2.py)."""
 import json
 import re
 import xml.etree.ElementTree as ET
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -36,7 +36,7 @@ def read_cola2(filename):
 
 def read_qgc(outdir):
     """The waypoints of mission.plan or mission_1.plan, ... (DO_CHANGE_SPEED first in each)."""
-    files = sorted(FilePath(outdir).glob("mission*.plan"))
+    files = sorted(Path(outdir).glob("mission*.plan"))
     assert files
     items = []
     for f in files:
@@ -52,7 +52,7 @@ def read_qgc(outdir):
 def read_geojson(filename):
     """The file, its route's (lon, lat) vertices and its waypoints' (lon, lat, elevation):
     2D positions, depths as properties."""
-    gj = json.loads(FilePath(filename).read_text())
+    gj = json.loads(Path(filename).read_text())
     assert "crs" not in gj  # RFC 7946: WGS 84, no crs member
     route = gj["features"][0]
     assert route["properties"]["kind"] == "route" and route["geometry"]["type"] == "LineString"
@@ -147,9 +147,9 @@ def test_cli_exports_on_the_monterey_tiles(tmp_path, capsys, tile):
     code = main(["plan", str(tile), "--omega", "20", "--export", "cola2,qgc,geojson",
                  "--no-figures", "--no-3d-metrics", "-o", str(tmp_path)])
     assert code == 0, capsys.readouterr().err
-    from drake_auv.planning.path import Path
+    from drake_auv.planning.path import PlannedPath
 
-    path = Path.from_csv(tmp_path / "path.csv")
+    path = PlannedPath.from_csv(tmp_path / "path.csv")
     bathy = read_bathymetry(tile)
     geo = GeoFrame(bathy)
     _, route, _ = read_geojson(tmp_path / "path.geojson")

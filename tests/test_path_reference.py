@@ -7,7 +7,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.analysis import Simulator
 
 from drake_auv.mission.legs import Leg, advance_progress, goal_reached, start_progress
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.transit import transit
 from drake_auv.vehicle.path_reference import PathLeg, PathReference
 
@@ -76,7 +76,7 @@ def test_goto_leg_is_timed_from_the_leg_start_and_ends_at_the_target():
 def test_nominal_leg_flies_the_input_path_after_a_transit():
     reference = PathReference(PathLeg("nominal", speed=1.0))
     context = _context(reference, np.zeros(12) + np.r_[0, 0, -5, np.zeros(9)])
-    nominal = Path(np.array([[5.0, 0.0, -5.0], [5.0, 10.0, -5.0]]), np.pi / 2, (0, 0, -1))
+    nominal = PlannedPath(np.array([[5.0, 0.0, -5.0], [5.0, 10.0, -5.0]]), np.pi / 2, (0, 0, -1))
     reference.nominal_input.FixValue(context, AbstractValue.Make(nominal))
     simulator = Simulator(reference, context)
     simulator.AdvanceTo(1.0)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from drake_auv.cli import main
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.readers import write_geotiff
 
@@ -30,7 +30,7 @@ def test_plan_writes_every_output(tmp_path, small_tif, capsys):
                  "slope.png", "classification.png", "cells.png", "lanes.png", "contours.png",
                  "path3d.png", "lawnmower.png"):
         assert (out / name).stat().st_size > 0, name
-    path = Path.from_csv(out / "path.csv")
+    path = PlannedPath.from_csv(out / "path.csv")
     assert {"planar", "slice"} <= set(path.labels)
     report = json.loads((out / "report.json").read_text())
     assert report["classification"]["high_slope_regions"] == 1
@@ -220,7 +220,7 @@ def test_label_runs_draw_every_segment_once_in_its_label():
 
     labels = np.array(list("aabbbaabba"), dtype=object)
     points = np.column_stack([np.arange(10.0), np.arange(10.0) ** 2, np.zeros(10)])
-    runs = label_runs(Path(points, 0.0, (0.0, 0.0, -1.0), labels))
+    runs = label_runs(PlannedPath(points, 0.0, (0.0, 0.0, -1.0), labels))
     assert set(runs) == {"a", "b"}
     for name, line in runs.items():
         drawn = {(line[k, 0], line[k + 1, 0]) for k in range(len(line) - 1)

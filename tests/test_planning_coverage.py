@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.export import path_to_geojson
 from drake_auv.planning.geo import GeoFrame
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.scenarios import DATA_DIR as DATA
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
@@ -262,7 +262,7 @@ def test_no_data_holes_are_no_go_for_coverage_but_do_not_break_the_plan():
 
 def test_lawnmower_is_a_path_over_the_whole_roi(caldera_plan):
     lawn = caldera_plan.lawnmower
-    assert isinstance(lawn, Path) and set(lawn.labels) <= {"lawnmower", "transit"}
+    assert isinstance(lawn, PlannedPath) and set(lawn.labels) <= {"lawnmower", "transit"}
     xy = lawn.points[:, :2]
     assert xy[:, 0].min() < 1.5 and xy[:, 0].max() > 98.5
     assert xy[:, 1].min() < 1.5 and xy[:, 1].max() > 248.5

@@ -6,7 +6,7 @@ import pytest
 
 from drake_auv.planning.current import (PlanCurrent, aligned_sweep_angle, current_markdown,
                                         current_report, parse_current, thrust_share)
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.vehicle.control import axis_force_limits
 from drake_auv.vehicle.model import Girona500Params
 
@@ -17,7 +17,7 @@ def _two_lanes(n=41, length=20.0):
     north = np.column_stack([np.full(n, length), np.linspace(0, length, n), np.full(n, -5.0)])
     points = np.vstack([east, north[1:]])
     heading = np.concatenate([np.zeros(n), np.full(n - 1, np.pi / 2)])
-    return Path(points, heading, (0.0, 0.0, -1.0),
+    return PlannedPath(points, heading, (0.0, 0.0, -1.0),
                 np.array(["planar"] * len(points), dtype=object))
 
 
@@ -90,7 +90,7 @@ def test_contours_and_transits_are_pieces_of_their_own():
     labels = path.labels.copy()
     labels[45:60] = "slice"
     labels[60:65] = "transit"
-    report = current_report(Path(path.points, path.heading, path.sensor_dir, labels),
+    report = current_report(PlannedPath(path.points, path.heading, path.sensor_dir, labels),
                             PlanCurrent(0.2, 0.0), 0.5)
     assert [(p["kind"], p["index"]) for p in report["pieces"]] == [
         ("lane", 1), ("turn", 1), ("contour", 1), ("transit", 1), ("lane", 2)]

@@ -87,9 +87,9 @@ def test_cli_no_go_across_the_middle_and_roi_with_a_hole(utm_tif, tmp_path, caps
     code = main(["plan", str(utm_tif), "--roi-file", str(roi), "--no-go", str(zone),
                  "--export", "qgc,geojson", "--no-figures", "-o", str(out)])
     assert code == 0, capsys.readouterr().err
-    from drake_auv.planning.path import Path
+    from drake_auv.planning.path import PlannedPath
 
-    path = Path.from_csv(out / "path.csv")
+    path = PlannedPath.from_csv(out / "path.csv")
     d = shapely.distance(shapely.box(25, -1, 30, 40), shapely.points(path.points[:, :2]))
     assert d.min() >= 2.0 * 0.98
     # The ROI's hole is not covered: no lane sample over its interior.

@@ -4,7 +4,7 @@ progress and route terms and its waypoint bookkeeping read)."""
 import numpy as np
 import pytest
 
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.polyline import Polyline, arc_length, length, project, resample
 
 L_SHAPE = np.array([[0.0, 0.0, -5.0], [4.0, 0.0, -5.0], [4.0, 3.0, -5.0]])
@@ -14,7 +14,7 @@ def test_arc_length_is_the_cumulative_distance():
     assert np.allclose(arc_length(L_SHAPE), [0.0, 4.0, 7.0])
     assert arc_length(L_SHAPE[:1]).tolist() == [0.0]
     assert length(L_SHAPE) == pytest.approx(7.0)
-    path = Path(L_SHAPE, 0.0, (0, 0, -1))
+    path = PlannedPath(L_SHAPE, 0.0, (0, 0, -1))
     assert np.array_equal(path.arc_length(), arc_length(L_SHAPE))
     assert np.allclose(arc_length(resample(L_SHAPE, 0.5)), np.linspace(0.0, 7.0, 15))
 

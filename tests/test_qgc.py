@@ -5,7 +5,7 @@ Monterey tiles and on random seabeds; the replay's semantics and the reader's er
 import json
 import struct
 import time
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -97,7 +97,7 @@ def mavsdk_importer():
 
 def check_with_mavsdk(importer, filename):
     """MAVSDK imports the file item by item as written (home first, added by the importer)."""
-    plan = json.loads(FilePath(filename).read_text())
+    plan = json.loads(Path(filename).read_text())
     items = plan["mission"]["items"]
     data = importer.import_qgroundcontrol_mission(str(filename))
     got = data.mission_items

@@ -10,7 +10,7 @@ from pydrake.systems.analysis import Simulator
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.ocean.forecast import forecast
 from drake_auv.ocean.spec import ocean_from_raw
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.replanning.cost import ReplanningCost
 from drake_auv.replanning.fields import SliceMap
 from drake_auv.replanning.replanner import Replanner
@@ -109,7 +109,7 @@ def _replanned(params, current):
     replanner.state_input.FixValue(context, state)
     replanner.map_input.FixValue(context, AbstractValue.Make(OnlineMap(0.5)))
     replanner.nominal_input.FixValue(context, AbstractValue.Make(
-        Path(waypoints, 0.0, (0.0, 1.0, 0.0))))
+        PlannedPath(waypoints, 0.0, (0.0, 1.0, 0.0))))
     Simulator(replanner, context).AdvanceTo(3.0)
     return replanner.section(context).trajectory
 

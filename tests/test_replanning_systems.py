@@ -11,7 +11,7 @@ from pydrake.systems.analysis import Simulator
 from drake_auv.mapping.mapper import OctreeMapper, OnlineMap
 from drake_auv.mapping.octree_map import OctreeMap
 from drake_auv.mapping.scan_log import ScanBatch, ScanLog
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.replanning.replanner import Replanner
 from drake_auv.signals import Reference, ReplanningStep
 from drake_auv.sonar.returns import SonarReturns
@@ -113,7 +113,7 @@ def _replanner_context(replanner, waypoints, state):
     replanner.state_input.FixValue(context, state)
     replanner.map_input.FixValue(context, AbstractValue.Make(OnlineMap(0.5)))
     replanner.nominal_input.FixValue(context, AbstractValue.Make(
-        Path(waypoints, 0.0, (0.0, 1.0, 0.0))))
+        PlannedPath(waypoints, 0.0, (0.0, 1.0, 0.0))))
     return context
 
 

@@ -292,15 +292,15 @@ def test_a_cola2_depth_step_is_flown_without_a_safety_response(tmp_path):
 
 def test_a_planned_path_below_the_prior_or_above_the_surface_is_refused(tmp_path):
     from drake_auv.mission.site import check_path_in_water
-    from drake_auv.planning.path import Path
+    from drake_auv.planning.path import PlannedPath
 
     _, _, site = _site(tmp_path)
     for z, message in ((-25.0, "sample 1 of the planned path: depth 25.00 m is 5.00 m below "
                                "the prior map's seabed there (20.0 m deep)"),
                        (3.0, "sample 1 of the planned path: depth -3.00 m is 3.00 m above the "
                              "sea surface")):
-        path = Path(np.array([[-20.0, -20.0, -5.0], [-20.0, -10.0, z]]), 0.0, [0, 0, -1.0])
+        path = PlannedPath(np.array([[-20.0, -20.0, -5.0], [-20.0, -10.0, z]]), 0.0, [0, 0, -1.0])
         with pytest.raises(MissionFileError, match=re.escape("steps[0].plan: " + message)):
             check_path_in_water(path, site, "m", "steps[0].plan")
-    check_path_in_water(Path(np.array([[-20.0, -20.0, -5.0], [200.0, 0.0, -30.0]]), 0.0,
+    check_path_in_water(PlannedPath(np.array([[-20.0, -20.0, -5.0], [200.0, 0.0, -30.0]]), 0.0,
                              [0, 0, -1.0]), site, "m", "steps[0].plan")  # off the map: unjudged

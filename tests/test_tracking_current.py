@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from drake_auv.planning import Path
+from drake_auv.planning import PlannedPath
 from drake_auv.vehicle.control import TrackingController, TrackingGains, axis_force_limits
 from drake_auv.vehicle.diagram import build_tracking_diagram
 from drake_auv.vehicle.model import Girona500Model, Girona500Params, allocate_thrust
 
-LANE = Path(np.array([(0.0, 0.0, -10.0), (30.0, 0.0, -10.0)]), 0.0, (0.0, 0.0, -1.0))
+LANE = PlannedPath(np.array([(0.0, 0.0, -10.0), (30.0, 0.0, -10.0)]), 0.0, (0.0, 0.0, -1.0))
 
 
 def _fly_across(current, gains=None):

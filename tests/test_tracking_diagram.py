@@ -8,7 +8,7 @@ from pydrake.systems.framework import DiagramBuilder
 from drake_auv.vehicle.control import cross_track_distance, wrap_angle
 from drake_auv.vehicle.diagram import add_girona500, build_tracking_diagram
 from drake_auv.vehicle.navigation import NavigationParams
-from drake_auv.planning import Path
+from drake_auv.planning import PlannedPath
 
 SPEED = 0.5
 
@@ -19,7 +19,7 @@ def lawnmower(length=50.0, spacing=5.0, lanes=5, depth=-10.0, heading=None):
         xs = (0.0, length) if i % 2 == 0 else (length, 0.0)
         points += [(xs[0], i * spacing, depth), (xs[1], i * spacing, depth)]
     heading = 0.0 if heading is None else heading
-    return Path(np.array(points), heading, (0.0, 0.0, -1.0), "planar")
+    return PlannedPath(np.array(points), heading, (0.0, 0.0, -1.0), "planar")
 
 
 def fly(path, **kwargs):
@@ -72,7 +72,7 @@ def test_heading_is_held_independently_of_motion():
 
 
 def test_navigation_drift_is_seeded_and_followed():
-    path = Path(np.array([(0.0, 0.0, -10.0), (100.0, 0.0, -10.0)]), 0.0, (0.0, 0.0, -1.0))
+    path = PlannedPath(np.array([(0.0, 0.0, -10.0), (100.0, 0.0, -10.0)]), 0.0, (0.0, 0.0, -1.0))
     nav = NavigationParams(heading_bias=np.radians(1.0), random_walk=0.02, position_noise=0.05,
                            seed=7)
     runs = [fly(path.resample(1.0), navigation=nav) for _ in range(2)]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from drake_auv.commands import lawnmower, simulate
-from drake_auv.planning import Path
+from drake_auv.planning import PlannedPath
 
 
 def parse(module, argv):
@@ -27,7 +27,7 @@ def test_lawnmower_writes_recording_and_error_plot(tmp_path, capsys):
     animation = [c for c in commands if b"set_animation" in c]
     assert len(animation) == 1 and b"/drake_auv/vehicle" in animation[0]
     assert (out / "tracking_error.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    path = Path.from_csv(out / "path.csv")
+    path = PlannedPath.from_csv(out / "path.csv")
     state = np.loadtxt(out / "state.csv", delimiter=",", skiprows=1)
     np.testing.assert_allclose(state[-1, 1:4], path.points[-1], atol=0.05)
     text = capsys.readouterr().out
@@ -36,7 +36,7 @@ def test_lawnmower_writes_recording_and_error_plot(tmp_path, capsys):
 
 
 def test_simulate_flies_a_path_csv(tmp_path):
-    path = Path(np.array([[0.0, 0, -5], [15, 0, -5], [15, 5, -5]]), [0.0, 0.0, np.pi / 2],
+    path = PlannedPath(np.array([[0.0, 0, -5], [15, 0, -5], [15, 5, -5]]), [0.0, 0.0, np.pi / 2],
                 (1.0, 0.0, 0.0), "slice")
     path.to_csv(tmp_path / "p.csv")
     args = parse(simulate, ["simulate", str(tmp_path / "p.csv"), "--out", str(tmp_path / "s"),
@@ -50,7 +50,7 @@ def test_simulate_flies_a_path_csv(tmp_path):
 
 
 def test_bad_inputs_are_named(tmp_path):
-    path = Path(np.array([[0.0, 0, -5], [5, 0, -5]]), 0.0, (0.0, 0.0, -1.0))
+    path = PlannedPath(np.array([[0.0, 0, -5], [5, 0, -5]]), 0.0, (0.0, 0.0, -1.0))
     with pytest.raises(ValueError, match="speed"):
         simulate.fly_path(path, tmp_path, speed=3.0, progress=False)
     with pytest.raises(FileNotFoundError):
@@ -66,13 +66,13 @@ def test_bad_inputs_are_named(tmp_path):
 
 def test_first_turn_index_finds_the_end_of_the_first_lane():
     points = [(x, 0.0, -5.0) for x in range(11)] + [(10.0, 2.0, -5.0), (9.0, 2.0, -5.0)]
-    path = Path(np.array(points), 0.0, (0.0, 0.0, -1.0))
+    path = PlannedPath(np.array(points), 0.0, (0.0, 0.0, -1.0))
     assert lawnmower.first_turn_index(path) == 10
-    straight = Path(np.array([(0.0, 0, 0), (1.0, 0.1, 0), (2.0, 0, 0)]), 0.0, (0.0, 0.0, -1.0))
+    straight = PlannedPath(np.array([(0.0, 0, 0), (1.0, 0.1, 0), (2.0, 0, 0)]), 0.0, (0.0, 0.0, -1.0))
     assert lawnmower.first_turn_index(straight) == 2
 
 
 def test_realtime_rate_validated(tmp_path):
-    path = Path(np.array([[0.0, 0, -5], [5, 0, -5]]), 0.0, (0.0, 0.0, -1.0))
+    path = PlannedPath(np.array([[0.0, 0, -5], [5, 0, -5]]), 0.0, (0.0, 0.0, -1.0))
     with pytest.raises(ValueError, match="realtime_rate"):
         simulate.fly_path(path, tmp_path, realtime_rate=-1.0, progress=False)

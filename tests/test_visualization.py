@@ -9,7 +9,7 @@ import trimesh
 from pydrake.systems.analysis import Simulator
 
 from drake_auv.vehicle.diagram import build_tracking_diagram
-from drake_auv.planning import Path
+from drake_auv.planning import PlannedPath
 from drake_auv.terrain.synthetic import random_seabed
 from drake_auv.visualization import Scene
 
@@ -28,7 +28,7 @@ def embedded_commands(html: str) -> list[bytes]:
 def test_recorded_html_holds_the_animation(scene, tmp_path):
     bathy = random_seabed(seed=1, shape=(30, 40), relief=3.0)
     scene.add_terrain(bathy)
-    path = Path(np.array([[2.0, 2.0, -40.0], [22.0, 2.0, -40.0], [22.0, 6.0, -40.0]]), 0.0,
+    path = PlannedPath(np.array([[2.0, 2.0, -40.0], [22.0, 2.0, -40.0], [22.0, 6.0, -40.0]]), 0.0,
                 (0.0, 0.0, -1.0))
     scene.add_path("path", path)
     diagram, handles = build_tracking_diagram(path, scene=scene)

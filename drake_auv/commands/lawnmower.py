@@ -45,7 +45,7 @@ def check_options(args) -> None:
 
 
 def run(args) -> int:
-    from pathlib import Path as FilePath
+    from pathlib import Path
 
     from drake_auv.commands.outputs import MiB, output_folder
     from drake_auv.commands.simulate import fly_path, report
@@ -64,7 +64,7 @@ def run(args) -> int:
     path = plan_lawnmower(seabed, omega=args.altitude, aperture_deg=args.aperture_deg,
                           overlap=args.overlap)
     spacing = lane_spacing(args.altitude, args.aperture_deg, args.overlap)
-    out = FilePath(args.out)
+    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     path.to_csv(out / "path.csv")
     scene = None

@@ -12,15 +12,15 @@ from __future__ import annotations
 
 import shutil
 import tempfile
-from pathlib import Path as FilePath
+from pathlib import Path
 
 MiB = 2 ** 20
 
 
-def output_folder(path, option: str, need_bytes: int) -> FilePath:
+def output_folder(path, option: str, need_bytes: int) -> Path:
     """Creates folder `path` (with its parents) when missing and checks that a file can be
     created in it and that its file system has `need_bytes` free; returns the path."""
-    folder = FilePath(path)
+    folder = Path(path)
     if folder.exists() and not folder.is_dir():
         raise ValueError(f"{option} {folder}: a file is in the way (an output folder is needed; "
                          "nothing was written)")
@@ -38,11 +38,11 @@ def output_folder(path, option: str, need_bytes: int) -> FilePath:
     return folder
 
 
-def output_file(path, option: str, suffixes: tuple[str, ...], need_bytes: int) -> FilePath:
+def output_file(path, option: str, suffixes: tuple[str, ...], need_bytes: int) -> Path:
     """Checks that file `path` can be written: one of `suffixes` (lower case, with the dot),
     not a folder nor a special file, and its folder (created when missing) writable with
     `need_bytes` free; returns the path. An existing file is left as it is."""
-    file = FilePath(path)
+    file = Path(path)
     if file.is_dir():
         raise ValueError(f"{option} {file} is a folder; give a file name")
     if file.suffix.lower() not in suffixes:
@@ -54,7 +54,7 @@ def output_file(path, option: str, suffixes: tuple[str, ...], need_bytes: int) -
     return file
 
 
-def _where(err: OSError, folder: FilePath) -> str:
+def _where(err: OSError, folder: Path) -> str:
     """': PATH' when the OSError is about another path than `folder` (a parent in the way)."""
     name = err.filename
-    return f": {name}" if name is not None and FilePath(name) != folder else ""
+    return f": {name}" if name is not None and Path(name) != folder else ""

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import json
 import sys
-from pathlib import Path as FilePath
+from pathlib import Path
 
 from drake_auv.commands import check_plan_options, whole_number
 
@@ -142,7 +142,7 @@ def run(args) -> int:
     elif args.tide is not None or args.align_with_current:
         raise ValueError("--tide and --align-with-current need --current SPEED,TOWARDS_DEG")
     origin = _lonlat(args.origin_lonlat) if args.origin_lonlat is not None else None
-    if args.bathymetry == "caldera" and not FilePath("caldera").exists():
+    if args.bathymetry == "caldera" and not Path("caldera").exists():
         from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
         from drake_auv.terrain.synthetic import caldera_site
 
@@ -193,7 +193,7 @@ def run(args) -> int:
                               metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
                               ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d,
                               reference_table=args.reference_table, current=flow)
-    report = json.loads((FilePath(args.out) / "report.json").read_text())
+    report = json.loads((Path(args.out) / "report.json").read_text())
     if plan.metrics is not None:
         print(table3_markdown(plan.metrics))
     print(mission_time_line(report["mission_time"]))

@@ -16,7 +16,7 @@ first.
 
 from __future__ import annotations
 
-from pathlib import Path as FilePath
+from pathlib import Path
 
 from drake_auv.commands import whole_number
 from drake_auv.output_files import replacing
@@ -91,9 +91,9 @@ def run(args) -> int:
         raise ValueError(f"--crop must be >= 0 m, got {args.crop}")
     check_parameters(10 ** 9, args.depth, args.k, args.trim, args.support, args.outliers)  # before any work
     cloud = read_point_cloud(args.points)
-    target = load_mesh(FilePath(args.target), "--target", "reconstruct") if args.target \
+    target = load_mesh(Path(args.target), "--target", "reconstruct") if args.target \
         else None
-    world = load_mesh(FilePath(args.world), "--world", "reconstruct") if args.world else None
+    world = load_mesh(Path(args.world), "--world", "reconstruct") if args.world else None
     if args.crop is not None:
         cloud = cloud.crop(*target.bounds, args.crop)
     try:  # what the cloud itself allows, named by its file
@@ -110,7 +110,7 @@ def run(args) -> int:
             f"{len(cloud)} points, median distance to a point "
             f"{np.median(surface.support_m):.3f} m (support trim "
             f"{f'{args.support:g} local spacings' if args.support else 'off'})")
-    panels = [(FilePath(args.points).name, mesh, surface.support_m, SUPPORT_LABEL)]
+    panels = [(Path(args.points).name, mesh, surface.support_m, SUPPORT_LABEL)]
     if target is not None:
         summary, errors = score(target, mesh, cloud.points, world=world)
         mesh = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False,
@@ -122,7 +122,7 @@ def run(args) -> int:
                  f"{s['accuracy_p95_m']:.3f} m), completeness {100 * s['completeness']:.1f} % "
                  f"({100 * s['completeness_seen']:.1f} % of the seen target) (points: median "
                  f"{p['accuracy_median_m']:.3f} m, {100 * p['completeness']:.1f} %)")
-        panels.insert(0, (FilePath(args.points).name, surface.mesh, errors))
+        panels.insert(0, (Path(args.points).name, surface.mesh, errors))
     if args.figure:
         from drake_auv.reconstruction.figures import fig_reconstruction
 

@@ -13,7 +13,7 @@ surface and the returns' coverage of the target.
 
 from __future__ import annotations
 
-from pathlib import Path as FilePath
+from pathlib import Path
 
 from drake_auv.commands import whole_number
 
@@ -63,8 +63,8 @@ def run(args) -> int:
         raise ValueError(f"--max-range must be in (0, 10000) m, got {args.max_range}")
     if args.world and not args.target:
         raise ValueError("--world needs --target")
-    world = load_mesh(FilePath(args.world), "--world", "replay") if args.world else None
-    target = load_mesh(FilePath(args.target), "--target", "replay") if args.target else None
+    world = load_mesh(Path(args.world), "--world", "replay") if args.world else None
+    target = load_mesh(Path(args.target), "--target", "replay") if args.target else None
     output_folder(args.out, "-o", 100 * MiB)
     index = open_log(args.log, topics, given, args.base_frame, args.max_range)
     settings = map_settings(index, args.voxel, args.multibeam_stride)
@@ -77,5 +77,5 @@ def run(args) -> int:
         line += (f"; target coverage {100 * summary['coverage']['point_cloud']:.1f} % "
                  f"(returns within {summary['coverage']['tolerance_m']:g} m), surface "
                  f"{100 * summary['coverage']['surface']:.1f} %")
-    print(line + f"; report in {FilePath(args.out) / 'report.md'}")
+    print(line + f"; report in {Path(args.out) / 'report.md'}")
     return 0

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path as FilePath
+from pathlib import Path
 
 from drake_auv.commands import add_recording_options, whole_number
 from drake_auv.commands.outputs import MiB, output_folder
@@ -139,8 +139,8 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
             from drake_auv.rosio.writer import dive_log
 
             with display.step("dive.mcap"):
-                FilePath(out).mkdir(parents=True, exist_ok=True)
-                log = dive_log(FilePath(out) / "dive.mcap", spec, site)
+                Path(out).mkdir(parents=True, exist_ok=True)
+                log = dive_log(Path(out) / "dive.mcap", spec, site)
         result = run_mission(spec, site, scene=scene, progress=display, plan=plan,
                              realtime_rate=realtime, mcap=log)
         setup_s = time.perf_counter() - start - result.wall_s
@@ -148,7 +148,7 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         def finish(out):
             finish_recording(result, scene, out / "mission.html")
 
-        return write_outputs(result, FilePath(out), setup_s=setup_s,
+        return write_outputs(result, Path(out), setup_s=setup_s,
                              finish=finish if html else None, progress=display)
 
 
@@ -165,14 +165,14 @@ def run(args) -> int:
           f"camera {100 * c['camera']:.1f} %, minimum clearance "
           f"{summary['min_clearance_m']:.2f} m"
           + (" (contact)" if summary["contact"] else "")
-          + f"; report in {FilePath(args.out) / 'report.md'}")
+          + f"; report in {Path(args.out) / 'report.md'}")
     t = summary["timing"]
     print(f"end to end {t['total_s']:.1f} s: setup {t['setup_s']:.1f} s, simulation "
           f"{t['simulation_s']:.1f} s ({t['real_time_factor']:.0f}x real time), outputs "
           f"{t['outputs_s']:.1f} s; peak memory {t['peak_rss_mb']:.0f} MiB")
     if args.meshcat and not args.no_html:
         print(f"the live view ends with this process; replay the dive any time from "
-              f"{FilePath(args.out) / 'mission.html'}")
+              f"{Path(args.out) / 'mission.html'}")
     return 0
 
 

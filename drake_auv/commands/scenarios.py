@@ -8,7 +8,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -41,9 +41,9 @@ def run(args) -> int:
         for name, text in list_scenarios():
             print(f"{name:<{width}}  {text}")
         return 0
-    if args.prior and FilePath(args.prior).suffix.lower() not in (".tif", ".tiff", ".npz"):
+    if args.prior and Path(args.prior).suffix.lower() not in (".tif", ".tiff", ".npz"):
         raise ValueError(f"--prior: file must end in .tif or .npz, got {args.prior}")
-    if args.world and FilePath(args.world).suffix.lower() not in (".ply", ".stl", ".obj", ".glb"):
+    if args.world and Path(args.world).suffix.lower() not in (".ply", ".stl", ".obj", ".glb"):
         raise ValueError(f"--world: file must end in .ply, .stl, .obj or .glb, got {args.world}")
     sc = get_scenario(args.name)
     lo, hi = sc.world.bounds
@@ -60,10 +60,10 @@ def run(args) -> int:
 
         site = load_site(SiteSpec(scenario=args.name, prior_error_m=args.error), args.seed,
                          label=f"scenarios {args.name}")
-        _write_prior(site.prior, FilePath(args.prior))
+        _write_prior(site.prior, Path(args.prior))
         print(f"  wrote prior map to {args.prior}")
     if args.world:
-        out = FilePath(args.world)
+        out = Path(args.world)
         out.parent.mkdir(parents=True, exist_ok=True)
         with replacing(out) as temporary:
             sc.world.export(temporary)
@@ -71,7 +71,7 @@ def run(args) -> int:
     return 0
 
 
-def _write_prior(bathy, out: FilePath) -> None:
+def _write_prior(bathy, out: Path) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     if out.suffix.lower() == ".npz":
         with open_replacing(out, "wb") as f:

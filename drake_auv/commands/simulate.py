@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -74,7 +74,7 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
     check_below_surface(path)
     if not (np.isfinite(realtime_rate) and realtime_rate >= 0):
         raise ValueError(f"realtime_rate must be >= 0 (0 = as fast as possible), got {realtime_rate}")
-    out_dir = FilePath(out_dir)
+    out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if scene is not None:
         from drake_auv.visualization.legend import LegendEntry, css_colour
@@ -191,10 +191,10 @@ def report(result: FlightResult, out_dir) -> None:
 def run(args) -> int:
     from drake_auv.commands.outputs import MiB, output_folder
     from drake_auv.vehicle.navigation import NavigationParams
-    from drake_auv.planning.path import Path
+    from drake_auv.planning.path import PlannedPath
     from drake_auv.visualization import Scene
 
-    path = Path.from_csv(args.path_csv)
+    path = PlannedPath.from_csv(args.path_csv)
     check_below_surface(path, args.path_csv, first_row=2)  # row 1: the header
     output_folder(args.out, "-o", 20 * MiB)  # mission.html, tracking_error.png, state.csv
     navigation = NavigationParams(heading_bias=np.radians(args.heading_bias_deg),
@@ -209,7 +209,7 @@ def run(args) -> int:
 def add_parser(subparsers) -> None:
     parser = subparsers.add_parser(
         "simulate", help="fly a path CSV with the GIRONA 500 and record it",
-        description="Flies a path (CSV from `drake-auv plan` or Path.to_csv) with the simulated "
+        description="Flies a path (CSV from `drake-auv plan` or PlannedPath.to_csv) with the simulated "
                     "GIRONA 500 and writes a Meshcat HTML recording and a tracking-error plot.")
     parser.add_argument("path_csv", help="path CSV: x,y,z,heading,sensor_x,sensor_y,sensor_z,label")
     parser.add_argument("-o", "--out", default=DEFAULT_OUT,

@@ -40,7 +40,7 @@ from drake_auv.exploration.planner import ExploreParameters, Target, plan_view
 from drake_auv.behaviour import Behaviour, trajectory_reference
 from drake_auv.random_streams import stream
 from drake_auv.mapping.mapper import OnlineMap
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.signals import (BehaviourStatus, ExplorerProgress, ExplorerStep, Reference,
                                VehicleState)
 
@@ -175,7 +175,7 @@ class ViewPlanner(Behaviour):
         heading[-1] = target.yaw
         heading = x.yaw + np.angle(np.exp(1j * (heading - x.yaw)))  # nearest turn first
         sensor = np.column_stack([np.cos(heading), np.sin(heading), np.zeros(len(path))])
-        trajectory = Path(path, heading, sensor).to_trajectory(params.speed, yaw_rate=YAW_RATE)
+        trajectory = PlannedPath(path, heading, sensor).to_trajectory(params.speed, yaw_rate=YAW_RATE)
         trajectory.shiftRight(t)
         return trajectory
 

@@ -20,7 +20,7 @@ from drake_auv.mission.site import Site, check_in_water
 from drake_auv.mission.spec import MissionSpec
 from drake_auv.mission.steps import STEPS
 from drake_auv.mission.steps.step import Planning
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 
 
 @dataclass
@@ -43,7 +43,7 @@ class MissionPlan:
         budget: sum of the legs' time budgets, s.
     """
 
-    nominal: Path | None
+    nominal: PlannedPath | None
     coverage: object
     omega: float | None
     method: str

@@ -13,7 +13,7 @@ mission time and the leg flying.
 
 from __future__ import annotations
 
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -72,6 +72,6 @@ def finish_recording(result: MissionResult, scene, filename):
     scene.add_legend(coverage_legend(scene.path_of("coverage")))
     draw_octree(scene.meshcat, scene.path_of("octree"), result.online_map.map)
     scene.add_legend(octree_legend(scene.path_of("octree")))
-    draw_products(scene, result, FilePath(filename).parent)
+    draw_products(scene, result, Path(filename).parent)
     scene.clock_legs = leg_starts(result)
     return scene.write_html(filename)

@@ -26,7 +26,7 @@ import csv
 import dataclasses
 import resource
 import time
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -493,7 +493,7 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
     `progress`: the run's display, whose `outputs` phase this runs, a step per file (or group
     of files) written."""
     start = time.perf_counter()
-    out = FilePath(outdir)
+    out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     names = ["coverage.png", "distance.png", "coverage_vs_time.png",
              *(["plan.png"] if result.plan.coverage is not None else [])]

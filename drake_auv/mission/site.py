@@ -345,7 +345,7 @@ def check_in_water(site: Site, points, label: str, where: str, names) -> None:
 
 def check_path_in_water(path, site: Site, label: str, where: str) -> None:
     """Raises MissionFileError (one line naming `where` and the sample) for the first sample of
-    a planned `path` (a `planning.path.Path`, local frame) above the sea surface or below the
+    a planned `path` (a `planning.path.PlannedPath`, local frame) above the sea surface or below the
     prior map it was planned on (on the map's extent)."""
     x, y, z = path.points.T
     xmin, xmax, ymin, ymax = site.prior.extent

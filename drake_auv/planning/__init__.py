@@ -1,10 +1,10 @@
 """Off-line planners and optimisers, pure numpy/scipy (no Drake).
 
-`Path` is imported eagerly; the planners load on first use (they pull in scipy, contourpy and
-matplotlib.path, which modules that only need `Path` should not pay for).
+`PlannedPath` is imported eagerly; the planners load on first use (they pull in scipy, contourpy and
+matplotlib.path, which modules that only need `PlannedPath` should not pay for).
 """
 
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 
 _LAZY = {
     "CoveragePlan": "drake_auv.planning.coverage_plan",
@@ -12,7 +12,7 @@ _LAZY = {
     "plan_lawnmower": "drake_auv.planning.lawnmower",
 }
 
-__all__ = ["CoveragePlan", "Path", "plan_coverage", "plan_lawnmower"]
+__all__ = ["CoveragePlan", "PlannedPath", "plan_coverage", "plan_lawnmower"]
 
 
 def __getattr__(name):

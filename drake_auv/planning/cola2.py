@@ -1,4 +1,4 @@
-"""COLA2 mission XML (GIRONA 500) from a `Path`, with sections chosen to hold under COLA2's
+"""COLA2 mission XML (GIRONA 500) from a `PlannedPath`, with sections chosen to hold under COLA2's
 execution semantics, and its reader.
 
 COLA2 flies a section toward its final point holding the section's FINAL depth (heave_mode 0)
@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -35,7 +35,7 @@ from drake_auv.autopilot.items import MAX_HOLD_S, MissionItem, VehicleMission
 from drake_auv.output_files import replacing
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.missions import ALTITUDE_LABELS
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.surface import TerrainSurface
 
 
@@ -207,7 +207,7 @@ class _Splitter:
         return b, False, dev, z_end, safe
 
 
-def cola2_sections(path: Path, surface: TerrainSurface, omega: float, min_depth: float, *,
+def cola2_sections(path: PlannedPath, surface: TerrainSurface, omega: float, min_depth: float, *,
                    deviation: float | None = None, tolerance_xy: float = 1.0,
                    surge_velocity: float = DEFAULT_SURGE, heave_in_3d: bool = False,
                    heave_speed: float = HEAVE_SPEED, spacing: float = 1.0) -> Cola2Sections:
@@ -388,7 +388,7 @@ def read_cola2(path) -> VehicleMission:
     the field.
     """
     name = str(path)
-    if not FilePath(path).is_file():
+    if not Path(path).is_file():
         raise FileNotFoundError(f"{name}: no such COLA2 mission file")
     try:
         root = ET.parse(path).getroot()
@@ -427,7 +427,7 @@ def read_cola2(path) -> VehicleMission:
     return VehicleMission("cola2", tuple(items), source=name)
 
 
-def export_cola2(path: Path, surface: TerrainSurface, omega: float, min_depth: float,
+def export_cola2(path: PlannedPath, surface: TerrainSurface, omega: float, min_depth: float,
                  geo: GeoFrame, filename, surge_velocity: float = DEFAULT_SURGE,
                  tolerance_xy: float = 1.0, heave_in_3d: bool = False) -> dict:
     """Writes the COLA2 mission of `path` to `filename`, reads it back (`read_cola2`), replays

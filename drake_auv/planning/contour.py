@@ -10,7 +10,7 @@ import contourpy
 import numpy as np
 from scipy import ndimage
 
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.polyline import motion_heading, resample
 from drake_auv.terrain.bathymetry import Bathymetry
 
@@ -19,7 +19,7 @@ END_OVERRUN = 7.0  # m, the largest prior-map error (5 m) plus 2 m
 
 def nominal_contour(prior: Bathymetry, depth: float, omega: float,
                     end_width: float | None = None, start=None, *, end_heading: float = 0.0,
-                    overrun: float = END_OVERRUN, spacing: float = 1.0) -> Path:
+                    overrun: float = END_OVERRUN, spacing: float = 1.0) -> PlannedPath:
     """The offset-`omega` contour, at `depth`, of the structure's cross-section in `prior`,
     flown counter-clockwise seen from above (structure to port).
 
@@ -39,7 +39,7 @@ def nominal_contour(prior: Bathymetry, depth: float, omega: float,
         overrun: how far past `end_width` the contour is kept, m (>= 0).
         spacing: largest distance between path samples, m (> 0).
     Returns:
-        A `Path` labelled "slice" at z = -depth, heading along the motion, the sensor to port.
+        A `PlannedPath` labelled "slice" at z = -depth, heading along the motion, the sensor to port.
     """
     for name, value in (("depth", depth), ("omega", omega), ("spacing", spacing)):
         if not (np.isfinite(value) and value > 0):
@@ -75,7 +75,7 @@ def nominal_contour(prior: Bathymetry, depth: float, omega: float,
         points = np.vstack([np.asarray(start, dtype=float)[:3], points])
     heading = motion_heading(points)
     sensor = np.column_stack([-np.sin(heading), np.cos(heading), np.zeros(len(heading))])
-    return Path(points, heading, sensor, "slice")
+    return PlannedPath(points, heading, sensor, "slice")
 
 
 def _end_arc(prior: Bathymetry, solid: np.ndarray, line: np.ndarray, reach: float,

@@ -18,7 +18,7 @@ from drake_auv.planning.boustrophedon import (Decomposition, best_sweep_angle,
                                               exhaustive_walk, sliver_cells, sweep_raster)
 from drake_auv.planning.lawnmower import (check_omega_fits, check_sensor_parameters, lane_spacing,
                                           plan_lawnmower, wet_grid)
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.route import RouteBuilder
 from drake_auv.planning.slicing import (MAX_SLICES, Contour, fixed_depression, order_contours,
                                         slice_levels, slice_region)
@@ -48,8 +48,8 @@ class CoveragePlan:
     """
 
     bathy: Bathymetry
-    path: Path
-    lawnmower: Path | None
+    path: PlannedPath
+    lawnmower: PlannedPath | None
     labels: TerrainLabels
     cells: Decomposition
     contours: list[Contour]

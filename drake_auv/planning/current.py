@@ -31,7 +31,7 @@ import numpy as np
 
 from drake_auv.ocean.current import MAX_CURRENT_MPS, towards_unit
 from drake_auv.params import param, validate
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.vehicle.control import axis_force_limits
 from drake_auv.vehicle.model import Girona500Params
 
@@ -105,7 +105,7 @@ def thrust_share(direction: np.ndarray, heading: np.ndarray, ground_speed, water
     return np.abs(thrust).max(axis=-1) / p.max_thrust, force
 
 
-def _pieces(path: Path) -> list[tuple[str, int, int]]:
+def _pieces(path: PlannedPath) -> list[tuple[str, int, int]]:
     """(kind, first, last sample) of the path's lanes, contours and transits: runs of one
     label, a lane also ending where the horizontal direction turns by more than `TURN_DEG`;
     a piece of lane shorter than `MIN_LANE_M` is a "turn" (the step between two lanes)."""
@@ -129,7 +129,7 @@ def _pieces(path: Path) -> list[tuple[str, int, int]]:
     return out
 
 
-def current_report(path: Path, current: PlanCurrent, speed: float,
+def current_report(path: PlannedPath, current: PlanCurrent, speed: float,
                    params: Girona500Params | None = None,
                    yaw_rate: float = np.radians(15.0), aligned: bool = True) -> dict:
     """Per lane, contour and transit of `path` flown at the ground `speed` (m/s) in `current`:
@@ -255,7 +255,7 @@ def aligned_lanes(current: PlanCurrent, speed: float,
     out = []
     for yaw in (angle, angle + np.pi):
         points = np.outer(np.arange(3.0), [np.cos(yaw), np.sin(yaw), 0.0])
-        lane = Path(points, np.full(3, yaw), (0.0, 0.0, -1.0),
+        lane = PlannedPath(points, np.full(3, yaw), (0.0, 0.0, -1.0),
                     np.array(["planar"] * 3, dtype=object))
         out += [q for q in current_report(lane, current, speed, params, aligned=False)["pieces"]]
     return out

@@ -9,14 +9,14 @@ file's violations as warnings (`export_warnings`) and the QGroundControl files' 
 
 from __future__ import annotations
 
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
 from drake_auv.output_files import write_json, write_text
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.missions import douglas_peucker
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.stages import next_stage, stage_bar
 
 # The reference's Table 3 (Santorini caldera ROI, Omega = 2 m, 60 degree camera).
@@ -46,7 +46,7 @@ def _waypoint_features(mission, geo: GeoFrame, surface) -> list[dict]:
             depth, alt = held, None if seabed is None else round(float(-it.z - seabed[k]), 3)
         else:
             depth, alt = None if seabed is None else round(float(-(seabed[k] + it.z)), 3), held
-        props = {"kind": "waypoint", "file": FilePath(mission.source).name, "seq": k + 1,
+        props = {"kind": "waypoint", "file": Path(mission.source).name, "seq": k + 1,
                  "item": it.kind, "heave": it.z_mode, "depth": depth, "alt": alt}
         if it.yaw is not None:
             props["yaw_deg"] = round(float(np.degrees(it.yaw)) % 360.0, 2)
@@ -56,7 +56,7 @@ def _waypoint_features(mission, geo: GeoFrame, surface) -> list[dict]:
     return features
 
 
-def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", missions=(),
+def path_to_geojson(path: PlannedPath, geo: GeoFrame, name: str = "path", missions=(),
                     surface=None) -> dict:
     """A FeatureCollection (RFC 7946, WGS 84) of the route and the waypoints of the vehicle
     missions written with it, property names of at most 10 characters (Shapefile-safe).
@@ -88,7 +88,7 @@ def path_to_geojson(path: Path, geo: GeoFrame, name: str = "path", missions=(),
     return {"type": "FeatureCollection", "name": name, "features": features}
 
 
-def write_geojson(path: Path, geo: GeoFrame, filename, name: str = "path", missions=(),
+def write_geojson(path: PlannedPath, geo: GeoFrame, filename, name: str = "path", missions=(),
                   surface=None) -> None:
     write_json(filename, path_to_geojson(path, geo, name, missions, surface), indent=None,
                separators=(",", ":"))
@@ -99,7 +99,7 @@ def _ratio(a: float, b: float) -> float | None:
     return float(a / b) if np.isfinite(a) and np.isfinite(b) and b != 0 else None
 
 
-def _depth_limited(path: Path, plan) -> dict:
+def _depth_limited(path: PlannedPath, plan) -> dict:
     """Samples held at the minimum operating depth with less than Omega of altitude."""
     p = plan.parameters
     ceiling = -p["min_depth"]
@@ -406,7 +406,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
                   metrics_3d=True, max_items: int = 700, ardusub_frames: str = "terrain",
                   heave_in_3d: bool = False, reference_table: bool = False,
-                  current: dict | None = None) -> list[FilePath]:
+                  current: dict | None = None) -> list[Path]:
     """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
     `figures`) the PNG figures into `outdir`; returns the files written.
 
@@ -433,7 +433,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
     """
     exports, geo = check_exports(plan.bathy, exports, origin_lonlat, max_items, ardusub_frames)
     mission_time(plan, surge_velocity)  # the speed, checked before any file is written
-    outdir = FilePath(outdir)
+    outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     written, extras, missions = [], {}, []
     bar, owned = stage_bar(progress, output_stages(exports, figures, metrics_3d), "outputs")

@@ -9,7 +9,7 @@ backend needed).
 
 from __future__ import annotations
 
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 from matplotlib.collections import LineCollection
@@ -233,13 +233,13 @@ VIEWS_3D = {
 
 
 def write_figures(plan, outdir, dpi: int = 110, progress=False,
-                  geo=None) -> list[FilePath]:
+                  geo=None) -> list[Path]:
     """Writes every figure of `PLAN_VIEWS` (in `geo`'s CRS, with latitude, longitude and
     north, when given) and `VIEWS_3D` into `outdir`; returns the files. `progress`: a bar over
     the figures, or a caller's tqdm bar to advance by one stage per figure."""
     from drake_auv.planning.stages import next_stage, stage_bar
 
-    outdir = FilePath(outdir)
+    outdir = Path(outdir)
     written = []
     makers = {**{k: (lambda plan, f=f: f(plan, geo)) for k, f in PLAN_VIEWS.items()}, **VIEWS_3D}
     bar, owned = stage_bar(progress, len(makers), "figures")

@@ -15,7 +15,7 @@ import numpy as np
 from drake_auv.planning.boustrophedon import (best_sweep_angle, boustrophedon_waypoints,
                                               cell_lanes, decompose, exhaustive_walk,
                                               sliver_cells)
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.route import RouteBuilder
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.terrain.bathymetry import Bathymetry
@@ -75,7 +75,7 @@ def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float
                    overlap: float = 0.1, sweep_angle_deg: float | None = None,
                    sample_spacing: float | None = None, enforce_clearance: bool = True,
                    surface: TerrainSurface | None = None, min_depth: float = 1.0,
-                   nogo=None, lane_spacing_m: float | None = None) -> Path:
+                   nogo=None, lane_spacing_m: float | None = None) -> PlannedPath:
     """Lawnmower over the valid cells of `bathy`; labels "lawnmower" and "transit".
 
     Args:

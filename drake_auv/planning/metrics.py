@@ -21,7 +21,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.surface import TerrainSurface
 
 
@@ -123,7 +123,7 @@ def clearance(surface: TerrainSurface, points: np.ndarray, omega: float) -> np.n
     return d
 
 
-def _summary(path: Path, mask: np.ndarray, angles: np.ndarray, dist: np.ndarray, seen: np.ndarray,
+def _summary(path: PlannedPath, mask: np.ndarray, angles: np.ndarray, dist: np.ndarray, seen: np.ndarray,
              region: np.ndarray, weights: np.ndarray) -> SegmentMetrics:
     """Metrics of the samples selected by `mask` from per-sample angles (NaN for transit or
     blind samples), distances and the cells they saw; coverage is over the cells of `region`."""
@@ -146,7 +146,7 @@ def _summary(path: Path, mask: np.ndarray, angles: np.ndarray, dist: np.ndarray,
     )
 
 
-def evaluate_path(path: Path, surface: TerrainSurface, aperture_deg: float, sensor_range: float,
+def evaluate_path(path: PlannedPath, surface: TerrainSurface, aperture_deg: float, sensor_range: float,
                   omega: float, groups: dict[str, tuple[np.ndarray, np.ndarray]],
                   weights: np.ndarray | None = None) -> dict[str, SegmentMetrics]:
     """Metrics of groups of samples of one path, computing each per-sample quantity once.

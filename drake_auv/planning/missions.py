@@ -1,4 +1,4 @@
-"""Waypoints of a `Path`, the start of the vehicle missions: the COLA2 mission XML
+"""Waypoints of a `PlannedPath`, the start of the vehicle missions: the COLA2 mission XML
 (`planning.cola2`, sections chosen under COLA2's semantics) and the QGroundControl `.plan`
 (`planning.qgc`, ArduSub), both in WGS 84.
 
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.surface import TerrainSurface
 
 ALTITUDE_LABELS = ("planar", "lawnmower")
@@ -90,7 +90,7 @@ class Waypoints:
         return len(self.index)
 
 
-def mission_waypoints(path: Path, surface: TerrainSurface, tolerance: float = 0.05,
+def mission_waypoints(path: PlannedPath, surface: TerrainSurface, tolerance: float = 0.05,
                       altitude_labels: tuple[str, ...] = ALTITUDE_LABELS) -> Waypoints:
     """Waypoints of `path` (see the module docstring); `tolerance` in m, > 0; the vehicle holds
     altitude on the runs labelled one of `altitude_labels` (() : depth everywhere)."""

@@ -1,6 +1,6 @@
 """The coverage path: ordered 3D samples with heading, sensor direction and segment label.
 
-A `Path` is what every planner returns and what the vehicle diagrams consume. It is pure numpy;
+A `PlannedPath` is what every planner returns and what the vehicle diagrams consume. It is pure numpy;
 the conversion to a Drake trajectory imports pydrake lazily so planning never needs Drake.
 Frames: world, z up, metres; heading is the yaw of the body x axis about world z, radians.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 import csv
 import io
 from dataclasses import dataclass, field
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -21,7 +21,7 @@ _CSV_FIELDS = ("x", "y", "z", "heading", "sensor_x", "sensor_y", "sensor_z", "la
 
 
 @dataclass(frozen=True)
-class Path:
+class PlannedPath:
     """Ordered samples of a path in the world frame.
 
     Attributes:
@@ -41,8 +41,8 @@ class Path:
         self._validate(copy=True)
 
     @classmethod
-    def adopt(cls, points, heading, sensor_dir, labels) -> "Path":
-        """A Path that takes ownership of freshly built, full-shape arrays without copying
+    def adopt(cls, points, heading, sensor_dir, labels) -> "PlannedPath":
+        """A PlannedPath that takes ownership of freshly built, full-shape arrays without copying
         them (they become read-only): for planners assembling millions of samples."""
         path = cls.__new__(cls)
         for name, value in (("points", points), ("heading", heading),
@@ -54,10 +54,10 @@ class Path:
     def _validate(self, copy: bool) -> None:
         points = np.array(self.points, dtype=float, copy=copy or None)
         if points.ndim != 2 or points.shape[1] != 3:
-            raise ValueError(f"Path.points must have shape (N, 3), got {points.shape}")
+            raise ValueError(f"PlannedPath.points must have shape (N, 3), got {points.shape}")
         n = len(points)
         if n < 1:
-            raise ValueError("Path.points is empty: a path needs at least one sample")
+            raise ValueError("PlannedPath.points is empty: a path needs at least one sample")
 
         def full(value, shape, dtype):
             value = np.asarray(value, dtype=dtype)
@@ -69,10 +69,10 @@ class Path:
         sensor_dir = full(self.sensor_dir, (n, 3), float)
         labels = full(self.labels if self.labels is not None else "path", (n,), object)
         if not (np.all(np.isfinite(points)) and np.all(np.isfinite(heading))):
-            raise ValueError("Path.points and Path.heading must be finite (no NaN or inf)")
+            raise ValueError("PlannedPath.points and PlannedPath.heading must be finite (no NaN or inf)")
         norms = np.linalg.norm(sensor_dir, axis=1)
         if np.any(~np.isfinite(norms)) or np.any(norms < 1e-9):
-            raise ValueError("Path.sensor_dir must hold finite non-zero vectors")
+            raise ValueError("PlannedPath.sensor_dir must hold finite non-zero vectors")
         sensor_dir /= norms[:, None]
         for name, value in (("points", points), ("heading", heading),
                             ("sensor_dir", sensor_dir), ("labels", labels)):
@@ -86,11 +86,11 @@ class Path:
         return self  # immutable: frozen, read-only arrays (a Drake source's copies are free)
 
     @classmethod
-    def concatenate(cls, paths: list["Path"]) -> "Path":
+    def concatenate(cls, paths: list["PlannedPath"]) -> "PlannedPath":
         """Joins paths end to start, in order."""
         paths = [p for p in paths if p is not None and len(p) > 0]
         if not paths:
-            raise ValueError("Path.concatenate needs at least one non-empty path")
+            raise ValueError("PlannedPath.concatenate needs at least one non-empty path")
         return cls(np.vstack([p.points for p in paths]),
                    np.concatenate([p.heading for p in paths]),
                    np.vstack([p.sensor_dir for p in paths]),
@@ -121,12 +121,12 @@ class Path:
         return {str(lab): float(seg[self.labels[1:] == lab].sum())
                 for lab in dict.fromkeys(self.labels.tolist())}
 
-    def select(self, mask) -> "Path":
+    def select(self, mask) -> "PlannedPath":
         """The samples where `mask` (booleans, or indices) selects, in order."""
         mask = np.asarray(mask)
-        return Path(self.points[mask], self.heading[mask], self.sensor_dir[mask], self.labels[mask])
+        return PlannedPath(self.points[mask], self.heading[mask], self.sensor_dir[mask], self.labels[mask])
 
-    def resample(self, spacing: float) -> "Path":
+    def resample(self, spacing: float) -> "PlannedPath":
         """Samples every `spacing` metres along the path, keeping every original vertex.
 
         Headings are interpolated on the unit circle, sensor directions linearly then
@@ -148,7 +148,7 @@ class Path:
         degenerate = np.linalg.norm(sensor, axis=1) < 1e-9
         sensor[degenerate] = self.sensor_dir[idx1][degenerate]
         labels = np.where(t == 0, self.labels[idx0], self.labels[idx1])
-        return Path(np.vstack([points, self.points[-1]]), np.append(heading, self.heading[-1]),
+        return PlannedPath(np.vstack([points, self.points[-1]]), np.append(heading, self.heading[-1]),
                     np.vstack([sensor, self.sensor_dir[-1]]), np.append(labels, self.labels[-1]))
 
     def times(self, speed: float, yaw_rate: float = np.radians(15.0)) -> np.ndarray:
@@ -193,7 +193,7 @@ class Path:
         return PiecewisePolynomial.FirstOrderHold(t, samples)
 
     @classmethod
-    def chain_trajectory(cls, paths: list["Path"], speed: float,
+    def chain_trajectory(cls, paths: list["PlannedPath"], speed: float,
                          yaw_rate: float = np.radians(15.0)):
         """One `PiecewisePolynomial` of [x, y, z, yaw] through `paths` in order, from t = 0:
         each path's own trajectory (`to_trajectory`) shifted to where the one before ends,
@@ -232,9 +232,9 @@ class Path:
                 f.write((row * len(block)) % tuple(block.ravel().tolist()))
 
     @classmethod
-    def from_csv(cls, filename) -> "Path":
+    def from_csv(cls, filename) -> "PlannedPath":
         """Reads a file written by `to_csv`; names the file and row of any malformed entry."""
-        filename = FilePath(filename)
+        filename = Path(filename)
         if not filename.is_file():
             raise FileNotFoundError(f"path CSV not found: {filename}")
         with open(filename, newline="") as f:

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -44,7 +44,7 @@ from drake_auv.output_files import open_replacing
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.metrics import evaluate_path, surface_area_weights
 from drake_auv.planning.missions import ALTITUDE_LABELS, Waypoints, mission_waypoints
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 
 MAV_CMD_NAV_WAYPOINT = 16
 MAV_CMD_DO_CHANGE_SPEED = 178
@@ -126,8 +126,8 @@ def _items(n_waypoints: int) -> int:
     return n_waypoints + 2
 
 
-def _flown_path(path: Path, wp: Waypoints, surface, spacing: float) -> Path:
-    """The replayed flight as a `Path`, each sample taking the sensor axis, heading and label of
+def _flown_path(path: PlannedPath, wp: Waypoints, surface, spacing: float) -> PlannedPath:
+    """The replayed flight as a `PlannedPath`, each sample taking the sensor axis, heading and label of
     the path sample at the same fraction of its leg."""
     pos, item = _replay(wp, surface, spacing)
     a = wp.index[np.maximum(item - 1, 0)]
@@ -136,10 +136,10 @@ def _flown_path(path: Path, wp: Waypoints, surface, spacing: float) -> Path:
     leg_len = np.bincount(item)[item]
     frac = (np.arange(len(item)) - leg_start + 1) / leg_len
     src = np.rint(a + np.where(item > 0, frac, 1.0) * (b - a)).astype(int)
-    return Path(pos, path.heading[src], path.sensor_dir[src], path.labels[src])
+    return PlannedPath(pos, path.heading[src], path.sensor_dir[src], path.labels[src])
 
 
-def _coverage(path: Path, plan) -> float:
+def _coverage(path: PlannedPath, plan) -> float:
     """Coverage of the valid cells, as `metrics.evaluate_plan` computes the total's."""
     p, s = plan.parameters, plan.surface
     m = evaluate_path(path, s, p["aperture_deg"], p["sensor_range"], p["omega"],
@@ -202,7 +202,7 @@ def budget_mission(plan, max_items: int = DEFAULT_MAX_ITEMS,
     # Lane samples held at the minimum depth (less than Omega above the seabed) are flown in
     # frame 3: following the seabed there would take the vehicle above that depth.
     ceiling = (pts[:, 2] >= -min_depth - 1e-9) & (altitude < omega - 1e-6)
-    path = Path(pts, path.heading, path.sensor_dir,
+    path = PlannedPath(pts, path.heading, path.sensor_dir,
                 np.where(ceiling, "depth limited", path.labels).astype(object))
     full = Waypoints(np.arange(len(path)), pts, altitude, path.heading, path.labels,
                      np.isin(path.labels.astype(str), list(labels)))
@@ -287,7 +287,7 @@ def qgc_plan(wp: Waypoints, geo: GeoFrame, speed: float = 0.5, acceptance_radius
 
 def write_qgc(plan, geo: GeoFrame, outdir, max_items: int = DEFAULT_MAX_ITEMS,
               frames: str = "terrain", speed: float = 0.5,
-              acceptance_radius: float = 1.0) -> tuple[list[FilePath], dict]:
+              acceptance_radius: float = 1.0) -> tuple[list[Path], dict]:
     """Writes the plan's ArduSub mission into `outdir`: mission.plan, or mission_1.plan,
     mission_2.plan, ... when it needs more than `max_items` items per file.
 
@@ -297,7 +297,7 @@ def write_qgc(plan, geo: GeoFrame, outdir, max_items: int = DEFAULT_MAX_ITEMS,
     replay gives), clearance (`clearance_report` of that flight)."""
     mission = budget_mission(plan, max_items, frames)
     zones = [geo.to_lonlat(ring) for ring in plan.parameters.get("no_go_rings", [])]
-    outdir = FilePath(outdir)
+    outdir = Path(outdir)
     n = len(mission.parts)
     files = [outdir / ("mission.plan" if n == 1 else f"mission_{k + 1}.plan") for k in range(n)]
     counts = []
@@ -339,7 +339,7 @@ def read_qgc_plan(filename) -> VehicleMission:
     file and the item."""
     source = str(filename)
     try:
-        text = FilePath(filename).read_text()
+        text = Path(filename).read_text()
     except FileNotFoundError:
         raise FileNotFoundError(f"{source}: no such QGroundControl plan file") from None
     except (OSError, UnicodeDecodeError) as e:

@@ -1,4 +1,4 @@
-"""Assembling a `Path` from coverage pieces: terrain-following legs, transits, clearance,
+"""Assembling a `PlannedPath` from coverage pieces: terrain-following legs, transits, clearance,
 the water column.
 
 A transit is the straight line between two pieces, lifted where needed to at least Omega above
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.polyline import arc_length, densify, motion_heading
 from drake_auv.planning.surface import TerrainSurface
 
@@ -21,7 +21,7 @@ DOWN = np.array([0.0, 0.0, -1.0])
 
 
 class RouteBuilder:
-    """Accumulates labelled pieces in order, then builds one `Path`."""
+    """Accumulates labelled pieces in order, then builds one `PlannedPath`."""
 
     def __init__(self, surface: TerrainSurface, omega: float, sample_spacing: float,
                  ceiling: float = 0.0, nogo=None):
@@ -108,7 +108,7 @@ class RouteBuilder:
         self._append(line, np.tile(DOWN, (len(line), 1)), "transit", np.full(len(line), np.nan))
         return True
 
-    def build(self, enforce_clearance: bool = True) -> Path:
+    def build(self, enforce_clearance: bool = True) -> PlannedPath:
         """The assembled path; every sample at least Omega from the terrain if asked, and
         none above `ceiling` (the minimum operating depth, world z, m), which wins where the
         two conflict (water shallower than Omega plus the minimum depth). Consumes the
@@ -129,4 +129,4 @@ class RouteBuilder:
             points = self.surface.enforce_clearance(points, self.omega, copy=False)
         points[:, 2] = np.minimum(points[:, 2], self.ceiling)
         heading = np.where(np.isnan(facing), motion_heading(points), facing)
-        return Path.adopt(points, heading, sensor, labels)
+        return PlannedPath.adopt(points, heading, sensor, labels)

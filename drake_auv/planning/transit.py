@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.polyline import densify, motion_heading
 
 # A transit segment whose horizontal length is at most this share of its length (steeper than
@@ -24,8 +24,8 @@ STEEP = 0.2
 
 
 def transit(start, end, start_yaw: float, end_yaw: float | None = None, terrain=None,
-            clearance: float = 3.0, min_depth: float = 1.0, spacing: float = 1.0) -> Path:
-    """The transit `Path` (labelled "transit", sensor down) from `start` to `end` (3,).
+            clearance: float = 3.0, min_depth: float = 1.0, spacing: float = 1.0) -> PlannedPath:
+    """The transit `PlannedPath` (labelled "transit", sensor down) from `start` to `end` (3,).
 
     Args:
         start_yaw: heading at the start, rad; end_yaw: at the end (None: along the motion).
@@ -52,4 +52,4 @@ def transit(start, end, start_yaw: float, end_yaw: float | None = None, terrain=
     heading[0] = start_yaw
     if end_yaw is not None:
         heading[-1] = end_yaw
-    return Path(points, heading, (0.0, 0.0, -1.0), "transit")
+    return PlannedPath(points, heading, (0.0, 0.0, -1.0), "transit")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import importlib
 import itertools
 from dataclasses import dataclass
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -200,7 +200,7 @@ def read_ply(filename) -> PointCloud:
     `x y z` are required; `origin_*`, `time` and `source` are read when present (NaN origins
     and times, source 0 otherwise). The header's vertex count is checked against the file's
     size before anything is allocated."""
-    path = FilePath(filename)
+    path = Path(filename)
     if not path.is_file():
         raise FileNotFoundError(f"point cloud {path} does not exist")
     with open(path, "rb") as f:
@@ -289,7 +289,7 @@ def write_las(cloud: PointCloud, filename, scale: float = 1e-3) -> None:
 def read_las(filename) -> PointCloud:
     """Reads a LAS/LAZ file written by `write_las` (or any LAS: origins NaN when absent)."""
     laspy = _laspy()
-    path = FilePath(filename)
+    path = Path(filename)
     if not path.is_file():
         raise FileNotFoundError(f"point cloud {path} does not exist")
     try:
@@ -308,7 +308,7 @@ def read_las(filename) -> PointCloud:
 
 def read_point_cloud(filename) -> PointCloud:
     """`read_ply` or `read_las` by the file's extension (.ply, .las, .laz)."""
-    suffix = FilePath(filename).suffix.lower()
+    suffix = Path(filename).suffix.lower()
     if suffix in (".las", ".laz"):
         return read_las(filename)
     if suffix == ".ply":
@@ -319,7 +319,7 @@ def read_point_cloud(filename) -> PointCloud:
 
 def write_point_cloud(cloud: PointCloud, filename) -> None:
     """`write_ply` or `write_las` by the file's extension (.ply, .las, .laz)."""
-    suffix = FilePath(filename).suffix.lower()
+    suffix = Path(filename).suffix.lower()
     if suffix in (".las", ".laz"):
         write_las(cloud, filename)
     elif suffix == ".ply":

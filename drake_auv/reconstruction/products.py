@@ -18,7 +18,7 @@ Drake. The returns are read from the log's file a chunk at a time (`write_points
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -119,7 +119,7 @@ def write_products(result, outdir, dpi: int = 110, surface: bool = True,
     `progress`: the run's display, one step for the points and (with `surface`)
     `len(SURFACE_STAGES) + 1` for the reconstruction."""
     progress = progress if progress is not None else RunProgress.off()
-    out = FilePath(outdir)
+    out = Path(outdir)
     with progress.step("points.ply"):
         write_points(result, out / "points.ply")
     if not surface:
@@ -133,7 +133,7 @@ def write_products(result, outdir, dpi: int = 110, surface: bool = True,
     return section
 
 
-def _write_surface(result, out: FilePath, dpi: int, stage) -> dict:
+def _write_surface(result, out: Path, dpi: int, stage) -> dict:
     """The reconstruction part of `write_products` (`stage`: `mission_surface`'s)."""
     from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
 
@@ -204,7 +204,7 @@ def draw_products(scene, result, outdir, max_faces: int = 30_000) -> None:
     from drake_auv.reconstruction.figures import decimated
     from drake_auv.visualization.legend import LegendEntry, swatch
 
-    filename = FilePath(outdir) / "reconstruction.ply"
+    filename = Path(outdir) / "reconstruction.ply"
     if not filename.is_file():
         return
     mesh = trimesh.load(filename, process=False)

@@ -10,7 +10,7 @@ evaluates. The plan also carries the offsets at its tube's nodes, which the next
 where the map left them as they were (`SectionPlan.tube`). After the last waypoint it holds
 the end of the last plan and reports the leg finished.
 
-The nominal plan is an input (`nominal`, a `Path` from a source system), the map another
+The nominal plan is an input (`nominal`, a `PlannedPath` from a source system), the map another
 (`map`, the mapper's `OnlineMap`). State, all in the Context: the plan and its trajectory
 (abstract, replaced at every step, never modified), the progress (`progress` group:
 `signals.ReplannerProgress`) and the record of the last step (`last_step` group:
@@ -18,7 +18,7 @@ The nominal plan is an input (`nominal`, a `Path` from a source system), the map
 
 A `Behaviour` (`drake_auv.behaviour`). Ports (views in `drake_auv.signals`): inputs
 `estimated_state` (`VehicleState`), `leg` (`LegSignal`), `map` (`OnlineMap`), `nominal`
-(`Path`); outputs `reference` (`Reference`, world), `status` (`BehaviourStatus`, the leg last
+(`PlannedPath`); outputs `reference` (`Reference`, world), `status` (`BehaviourStatus`, the leg last
 flown, -1 before any; finished once every waypoint is visited; progress the next waypoint), `step`
 (`ReplanningStep`) and `section` ((N, 3) the last optimised section's trajectory, navigation
 frame, m; (0, 3) before any: for a viewer).
@@ -35,7 +35,7 @@ from pydrake.trajectories import PiecewisePolynomial
 
 from drake_auv.behaviour import Behaviour
 from drake_auv.mapping.mapper import OnlineMap
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.polyline import arc_length, motion_heading
 from drake_auv.random_streams import stream
 from drake_auv.replanning.section import (OPTIMIZERS, ReplanningParameters, SectionPlan,
@@ -54,8 +54,8 @@ class _Plan:
     trajectory: PiecewisePolynomial | None = None
 
 
-def _placeholder_path() -> Path:
-    return Path(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))
+def _placeholder_path() -> PlannedPath:
+    return PlannedPath(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))
 
 
 class Replanner(Behaviour):
@@ -189,7 +189,7 @@ class Replanner(Behaviour):
             facing = plan.facing - self.sensor_azimuth
             heading = np.where(np.isfinite(facing), facing, heading)
         heading = yaw + np.angle(np.exp(1j * (heading - yaw)))  # nearest turn first
-        path = Path(pts, heading, np.column_stack([np.cos(heading), np.sin(heading),
+        path = PlannedPath(pts, heading, np.column_stack([np.cos(heading), np.sin(heading),
                                                    np.zeros(len(pts))]))
         trajectory = path.to_trajectory(self.speed, yaw_rate=self.yaw_rate)
         trajectory.shiftRight(t)

@@ -22,7 +22,7 @@ echo, any other is dropped (REP 117).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path as FilePath
+from pathlib import Path
 from typing import Iterator
 
 import numpy as np
@@ -105,7 +105,7 @@ class LogIndex:
     topic, frame(s), message type and count, the log's `metadata` (MCAP only) and its
     `max_ranges` ({source: m})."""
 
-    path: FilePath
+    path: Path
     world: str
     base: str
     track: Track
@@ -150,7 +150,7 @@ def _reader_errors():
             IndexError, AssertionError, OSError, ValueError)
 
 
-def _open(path: FilePath):
+def _open(path: Path):
     from rosbags.highlevel import AnyReader
 
     if not path.exists():
@@ -165,7 +165,7 @@ def _open(path: FilePath):
     return reader
 
 
-def _mcap_metadata(path: FilePath) -> dict:
+def _mcap_metadata(path: Path) -> dict:
     """The MCAP file's metadata records ({name: {key: value}}), {} for other logs."""
     if not (path.is_file() and path.suffix == ".mcap"):
         return {}
@@ -183,7 +183,7 @@ def open_log(path, topics: dict | None = None, given=(), base_frame: str = "base
     """Reads and checks the log at `path` (module doc); `topics` as `DEFAULT_TOPICS` (those
     in `given` must be present; of the others, the present ones are used). `max_range`: the
     sonars' range, m (default: the log's metadata, the LaserScan's range_max, else 20)."""
-    path = FilePath(path)
+    path = Path(path)
     topics = dict(DEFAULT_TOPICS if topics is None else topics)
     reader = _open(path)
     try:

@@ -266,7 +266,7 @@ def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supe
     the `estimated` state and `reference` ports, the `supervisor`, `sonars` ({name: a
     `RangeSonar` or the DVL, for its mount and period}) with their `returns` ports,
     `coverage` ({name: a `CoverageRecorder`}), the `site`'s world and target, the nominal
-    `plan` (a `Path`), the `mapper`, the `replanner` and the `ocean` when there are."""
+    `plan` (a `PlannedPath`), the `mapper`, the `replanner` and the `ocean` when there are."""
     recorder = builder.AddNamedSystem("mcap_recorder", McapRecorder(
         log, {name: _mount_and_period(sonar) for name, sonar in sonars.items()},
         coverage=tuple(coverage), world=site.world, target=site.target_mesh,

@@ -14,7 +14,7 @@ has none, as a vehicle's own log).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -109,7 +109,7 @@ def write_replay_outputs(index: LogIndex, replayed: Replayed, settings: dict, ou
     scored with a target) and report.json / report.md into `outdir`; returns the summary."""
     from drake_auv.reconstruction.products import write_points, write_products
 
-    out = FilePath(outdir)
+    out = Path(outdir)
     summary = dict(log=log_summary(index), map=map_summary(replayed, settings))
     if replayed.site.target_mesh is not None:
         summary["reconstruction"] = write_products(replayed, out, dpi)
@@ -128,7 +128,7 @@ def write_replay_outputs(index: LogIndex, replayed: Replayed, settings: dict, ou
     return summary
 
 
-def unscored_surface(replayed: Replayed, out: FilePath) -> dict:
+def unscored_surface(replayed: Replayed, out: Path) -> dict:
     """Without a target: the surface of every return (site coordinates), not scored."""
     from drake_auv.reconstruction.products import MIN_POINTS, THIN_VOXEL, dive_cloud
     from drake_auv.reconstruction.surface import open3d_error, reconstruct

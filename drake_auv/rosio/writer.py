@@ -23,7 +23,7 @@ import contextlib
 import struct
 import zlib
 from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import lz4.frame
 import numpy as np
@@ -67,7 +67,7 @@ class McapLog:
         if compression not in COMPRESSIONS:
             raise ValueError(f"MCAP compression must be one of {', '.join(COMPRESSIONS)}, "
                              f"got {compression!r}")
-        self.filename = FilePath(filename)
+        self.filename = Path(filename)
         self._compression = "" if compression == "none" else compression
         self._compress = COMPRESSIONS[compression]
         self._files = contextlib.ExitStack()

@@ -14,7 +14,7 @@ WGS 84 longitude/latitude; any other CRS-less grid is taken to be in metres.
 from __future__ import annotations
 
 import zipfile
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -35,7 +35,7 @@ def read_bathymetry(path) -> Bathymetry:
     No-data cells (the file's nodata value, a mask, or NaN) become NaN, which planners treat
     as no-go. Raises FileNotFoundError for a missing file and ValueError for an unreadable one.
     """
-    path = FilePath(path)
+    path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"bathymetry file not found: {path}")
     if path.suffix.lower() == ".npz":
@@ -43,7 +43,7 @@ def read_bathymetry(path) -> Bathymetry:
     return _read_raster(path)
 
 
-def _read_npz(path: FilePath) -> Bathymetry:
+def _read_npz(path: Path) -> Bathymetry:
     try:
         with np.load(path, allow_pickle=False) as data:
             keys = set(data.keys())
@@ -88,7 +88,7 @@ def _degree_axes(tags: dict) -> bool:
 _ELEVATION_NAMES = ("z", "elevation", "band1", "height", "topo", "bathymetry")
 
 
-def _elevation_subdataset(path: FilePath, subdatasets: list[str]) -> str:
+def _elevation_subdataset(path: Path, subdatasets: list[str]) -> str:
     """The elevation variable of a multi-variable container (netCDF, HDF5)."""
     by_name = {sd.rsplit(":", 1)[-1].lower(): sd for sd in subdatasets}
     for name in _ELEVATION_NAMES:
@@ -101,7 +101,7 @@ def _elevation_subdataset(path: FilePath, subdatasets: list[str]) -> str:
                      f"elevation {list(_ELEVATION_NAMES)}")
 
 
-def _read_raster(path: FilePath) -> Bathymetry:
+def _read_raster(path: Path) -> Bathymetry:
     import warnings
 
     import rasterio

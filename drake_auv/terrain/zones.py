@@ -8,7 +8,7 @@ grid's). `zones_to_world` takes such a geometry to the grid's world frame (groun
 
 from __future__ import annotations
 
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 
@@ -26,7 +26,7 @@ def read_zones(filename, bathy: Bathymetry, what: str = "no-go zone"):
     import shapely
     from pyproj import CRS, Transformer
 
-    filename = FilePath(filename)
+    filename = Path(filename)
     if not filename.is_file():
         raise FileNotFoundError(f"{what} file not found: {filename}")
     try:

@@ -20,7 +20,7 @@ from pydrake.systems.primitives import (ConstantVectorSource, LogVectorOutput, T
 
 from drake_auv.vehicle.control import TrackingGains
 from drake_auv.vehicle.navigation import NavigationParams
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.vehicle.dynamics import Girona500Dynamics
 from drake_auv.vehicle.navigation_system import Navigation
 from drake_auv.vehicle.thrusters import ThrusterAllocation
@@ -78,7 +78,7 @@ class TrackingHandles:
     visualizer: object = None
 
 
-def build_tracking_diagram(path: Path, speed: float = 0.5, params: Girona500Params | None = None,
+def build_tracking_diagram(path: PlannedPath, speed: float = 0.5, params: Girona500Params | None = None,
                            navigation: NavigationParams | None = None, initial_state=None,
                            gains: TrackingGains | None = None, time_step: float = 0.05,
                            log_period: float = 0.1, scene=None, current=None):

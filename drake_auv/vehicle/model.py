@@ -27,12 +27,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 import yaml
 
-DEFAULT_MODEL = FilePath(__file__).resolve().parents[2] / "models" / "girona500.yaml"
+DEFAULT_MODEL = Path(__file__).resolve().parents[2] / "models" / "girona500.yaml"
 THRUSTER_NAMES = ("surge_port", "surge_starboard", "heave_bow", "heave_stern", "sway")
 FRD_TO_FLU = np.diag([1.0, -1.0, -1.0])  # the same matrix takes FLU back to FRD
 WRENCH_ROWS = (0, 1, 2, 5)  # surge X, sway Y, heave Z, yaw N rows of a 6-DOF wrench
@@ -171,7 +171,7 @@ def load_girona500(filename=None) -> Girona500Params:
     Raises FileNotFoundError for a missing file and ValueError naming the field for a
     malformed file, a missing field or a value out of its range.
     """
-    filename = FilePath(filename) if filename is not None else DEFAULT_MODEL
+    filename = Path(filename) if filename is not None else DEFAULT_MODEL
     if not filename.is_file():
         raise FileNotFoundError(f"vehicle model file not found: {filename}")
     try:

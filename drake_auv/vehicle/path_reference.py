@@ -4,13 +4,13 @@ Two kinds of legs: `goto` (a transit from wherever the vehicle is when the leg b
 target pose, above the terrain and below the surface: `drake_auv.planning.transit`) and
 `nominal` (the `nominal` input's path, the off-line plan, flown at the survey speed after a
 transit to its first sample). At the first update of a leg (every `period` s) the transit and
-the plan become one `PiecewisePolynomial` of [x, y, z, yaw] (`Path.chain_trajectory`: each
+the plan become one `PiecewisePolynomial` of [x, y, z, yaw] (`PlannedPath.chain_trajectory`: each
 piece's first-order hold, shifted after the one before and concatenated in time), shifted to
 the leg's start (`shiftRight`) and held in abstract state; the `reference` output is Drake's
 value and first derivative of it (past its end: its end value, zero rates).
 
 A `Behaviour` (`drake_auv.behaviour`). Ports: inputs `estimated_state` (12), `leg` (2),
-`nominal` (`Path`, only for `nominal` legs); outputs `reference` (8, world) and `status`
+`nominal` (`PlannedPath`, only for `nominal` legs); outputs `reference` (8, world) and `status`
 (`BehaviourStatus`: the leg of the path held, -1 before any; finished once its end time has
 passed; progress the share of its duration flown, 0 to 1).
 """
@@ -21,7 +21,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 
 from drake_auv.behaviour import Behaviour, TrajectoryHolder
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.transit import transit
 from drake_auv.signals import BehaviourStatus, VehicleState
 from drake_auv.vehicle.path_leg import PathLeg
@@ -50,7 +50,7 @@ class PathReference(Behaviour):
         self.terrain, self.clearance, self.min_depth = terrain, float(clearance), float(min_depth)
         self.yaw_rate = float(yaw_rate)
         self.nominal_input = self.DeclareAbstractInputPort(
-            "nominal", AbstractValue.Make(Path(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))))
+            "nominal", AbstractValue.Make(PlannedPath(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))))
         self._timed_index = self.DeclareTrajectoryState()
         self._flown = self.DeclareDiscreteState(np.array([-1.0, 0.0]))  # leg, end time
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_path)
@@ -60,7 +60,7 @@ class PathReference(Behaviour):
             self.discrete_state_ticket(self._flown), self.abstract_state_ticket(self._timed_index),
             self.time_ticket()})
 
-    def paths_for(self, leg: PathLeg, x: np.ndarray, nominal: Path | None) -> list[Path]:
+    def paths_for(self, leg: PathLeg, x: np.ndarray, nominal: PlannedPath | None) -> list[PlannedPath]:
         """The paths `leg` flies in order from the estimated state `x` (12): the transit, and
         for a nominal leg the plan after it."""
         end = np.asarray(leg.target if leg.kind == "goto" else nominal.points[0], dtype=float)
@@ -76,7 +76,7 @@ class PathReference(Behaviour):
         if spec is None or context.get_discrete_state(self._flown)[0] == leg:
             return  # not ours, or already timed
         nominal = self.nominal_input.Eval(context) if spec.kind == "nominal" else None
-        trajectory = Path.chain_trajectory(
+        trajectory = PlannedPath.chain_trajectory(
             self.paths_for(spec, self.state_input.Eval(context), nominal), spec.speed,
             self.yaw_rate)
         trajectory.shiftRight(context.get_time())

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import logging
 import math
-from pathlib import Path as FilePath
+from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import Box, Capsule, Meshcat, MeshcatParams, Rgba
@@ -21,7 +21,7 @@ from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.framework import LeafSystem
 
 from drake_auv.output_files import write_text
-from drake_auv.planning.path import Path
+from drake_auv.planning.path import PlannedPath
 from drake_auv.signals import VehicleState
 from drake_auv.visualization.legend import LegendEntry, css_colour, overlay_html, with_overlay
 
@@ -170,8 +170,8 @@ class Scene:
         return path
 
     def add_path(self, name: str, path, rgba=PATH_RGBA, line_width: float = 2.0) -> str:
-        """Draws a `Path` (or an (N, 3) array of points) as a polyline at `name`."""
-        points = path.points if isinstance(path, Path) else np.asarray(path, dtype=float)
+        """Draws a `PlannedPath` (or an (N, 3) array of points) as a polyline at `name`."""
+        points = path.points if isinstance(path, PlannedPath) else np.asarray(path, dtype=float)
         if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
             raise ValueError(f"add_path({name!r}): need (N >= 2, 3) points, got {points.shape}")
         scene_path = self.path_of(name)
@@ -204,7 +204,7 @@ class Scene:
         `time_offset` to the phase's start so the phases play one after the other."""
         return (self.time_offset + sim_time) / self.playback_speed
 
-    def write_html(self, filename) -> FilePath:
+    def write_html(self, filename) -> Path:
         """Publishes the recording (if any) and writes the scene as one standalone HTML file
         with the legend of the layers drawn and, with a recording, the mission clock; frames
         the camera on the scene first unless `frame_camera` was called."""
@@ -219,7 +219,7 @@ class Scene:
                    if entry.layer is None or self.meshcat.HasPath(entry.layer)]
         overlay = overlay_html(entries, self.playback_speed if recorded else None,
                                self.clock_legs)
-        filename = FilePath(filename)
+        filename = Path(filename)
         filename.parent.mkdir(parents=True, exist_ok=True)
         write_text(filename, with_overlay(self.meshcat.StaticHtml(), overlay))
         return filename
