@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -306,14 +307,27 @@ def _output_under_a_file(*argv):
 
 
 def output_in_a_read_only_folder(tmp_path):
+    """A folder without write permission; for root, who writes through permissions, a folder
+    of Linux's read-only sysfs."""
     locked = tmp_path / "locked"
     locked.mkdir()
     locked.chmod(0o555)
     if os.access(locked, os.W_OK):
-        pytest.skip("this user writes into read-only folders (root)")
+        locked = Path("/sys/class")
+        if not locked.is_dir() or os.access(locked, os.W_OK) and not _sysfs_refuses(locked):
+            pytest.skip("no folder this user cannot write into")
     grid = tmp_path / "g.npz"
     np.savez(grid, z=_slope_grid(), spacing=[1.0, 1.0])
-    return ["plan", grid, "-o", locked / "o"], ["locked"]
+    return ["plan", grid, "-o", locked / "o"], [str(locked)]
+
+
+def _sysfs_refuses(folder: Path) -> bool:
+    try:
+        (folder / "drake_auv_probe").mkdir()
+    except OSError:
+        return True
+    (folder / "drake_auv_probe").rmdir()
+    return False
 
 
 # --- the sea ---
@@ -425,7 +439,6 @@ def test_a_refused_campaign_ends_its_process_with_status_2(tmp_path):
     in its own process, guarded by a timeout, ends with status 2 and one line."""
     import subprocess
     import sys
-    from pathlib import Path
 
     root = Path(__file__).resolve().parents[1]
     env = {**os.environ, "PYTHONPATH": f"{root}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
