@@ -33,7 +33,7 @@ import numpy as np
 
 from _reference import machine
 from drake_auv.mission.config import load_mission
-from drake_auv.mission.report import _scored_samples, summarise
+from drake_auv.mission.report.summary import _scored_samples, summarise
 from drake_auv.mission.runner import run_mission
 
 ARMS = ("aware", "blind")

@@ -49,7 +49,7 @@ from _reference import machine, reference_factor  # noqa: E402
 from drake_auv.mapping.mapper import OnlineMap  # noqa: E402
 from drake_auv.mapping.scan_log import ScanLog  # noqa: E402
 from drake_auv.mission.config import BUILTIN_DIR, mission_from_dict  # noqa: E402
-from drake_auv.mission.report import summarise  # noqa: E402
+from drake_auv.mission.report.summary import summarise  # noqa: E402
 from drake_auv.mission.runner import run_mission  # noqa: E402
 from drake_auv.reconstruction.products import write_points  # noqa: E402
 from drake_auv.signals import ReplanningStep  # noqa: E402

@@ -45,7 +45,7 @@ from _reference import machine, print_reference, reference_factor
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.mapping.octree_map import OctreeMap
 from drake_auv.mission.config import load_mission
-from drake_auv.mission.report import _scored_samples, summarise
+from drake_auv.mission.report.summary import _scored_samples, summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.signals import ReplanningStep, VehicleState
 from drake_auv.scenarios import get_scenario

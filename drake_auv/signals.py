@@ -109,6 +109,10 @@ BehaviourStatus = _signal(
     "BehaviourStatus", ("leg", "finished", "progress"),
     "A behaviour's `status` (3, `drake_auv.behaviour`): the leg it last flew (-1 before any), "
     "finished (0/1), its own measure of progress (the behaviour's docstring names it).")
+FlownLeg = _signal(
+    "FlownLeg", ("leg", "end_s"),
+    "`PathReference`'s `flown` group (2): the leg whose path it holds (-1 none yet) and when "
+    "that path ends (s).")
 ReplannerProgress = _signal(
     "ReplannerProgress", ("leg", "next_index", "steps", "finished"),
     "The replanner's `progress` group (4): leg flown (-1 none yet), next waypoint, steps of "

@@ -6,7 +6,7 @@ blocks leave no room to pass), planned on a prior map shifted by up to 5 m (seed
 vehicle carries a port-looking multibeam and a horizontal pencil-beam profiler, both at 20 m
 range. The same mission is flown twice per seed: with the replanner (octree map + STOMP at
 1 Hz) and nominal-only (`steps.1.survey.replanning=false`). Written to `--out`:
-`breakwater_replanning.md` (the table, from each dive's `drake_auv.mission.report.summarise`),
+`breakwater_replanning.md` (the table, from each dive's `drake_auv.mission.report.summary.summarise`),
 `breakwater_replanning.png` (like the reference's Figure 88) and `breakwater_replanning.html`
 (Meshcat recording of the first replanning dive).
 
@@ -26,7 +26,7 @@ from tqdm import tqdm
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.plan import plan_mission
 from drake_auv.mission.recording import finish_recording, prepare_scene
-from drake_auv.mission.report import summarise
+from drake_auv.mission.report.summary import summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.mission.site import load_site
 from drake_auv.signals import VehicleState

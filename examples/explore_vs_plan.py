@@ -28,7 +28,7 @@ from tqdm import tqdm
 from drake_auv.campaign.grid import parse_seeds
 from drake_auv.commands.outputs import output_folder
 from drake_auv.mission.config import load_mission, mission_to_dict
-from drake_auv.mission.report import _rounded, summarise
+from drake_auv.mission.report.summary import rounded, summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 
 PLAN_MISSION = {"boulder_explore": "boulder", "breakwater_explore": "breakwater"}
@@ -54,7 +54,7 @@ def run_or_load(task: tuple) -> dict:
     report = Path(folder) / "report.json"
     if reuse and report.is_file():
         summary = json.loads(report.read_text())
-        if summary.get("config") == json.loads(json.dumps(_rounded(mission_to_dict(spec)))):
+        if summary.get("config") == json.loads(json.dumps(rounded(mission_to_dict(spec)))):
             return summary
     with warnings.catch_warnings():  # empty statistics of a phase are reported as null
         warnings.simplefilter("ignore", RuntimeWarning)

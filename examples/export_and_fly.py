@@ -29,7 +29,8 @@ import yaml  # noqa: E402
 
 from drake_auv.mission.config import load_mission  # noqa: E402
 from drake_auv.mission.plan import plan_mission  # noqa: E402
-from drake_auv.mission.report import summarise, write_outputs as write_report  # noqa: E402
+from drake_auv.mission.report.outputs import write_outputs as write_report  # noqa: E402
+from drake_auv.mission.report.summary import summarise  # noqa: E402
 from drake_auv.mission.runner import run_mission  # noqa: E402
 from drake_auv.mission.site import load_site  # noqa: E402
 from drake_auv.planning.export import write_outputs  # noqa: E402

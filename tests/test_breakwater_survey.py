@@ -9,7 +9,7 @@ import pytest
 
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.plan import plan_mission
-from drake_auv.mission.report import summarise
+from drake_auv.mission.report.summary import summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.mission.site import load_site
 

@@ -10,8 +10,8 @@ from pydrake.trajectories import PiecewisePolynomial
 
 from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.mission.config import load_mission
-from drake_auv.mission.report import (coverage_curve, fig_coverage_vs_time, summarise,
-                                      time_to_coverage)
+from drake_auv.mission.report.figures import fig_coverage_vs_time
+from drake_auv.mission.report.summary import coverage_curve, summarise, time_to_coverage
 from drake_auv.mission.runner import run_mission
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh

@@ -128,7 +128,7 @@ def test_bad_explore_step_exits_2_at_the_command_line(tmp_path, capsys):
 
 
 def test_explore_dive_gains_coverage_without_contact():
-    from drake_auv.mission.report import summarise
+    from drake_auv.mission.report.summary import summarise
     from drake_auv.mission.runner import run_mission
 
     spec = load_mission("boulder_explore", overrides=["limits.max_time_s=60"])

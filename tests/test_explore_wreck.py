@@ -61,7 +61,7 @@ def test_the_wreck_mission_needs_no_prior_and_refuses_a_plan(tmp_path):
 def test_explore_covers_the_wreck_without_contact(tmp_path):
     """The acceptance: >= 80 % multibeam coverage of the wreck, no contact (the mission file
     on the site's files, realistic sonars, drift)."""
-    from drake_auv.mission.report import summarise
+    from drake_auv.mission.report.summary import summarise
     from drake_auv.mission.runner import run_mission
 
     path = example.write_wreck_mission(tmp_path / "site", seed=0)

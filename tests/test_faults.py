@@ -222,7 +222,7 @@ def test_a_current_the_thrusters_cannot_hold_is_a_tracking_fault():
     sections start again from it once a second: the supervisor backs off after two tracking
     windows. In the mission's own sea (0.3 m/s onshore, tide, turbulence, swell) the whole
     dive flies without a response."""
-    from drake_auv.mission.report import summarise
+    from drake_auv.mission.report.summary import summarise
     from drake_auv.mission.runner import run_mission
 
     swept = run_mission(load_mission("breakwater_current", overrides=[
@@ -238,7 +238,7 @@ def test_a_current_the_thrusters_cannot_hold_is_a_tracking_fault():
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no survey samples: null statistics
 def test_a_navigation_jump_in_a_dive_ends_it_with_an_abort():
-    from drake_auv.mission.report import summarise
+    from drake_auv.mission.report.summary import summarise
     from drake_auv.mission.runner import run_mission
 
     spec = load_mission("breakwater", overrides=[

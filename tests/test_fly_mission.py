@@ -11,7 +11,7 @@ import yaml
 from drake_auv.cli import main
 from drake_auv.mission.config import MissionFileError, load_mission
 from drake_auv.mission.plan import plan_mission
-from drake_auv.mission.report import summarise
+from drake_auv.mission.report.summary import summarise
 from drake_auv.mission.runner import run_mission
 from drake_auv.mission.site import load_site
 from drake_auv.planning.export import write_outputs

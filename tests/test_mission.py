@@ -15,7 +15,7 @@ from drake_auv.cli import main
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.diagram import build_mission_diagram
 from drake_auv.mission.legs import Leg
-from drake_auv.mission.report import summarise
+from drake_auv.mission.report.summary import summarise
 from drake_auv.mission.runner import run_mission
 from drake_auv.mission.site import load_site
 from drake_auv.mission.supervisor import MissionSupervisor
@@ -225,7 +225,7 @@ def test_a_dive_stopped_before_its_survey_still_reports(tmp_path):
     summary = summarise(result)
     assert summary["distance_to_target"]["mean_m"] is None
     assert not summary["mission"]["completed"] and summary["phases"][0]["name"] == "transit"
-    from drake_auv.mission.report import report_markdown
+    from drake_auv.mission.report.markdown import report_markdown
 
     text = report_markdown(summary)  # what does not apply is left out, not "n/a"
     assert "n/a" not in text and "survey samples" not in text and "viewing angle" not in text

@@ -13,7 +13,7 @@ from scipy.interpolate import RegularGridInterpolator
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.diagram import build_mission_diagram
 from drake_auv.mission.plan import plan_mission
-from drake_auv.mission.report import write_trajectory
+from drake_auv.mission.report.outputs import write_trajectory
 from drake_auv.mission.runner import run_mission
 from drake_auv.mission.site import load_site
 from drake_auv.ocean.clock import format_utc, parse_utc

@@ -240,7 +240,7 @@ def test_reconstruct_command_scores_against_a_target(tmp_path, sphere_scan, caps
 
 def test_mission_writes_its_points(tmp_path):
     from drake_auv.mission.config import load_mission
-    from drake_auv.mission.report import write_outputs
+    from drake_auv.mission.report.outputs import write_outputs
     from drake_auv.mission.runner import run_mission
 
     # 45 s: the transit and the start of the survey (the report needs survey samples).

@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 from drake_auv.cli import main
 from drake_auv.mission.config import load_mission
-from drake_auv.mission.report import write_trajectory
+from drake_auv.mission.report.outputs import write_trajectory
 from drake_auv.mission.runner import run_mission
 from drake_auv.mission.site import load_site
 from drake_auv.reconstruction.pointcloud import read_ply

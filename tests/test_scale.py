@@ -163,7 +163,7 @@ def test_the_long_monterey_mission_flies_at_survey_scale(tmp_path, monkeypatch):
     keeps only the window of batches in memory and streams its points (figures: the
     benchmark, docs/benchmarks.md)."""
     from drake_auv.mission.config import load_mission
-    from drake_auv.mission.report import summarise
+    from drake_auv.mission.report.summary import summarise
     from drake_auv.mission.runner import run_mission
     from drake_auv.reconstruction.products import write_points
 

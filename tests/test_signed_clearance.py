@@ -17,7 +17,7 @@ from drake_auv.geometry.clearance import WorldClearance
 from drake_auv.geometry.distance import mesh_distance
 from drake_auv.mission.config import MissionFileError, load_mission
 from drake_auv.mission.plan import plan_mission
-from drake_auv.mission.report import summarise
+from drake_auv.mission.report.summary import summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.mission.site import load_site
 from drake_auv.planning.geo import GeoFrame

@@ -9,6 +9,7 @@ import pytest
 
 from drake_auv.commands import lawnmower, simulate
 from drake_auv.planning import PlannedPath
+from drake_auv.vehicle.flight import fly_path
 
 
 def parse(module, argv):
@@ -52,7 +53,7 @@ def test_simulate_flies_a_path_csv(tmp_path):
 def test_bad_inputs_are_named(tmp_path):
     path = PlannedPath(np.array([[0.0, 0, -5], [5, 0, -5]]), 0.0, (0.0, 0.0, -1.0))
     with pytest.raises(ValueError, match="speed"):
-        simulate.fly_path(path, tmp_path, speed=3.0, progress=False)
+        fly_path(path, tmp_path, speed=3.0, progress=False)
     with pytest.raises(FileNotFoundError):
         args = parse(simulate, ["simulate", str(tmp_path / "missing.csv"), "--no-html"])
         args.func(args)
@@ -75,4 +76,4 @@ def test_first_turn_index_finds_the_end_of_the_first_lane():
 def test_realtime_rate_validated(tmp_path):
     path = PlannedPath(np.array([[0.0, 0, -5], [5, 0, -5]]), 0.0, (0.0, 0.0, -1.0))
     with pytest.raises(ValueError, match="realtime_rate"):
-        simulate.fly_path(path, tmp_path, realtime_rate=-1.0, progress=False)
+        fly_path(path, tmp_path, realtime_rate=-1.0, progress=False)

@@ -51,7 +51,7 @@ def run_task(mission: dict, row=metrics_row) -> dict:
     start = time.perf_counter()
     try:
         from drake_auv.mission.config import mission_from_dict
-        from drake_auv.mission.report import summarise
+        from drake_auv.mission.report.summary import summarise
         from drake_auv.mission.runner import run_mission
 
         spec = mission_from_dict(mission, "/", label=str(mission.get("name", "mission")))

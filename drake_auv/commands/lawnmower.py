@@ -48,9 +48,10 @@ def run(args) -> int:
     from pathlib import Path
 
     from drake_auv.commands.outputs import MiB, output_folder
-    from drake_auv.commands.simulate import fly_path, report
+    from drake_auv.commands.simulate import draw_path, report
     from drake_auv.planning.lawnmower import lane_spacing, plan_lawnmower
     from drake_auv.terrain.synthetic import random_seabed
+    from drake_auv.vehicle.flight import fly_path
     from drake_auv.visualization import Scene
 
     width, length = args.extent
@@ -71,6 +72,7 @@ def run(args) -> int:
     if not args.no_html:
         scene = Scene()
         scene.add_terrain(seabed)
+        draw_path(scene, path)
     print(f"lawnmower over a {width:g} m x {length:g} m random seabed (seed {args.seed}): "
           f"lanes {spacing:.2f} m apart, {args.altitude:g} m above the seabed; "
           f"{path.length:.0f} m at {args.speed:g} m/s")

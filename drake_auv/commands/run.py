@@ -111,7 +111,7 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
         _note_missing_reconstruction()
     from drake_auv.mission.plan import plan_mission
     from drake_auv.mission.recording import finish_recording, prepare_scene
-    from drake_auv.mission.report import write_outputs
+    from drake_auv.mission.report.outputs import write_outputs
     from drake_auv.mission.runner import run_mission
     from drake_auv.progress import RUN_PHASES, RunProgress
 

@@ -5,7 +5,7 @@ Camera mode: a cone of `aperture_deg` about `axis_body` (default straight down),
 `rate` (frames per second) from the true state; the discrete state is the best viewing angle
 per target face (rad, NaN while unseen) and, in a second group, the time each face was first
 seen (s, NaN while unseen): the coverage-against-time curve of the whole dive follows from that
-one vector after the run (`mission.report.coverage_curve`), nothing stored per step. Outputs: `coverage`, the
+one vector after the run (`mission.report.summary.coverage_curve`), nothing stored per step. Outputs: `coverage`, the
 seen share of the target area, and `face_angles`, the best angles (for colouring the mesh in
 Meshcat).
 The pure work is in `drake_auv.geometry.visibility`.

@@ -47,9 +47,10 @@ class Phase:
     legs: list[int]
 
 
-@dataclass
+@dataclass(frozen=True, kw_only=True)
 class MissionResult:
-    """A flown mission (local frame; `site.to_site` gives the site's coordinates).
+    """A flown mission (local frame; `site.to_site` gives the site's coordinates), built by
+    keyword from the logs and the systems' Contexts after the run.
 
     Attributes:
         spec, site, plan: what was flown, where, and its off-line part.
@@ -257,16 +258,18 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
             vehicle.dynamics.GetMyContextFromRoot(context)).copy()
         current_drift = vehicle.navigation.current_drift_output.Eval(
             vehicle.navigation.GetMyContextFromRoot(context)).copy()
+        supervisor, camera, multibeam = (handles.supervisor, handles.camera_coverage,
+                                         handles.multibeam_coverage)
         return MissionResult(
-            spec, site, plan, times, state, estimated, distance, clearance, leg_at, phases,
-            handles.supervisor.outcomes(handles.supervisor.GetMyContextFromRoot(context)),
-            handles.camera_coverage.best_angles(
-                handles.camera_coverage.GetMyContextFromRoot(context)),
-            handles.multibeam_coverage.best_angles(
-                handles.multibeam_coverage.GetMyContextFromRoot(context)),
-            replanning, handles.mapper.scan_log(mapper_context),
-            handles.mapper.map_output.Eval(mapper_context), completed, profile,
-            logs["reference"].data().T[:len(times)].copy(), wall,
-            annotate_graphviz(diagram, diagram.GetGraphvizString()),
-            diagram, handles, context, responses_from_log(logs["response"]), water, saturation,
-            current_drift)
+            spec=spec, site=site, plan=plan, times=times, state=state, estimated=estimated,
+            distance=distance, clearance=clearance, leg_at=leg_at, phases=phases,
+            outcomes=supervisor.outcomes(supervisor.GetMyContextFromRoot(context)),
+            camera_best=camera.best_angles(camera.GetMyContextFromRoot(context)),
+            multibeam_best=multibeam.best_angles(multibeam.GetMyContextFromRoot(context)),
+            replanning=replanning, scan_log=handles.mapper.scan_log(mapper_context),
+            online_map=handles.mapper.map_output.Eval(mapper_context), completed=completed,
+            profile=profile, reference=logs["reference"].data().T[:len(times)].copy(),
+            wall_s=wall, diagram_dot=annotate_graphviz(diagram, diagram.GetGraphvizString()),
+            diagram=diagram, handles=handles, context=context,
+            responses=responses_from_log(logs["response"]), water=water,
+            thrust_saturation=saturation, current_drift=current_drift)

@@ -6,8 +6,9 @@ target pose, above the terrain and below the surface: `drake_auv.planning.transi
 transit to its first sample). At the first update of a leg (every `period` s) the transit and
 the plan become one `PiecewisePolynomial` of [x, y, z, yaw] (`PlannedPath.chain_trajectory`: each
 piece's first-order hold, shifted after the one before and concatenated in time), shifted to
-the leg's start (`shiftRight`) and held in abstract state; the `reference` output is Drake's
-value and first derivative of it (past its end: its end value, zero rates).
+the leg's start (`shiftRight`) and held in abstract state (its leg and end time in the
+discrete `flown` group, `signals.FlownLeg`); the `reference` output is Drake's value and first
+derivative of it (past its end: its end value, zero rates).
 
 A `Behaviour` (`drake_auv.behaviour`). Ports: inputs `estimated_state` (12), `leg` (2),
 `nominal` (`PlannedPath`, only for `nominal` legs); outputs `reference` (8, world) and `status`
@@ -23,7 +24,7 @@ from pydrake.common.value import AbstractValue
 from drake_auv.behaviour import Behaviour, TrajectoryHolder
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.transit import transit
-from drake_auv.signals import BehaviourStatus, VehicleState
+from drake_auv.signals import BehaviourStatus, FlownLeg, VehicleState
 from drake_auv.vehicle.path_leg import PathLeg
 
 
@@ -52,7 +53,9 @@ class PathReference(Behaviour):
         self.nominal_input = self.DeclareAbstractInputPort(
             "nominal", AbstractValue.Make(PlannedPath(np.zeros((1, 3)), 0.0, (0.0, 0.0, -1.0))))
         self._timed_index = self.DeclareTrajectoryState()
-        self._flown = self.DeclareDiscreteState(np.array([-1.0, 0.0]))  # leg, end time
+        flown = FlownLeg.zeros()
+        flown.leg = -1.0  # none yet
+        self._flown = self.DeclareDiscreteState(flown[:])
         self.DeclareInitializationUnrestrictedUpdateEvent(self._update_path)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update_path)
         self.DeclareReferenceOutput()
@@ -73,7 +76,8 @@ class PathReference(Behaviour):
     def _update_path(self, context, state):
         leg = self.leg(context)
         spec = self.legs.get(leg)
-        if spec is None or context.get_discrete_state(self._flown)[0] == leg:
+        flown = FlownLeg(context.get_discrete_state(self._flown).get_value())
+        if spec is None or flown.leg == leg:
             return  # not ours, or already timed
         nominal = self.nominal_input.Eval(context) if spec.kind == "nominal" else None
         trajectory = PlannedPath.chain_trajectory(
@@ -82,12 +86,14 @@ class PathReference(Behaviour):
         trajectory.shiftRight(context.get_time())
         state.get_mutable_abstract_state(self._timed_index).set_value(
             TrajectoryHolder(trajectory))
-        state.get_mutable_discrete_state(self._flown).set_value([leg, trajectory.end_time()])
+        flown = FlownLeg.zeros()
+        flown.leg, flown.end_s = leg, trajectory.end_time()
+        state.get_mutable_discrete_state(self._flown).set_value(flown[:])
 
     def _status(self, context) -> BehaviourStatus:
-        leg, end = context.get_discrete_state(self._flown).get_value()
-        status, t = BehaviourStatus.zeros(), context.get_time()
-        status.leg = leg
+        flown = FlownLeg(context.get_discrete_state(self._flown).get_value())
+        end, status, t = flown.end_s, BehaviourStatus.zeros(), context.get_time()
+        status.leg = flown.leg
         trajectory = self.held(context).trajectory
         if trajectory is not None:
             start = trajectory.start_time()
