@@ -29,6 +29,7 @@ import time
 import numpy as np
 
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.metrics import evaluate_plan
 from drake_auv.terrain.synthetic import caldera_site
 
@@ -71,7 +72,8 @@ def survey_run(n: int) -> dict:
     del gx, gy, s
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     t0, c0 = time.perf_counter(), time.process_time()
-    plan = plan_coverage(bathy, omega=2.0, baseline=False, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0), baseline=False,
+                         compute_metrics=False)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     return {"n": n, "wall": wall, "cpu": cpu, "ref_wall": ref_wall, "ref": ref,
             "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,

@@ -16,6 +16,7 @@ import argparse
 import time
 
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.export import REFERENCE_TABLE3, table3_markdown, write_outputs
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
 from drake_auv.planning.metrics3d import evaluate_plan_3d, table3d_markdown
@@ -30,8 +31,8 @@ def main() -> None:
 
     bathy = caldera_site(cell=0.5, seed=0)
     t0 = time.perf_counter()
-    plan = plan_coverage(bathy, omega=2.0, aperture_deg=60.0, overlap=0.1, slope_threshold=0.5,
-                         progress=True)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0, aperture_deg=60.0, overlap=0.1,
+                                                   slope_threshold=0.5), progress=True)
     elapsed = time.perf_counter() - t0
     m = plan.metrics
     print(f"Caldera-rim ROI {bathy.extent[1]:.0f} m x {bathy.extent[3]:.0f} m, "

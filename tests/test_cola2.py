@@ -16,6 +16,7 @@ from drake_auv.autopilot.items import localise
 from drake_auv.planning.cola2 import (Cola2Sections, cola2_sections, export_cola2, read_cola2,
                                       write_cola2)
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.missions import mission_waypoints
 from drake_auv.scenarios import DATA_DIR
@@ -27,15 +28,15 @@ MONTEREY = sorted((DATA_DIR / "monterey").glob("*.tif"))
 
 @pytest.fixture(scope="module")
 def caldera():
-    plan = plan_coverage(caldera_site(cell=2.0), omega=3.0, compute_metrics=False,
-                         baseline=False)
+    plan = plan_coverage(caldera_site(cell=2.0), CoverageParameters(omega=3.0),
+                         compute_metrics=False, baseline=False)
     return plan, GeoFrame(plan.bathy, CALDERA_ORIGIN_LONLAT)
 
 
 @pytest.fixture(scope="module")
 def caldera_file(caldera, tmp_path_factory):
     plan, geo = caldera
-    sec = cola2_sections(plan.path, plan.surface, 3.0, plan.parameters["min_depth"])
+    sec = cola2_sections(plan.path, plan.surface, 3.0, plan.parameters.min_depth)
     f = tmp_path_factory.mktemp("cola2") / "mission.xml"
     write_cola2(sec, geo, f)
     return sec, f
@@ -156,8 +157,8 @@ class _FlatSurface:
 def replay_file(f, plan, geo, start, heave_in_3d=False):
     legs = localise(read_cola2(f), geo.from_lonlat, geo.grid_north_azimuth)
     pos, _ = replay_cola2(legs, plan.surface.elevation, start, heave_in_3d=heave_in_3d)
-    return legs, clearance_report(pos, plan.surface, plan.parameters["omega"],
-                                  plan.parameters["min_depth"])
+    return legs, clearance_report(pos, plan.surface, plan.parameters.omega,
+                                  plan.parameters.min_depth)
 
 
 @pytest.fixture(scope="module")
@@ -166,7 +167,8 @@ def monterey_plans():
 
     def get(tile, omega):
         if (tile, omega) not in cache:
-            cache[tile, omega] = plan_coverage(read_bathymetry(tile), omega=omega,
+            cache[tile, omega] = plan_coverage(read_bathymetry(tile),
+                                               CoverageParameters(omega=omega),
                                                compute_metrics=False, baseline=False)
         return cache[tile, omega]
     return get
@@ -179,7 +181,7 @@ def test_monterey_missions_replay_safe(monterey_plans, tmp_path, tile, omega, he
     plan = monterey_plans(tile, omega)
     geo = GeoFrame(plan.bathy)
     f = tmp_path / "mission.xml"
-    out = export_cola2(plan.path, plan.surface, omega, plan.parameters["min_depth"], geo, f,
+    out = export_cola2(plan.path, plan.surface, omega, plan.parameters.min_depth, geo, f,
                        heave_in_3d=heave_in_3d)
     rep = out["replay"]  # the written file, read back and replayed
     assert rep["closer_than_half_omega"] == 0 and rep["min_clearance_over_omega"] >= 0.5
@@ -219,8 +221,8 @@ def test_random_seabeds_replay_safe(tmp_path, seed, top, omega, heave_in_3d):
     # A seabed of 8 m relief whose shallowest point lies `top` below the surface: within a
     # metre of it, the minimum depth (1 m) holds the path and cells above it are no-go.
     base = random_seabed(seed, shape=(40, 50), relief=8.0, smoothness=5.0)
-    plan = plan_coverage(base.with_z(base.z - np.nanmax(base.z) + top), omega=omega,
-                         compute_metrics=False, baseline=False)
+    plan = plan_coverage(base.with_z(base.z - np.nanmax(base.z) + top),
+                         CoverageParameters(omega=omega), compute_metrics=False, baseline=False)
     geo = GeoFrame(plan.bathy, CALDERA_ORIGIN_LONLAT)
     out = export_cola2(plan.path, plan.surface, omega, 1.0, geo, tmp_path / "m.xml",
                        heave_in_3d=heave_in_3d)

@@ -13,6 +13,7 @@ import shapely
 
 from drake_auv.cli import main
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.export import write_outputs
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.missions import douglas_peucker
@@ -126,7 +127,8 @@ def test_douglas_peucker_keeps_corners_and_bounds_the_error():
 
 
 def test_caldera_exports_read_back(tmp_path):
-    plan = plan_coverage(caldera_site(cell=1.0), omega=2.0, compute_metrics=False)
+    plan = plan_coverage(caldera_site(cell=1.0), CoverageParameters(omega=2.0),
+                         compute_metrics=False)
     write_outputs(plan, tmp_path, figures=False, exports=ALL, origin_lonlat=CALDERA_ORIGIN_LONLAT)
     lonlat = check_exports(plan, tmp_path, CALDERA_ORIGIN_LONLAT)
     lon0, lat0 = CALDERA_ORIGIN_LONLAT  # the site is 100 m x 250 m east and north of it
@@ -135,7 +137,8 @@ def test_caldera_exports_read_back(tmp_path):
 
 
 def test_exports_need_a_georeference(tmp_path):
-    plan = plan_coverage(caldera_site(cell=2.0), omega=3.0, compute_metrics=False)
+    plan = plan_coverage(caldera_site(cell=2.0), CoverageParameters(omega=3.0),
+                         compute_metrics=False)
     with pytest.raises(ValueError, match="no CRS"):
         write_outputs(plan, tmp_path, figures=False, exports=("geojson",))
     assert [f.name for f in write_outputs(plan, tmp_path, figures=False)] == [

@@ -11,6 +11,7 @@ import shapely
 
 from drake_auv.planning.cola2 import read_cola2
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.export import ROUTE_TOLERANCE, write_outputs
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.qgc import read_qgc_plan
@@ -22,7 +23,8 @@ WAYPOINT = ["kind", "file", "seq", "item", "heave", "depth", "alt", "yaw_deg"]
 
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory):
-    plan = plan_coverage(caldera_site(cell=2.0), omega=4.0, compute_metrics=False)
+    plan = plan_coverage(caldera_site(cell=2.0), CoverageParameters(omega=4.0),
+                         compute_metrics=False)
     out = tmp_path_factory.mktemp("gj")
     write_outputs(plan, out, figures=False, exports=("cola2", "qgc", "geojson"),
                   origin_lonlat=CALDERA_ORIGIN_LONLAT, metrics_3d=False, max_items=60)

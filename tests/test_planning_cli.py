@@ -128,12 +128,13 @@ def test_plan_figures_read_the_crs_latitude_longitude_and_north(small_tif):
     from pyproj import Transformer
 
     from drake_auv.planning.coverage_plan import plan_coverage
+    from drake_auv.planning.parameters import CoverageParameters
     from drake_auv.planning.figures import fig_slope
     from drake_auv.planning.geo import GeoFrame
     from drake_auv.terrain.readers import read_bathymetry
 
     bathy = read_bathymetry(small_tif)
-    plan = plan_coverage(bathy, omega=2.0, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0), compute_metrics=False)
     geo = GeoFrame(bathy)
     fig = fig_slope(plan, geo)
     fig.savefig(io.BytesIO(), format="png")  # lays the secondary axes out
@@ -168,10 +169,11 @@ def test_plan_figures_read_the_crs_latitude_longitude_and_north(small_tif):
 def test_what_does_not_apply_is_left_out_of_the_report():
     """A gentle slope: no high-slope region, so no row for it, and no "nan" or "n/a"."""
     from drake_auv.planning.coverage_plan import plan_coverage
+    from drake_auv.planning.parameters import CoverageParameters
     from drake_auv.planning.export import report_markdown
 
     x = np.arange(40.0)[None, :] * np.ones((30, 1))
-    plan = plan_coverage(Bathymetry(-20.0 + 0.05 * x, (1.0, 1.0)), omega=2.0)
+    plan = plan_coverage(Bathymetry(-20.0 + 0.05 * x, (1.0, 1.0)), CoverageParameters(omega=2.0))
     assert plan.labels.n_regions == 0 and plan.metrics.high_slope.samples == 0
     text = report_markdown(plan)
     assert "| Planar region |" in text and "| High-slope region |" not in text
@@ -179,8 +181,9 @@ def test_what_does_not_apply_is_left_out_of_the_report():
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--omega", "0"], "omega"), (["--aperture", "190"], "--aperture 190 is out of range; allowed: [5, 170] deg"),
-    (["--slope-threshold", "-1"], "slope_threshold"), (["--roi", "0,0,10,10"], "outside the grid"),
+    (["--omega", "0"], "--omega 0 is out of range; allowed: [0.5, 100] m"),
+    (["--aperture", "190"], "--aperture 190 is out of range; allowed: [5, 170] deg"),
+    (["--slope-threshold", "-1"], "--slope-threshold -1"), (["--roi", "0,0,10,10"], "outside the grid"),
     (["--speed", "0"], "--speed")])
 def test_plan_reports_bad_input(tmp_path, small_tif, capsys, extra, message):
     code = main(["plan", str(small_tif), "--no-figures", "-o", str(tmp_path / "o"), *extra])
@@ -201,8 +204,9 @@ def _npz(tmp_path, name, z):
 
 @pytest.mark.parametrize("case, extra, message", [
     ("dry", [], "minimum operating depth"), ("inf", [], "infinite"),
-    ("ok", ["--omega", "1e9"], "omega (offset to the terrain) must be in (0, "),
-    ("ok", ["--min-depth", "-1"], "min_depth"),
+    ("ok", ["--omega", "1e9"], "--omega 1e+09 is out of range"),
+    ("ok", ["--omega", "60"], "omega (offset to the terrain) must be in (0, 50.0] m"),
+    ("ok", ["--min-depth", "-1"], "--min-depth -1 is out of range; allowed: >= 0 m"),
     ("ok", ["--origin-lonlat", "north"], "--origin-lonlat")])
 def test_bad_grids_and_values_give_one_line(tmp_path, capsys, case, extra, message):
     x = np.arange(40.0)[None, :] * np.ones((30, 1))
@@ -245,6 +249,7 @@ class _RecordingBar:
 
 def test_one_progress_bar_ends_when_the_last_file_is_written(tmp_path):
     from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
+    from drake_auv.planning.parameters import CoverageParameters
     from drake_auv.planning.export import output_stages, write_outputs
 
     yy, xx = np.mgrid[0:40, 0:30] * 1.0
@@ -252,7 +257,7 @@ def test_one_progress_bar_ends_when_the_last_file_is_written(tmp_path):
                        (1000.0, 2000.0), "EPSG:32631")
     out = tmp_path / "out"
     bar = _RecordingBar(out)
-    plan = plan_coverage(bathy, omega=2.0, progress=bar)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0), progress=bar)
     assert [name for name, _ in bar.done] == list(PLAN_STAGES)
     files = write_outputs(plan, out, progress=bar)
     stages = bar.done[len(PLAN_STAGES):]

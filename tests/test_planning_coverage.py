@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.export import path_to_geojson
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.path import PlannedPath
@@ -43,7 +44,7 @@ def check_clearance(plan, omega, n_check=150):
     """Independent check: the samples the planner found closest plus random ones. Samples
     held at the minimum operating depth (water too shallow for Omega) are left out."""
     path = plan.path
-    held = path.points[:, 2] >= -plan.parameters["min_depth"] - 1e-9
+    held = path.points[:, 2] >= -plan.parameters.min_depth - 1e-9
     path = path.select(~held)
     d, _ = plan.surface.distance(path.points)
     assert d.min() >= 0.9 * omega
@@ -58,7 +59,8 @@ def check_clearance(plan, omega, n_check=150):
 
 @pytest.fixture(scope="module")
 def caldera_plan():
-    return plan_coverage(caldera_site(), omega=2.0, aperture_deg=60.0, slope_threshold=0.5)
+    return plan_coverage(caldera_site(), CoverageParameters(omega=2.0, aperture_deg=60.0,
+                                                            slope_threshold=0.5))
 
 
 def test_caldera_reproduces_the_table3_comparison(caldera_plan):
@@ -93,7 +95,7 @@ def test_caldera_path_samples_are_dense_and_oriented(caldera_plan):
     facing = np.arctan2(path.sensor_dir[sl, 1], path.sensor_dir[sl, 0])
     np.testing.assert_allclose(np.angle(np.exp(1j * (path.heading[sl] - facing))), 0, atol=1e-9)
     # Lane spacing from the footprint: 2 * 2 * tan(30 deg) * 0.9 = 2.078 m.
-    assert caldera_plan.parameters["lane_spacing"] == pytest.approx(2.0784609690826525)
+    assert caldera_plan.lane_spacing == pytest.approx(2.0784609690826525)
     # The planar lanes fly at about Omega above the terrain (more where slopes push them out).
     alt = path.points[planar, 2] - caldera_plan.surface.elevation(*path.points[planar, :2].T)
     assert np.median(alt) == pytest.approx(2.0, abs=0.15) and alt.min() >= 2.0 - 1e-6
@@ -103,7 +105,7 @@ def test_polygon_roi_oblique_to_the_lanes():
     # Edges nearly parallel to the sweep rasterise as staircases: their teeth become tiny
     # Morse cells, which get no lanes of their own; coverage must not suffer.
     roi = [(20.0, 5.0), (95.0, 30.0), (80.0, 240.0), (3.0, 200.0)]
-    plan = plan_coverage(caldera_site(), roi=roi, omega=2.0)
+    plan = plan_coverage(caldera_site(), CoverageParameters(omega=2.0), roi=roi)
     m = plan.metrics
     visited = [k for kind, k in plan.visit_order if kind == "cell"]
     assert len(visited) < len(plan.cells.cells)
@@ -115,7 +117,7 @@ def test_polygon_roi_oblique_to_the_lanes():
 
 def test_flat_terrain_gives_a_planar_only_plan():
     bathy = Bathymetry(np.full((81, 61), -30.0), (0.5, 0.5))
-    plan = plan_coverage(bathy, omega=2.0)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0))
     assert plan.labels.n_regions == 0 and "slice" not in set(plan.path.labels)
     assert len(plan.cells.cells) == 1 and plan.metrics.total.coverage >= 0.99
     assert plan.metrics.total.view_mean_deg == pytest.approx(0.0, abs=1e-6)
@@ -124,15 +126,16 @@ def test_flat_terrain_gives_a_planar_only_plan():
 def test_sweep_angle_parameter_sets_the_lane_direction():
     bathy = Bathymetry(np.full((61, 41), -30.0), (0.5, 0.5))
     for angle, axis in ((0.0, 0), (90.0, 1)):
-        plan = plan_coverage(bathy, omega=2.0, sweep_angle_deg=angle, compute_metrics=False)
+        plan = plan_coverage(bathy, CoverageParameters(omega=2.0, sweep_angle_deg=angle),
+                             compute_metrics=False)
         step = np.abs(np.diff(plan.path.points[:, :2], axis=0))
         along = step[:, axis].sum() / step.sum()
         assert along > 0.85, (angle, along)
-        assert plan.parameters["sweep_angle_deg"] == pytest.approx(angle)
+        assert plan.parameters.sweep_angle_deg == pytest.approx(angle)
 
 
 def test_fixed_tilt_sensor_on_the_caldera_rim(caldera_plan):
-    plan = plan_coverage(caldera_site(), omega=2.0, slice_sensor="fixed-tilt")
+    plan = plan_coverage(caldera_site(), CoverageParameters(omega=2.0, slice_sensor="fixed-tilt"))
     sl = plan.path.labels == "slice"
     tilt = np.arcsin(-plan.path.sensor_dir[sl, 2])
     assert np.ptp(tilt) < 1e-9  # one tilt for the region
@@ -148,7 +151,7 @@ def test_fixed_tilt_sensor_on_the_caldera_rim(caldera_plan):
 def test_steep_everywhere_gives_a_slicing_only_plan():
     yy, xx = np.mgrid[0:61, 0:81] * 0.5
     bathy = Bathymetry(-60.0 + 0.8 * xx + 0.1 * yy, (0.5, 0.5))
-    plan = plan_coverage(bathy, omega=2.0)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0))
     assert plan.labels.n_regions == 1 and plan.labels.high.all()
     assert "planar" not in set(plan.path.labels) and len(plan.cells.cells) == 0
     assert plan.metrics.total.coverage >= 0.95
@@ -161,7 +164,8 @@ def test_slice_spacing_override_gives_two_contours_two_metres_apart():
     x = np.arange(0, 80.5, 0.5)
     z1 = np.clip(x - 38.0, 0.0, 4.0) - 40.0
     bathy = Bathymetry(np.tile(z1, (81, 1)), (0.5, 0.5))
-    plan = plan_coverage(bathy, omega=10.0, slice_spacing=2.0, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=10.0, slice_spacing=2.0),
+                         compute_metrics=False)
     levels = sorted({c.level for c in plan.contours})
     assert len(levels) == 2 and levels[1] - levels[0] == pytest.approx(2.0)
 
@@ -172,14 +176,15 @@ def test_slice_count_fixes_the_number_of_contours_centred_on_the_wall():
     z1 = np.clip(x - 34.0, 0.0, 12.0) - 40.0
     bathy = Bathymetry(np.tile(z1, (81, 1)), (0.5, 0.5))
     all_levels = sorted({c.level for c in plan_coverage(
-        bathy, omega=10.0, slice_spacing=2.0, compute_metrics=False).contours})
+        bathy, CoverageParameters(omega=10.0, slice_spacing=2.0), compute_metrics=False).contours})
     two = sorted({c.level for c in plan_coverage(
-        bathy, omega=10.0, slice_spacing=2.0, slice_count=2, compute_metrics=False).contours})
+        bathy, CoverageParameters(omega=10.0, slice_spacing=2.0, slice_count=2),
+        compute_metrics=False).contours})
     assert len(all_levels) >= 5
     assert len(two) == 2 and two[1] - two[0] == pytest.approx(2.0)
     assert np.mean(two) == pytest.approx(np.mean(all_levels), abs=0.5)
     with pytest.raises(ValueError, match="slice_count"):
-        plan_coverage(bathy, omega=10.0, slice_count=0)
+        CoverageParameters(omega=10.0, slice_count=0)
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -193,7 +198,7 @@ def test_random_seabeds_are_covered_safely(seed, relief, smoothness, omega, hole
         z = bathy.z.copy()
         z[i:i + rng.integers(3, 10), j:j + rng.integers(3, 10)] = np.nan
         bathy = Bathymetry(z, bathy.spacing)
-    plan = plan_coverage(bathy, omega=omega)
+    plan = plan_coverage(bathy, CoverageParameters(omega=omega))
     m = plan.metrics
     assert m.total.min_clearance >= 0.9 * omega
     assert m.total.coverage >= 0.95
@@ -203,7 +208,8 @@ def test_random_seabeds_are_covered_safely(seed, relief, smoothness, omega, hole
 @pytest.mark.parametrize("tile", MONTEREY, ids=lambda p: p.name[12:40])
 def test_monterey_tiles(tile):
     bathy = read_bathymetry(tile)
-    plan = plan_coverage(bathy, omega=20.0, aperture_deg=60.0, slope_threshold=0.5)
+    plan = plan_coverage(bathy, CoverageParameters(omega=20.0, aperture_deg=60.0,
+                                                   slope_threshold=0.5))
     assert plan.metrics.total.coverage >= 0.95
     check_clearance(plan, 20.0, n_check=40)
     assert plan.path.points[:, 2].max() <= -1.0 and plan.lawnmower.points[:, 2].max() <= -1.0
@@ -230,16 +236,18 @@ def test_monterey_tiles(tile):
     (dict(aperture_deg=0.0), "aperture_deg"), (dict(aperture_deg=180.0), "aperture_deg"),
     (dict(overlap=1.0), "overlap"), (dict(slope_threshold=0.0), "slope_threshold"),
     (dict(slope_threshold=-0.5), "slope_threshold"), (dict(slice_spacing=0.0), "slice_spacing"),
-    (dict(roi=(1000.0, 1000.0, 1100.0, 1100.0)), "outside the grid"),
     (dict(sweep_angle_deg=np.inf), "sweep_angle_deg"), (dict(slice_sensor="up"), "slice_sensor"),
-    (dict(sensor_range=0.0), "sensor_range"), (dict(sample_spacing=-1.0), "sample_spacing")])
+    (dict(sensor_range=0.0), "sensor_range"), (dict(sample_spacing=-1.0), "sample_spacing"),
+    (dict(order="3"), "order"), (dict(min_depth=-1.0), "min_depth")])
 def test_bad_parameters_are_named(kwargs, match):
-    bathy = random_seabed(0, (20, 20), 1.0, 2.0, 4.0)
-    with pytest.raises(ValueError, match=match):
-        plan_coverage(bathy, **kwargs)
+    with pytest.raises(ValueError, match=f"CoverageParameters.{match} = "):
+        CoverageParameters(**kwargs)
 
 
 def test_bad_grids_and_no_data_roi():
+    with pytest.raises(ValueError, match="outside the grid"):
+        plan_coverage(random_seabed(0, (20, 20), 1.0, 2.0, 4.0),
+                      roi=(1000.0, 1000.0, 1100.0, 1100.0))
     with pytest.raises(ValueError, match="at least 3 x 3"):
         plan_coverage(Bathymetry(np.zeros((2, 10))))
     z = np.full((20, 20), -10.0)
@@ -254,7 +262,7 @@ def test_no_data_holes_are_no_go_for_coverage_but_do_not_break_the_plan():
     bathy = random_seabed(5, (60, 60), 1.0, 3.0, 6.0)
     z = bathy.z.copy()
     z[25:35, 25:35] = np.nan
-    plan = plan_coverage(Bathymetry(z), omega=2.0)
+    plan = plan_coverage(Bathymetry(z), CoverageParameters(omega=2.0))
     assert plan.metrics.total.coverage >= 0.95
     assert len(plan.cells.cells) >= 4  # the hole is an obstacle of the decomposition
     assert np.all(np.isfinite(plan.path.points))

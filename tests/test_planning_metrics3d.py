@@ -6,6 +6,7 @@ import numpy as np
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.geometry.visibility import FaceVisibility
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.metrics3d import evaluate_plan_3d
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
@@ -44,7 +45,7 @@ def test_a_wall_occludes_the_floor_behind_it():
 
 
 def test_plan_and_lawnmower_on_a_walled_block():
-    plan = plan_coverage(_block(), omega=2.0, compute_metrics=False)
+    plan = plan_coverage(_block(), CoverageParameters(omega=2.0), compute_metrics=False)
     m = evaluate_plan_3d(plan)
     assert list(m) == ["high_slope", "high_slope_fixed_tilt", "planar", "total", "lawnmower",
                        "lawnmower_high_slope"]
@@ -56,7 +57,8 @@ def test_plan_and_lawnmower_on_a_walled_block():
 def test_both_sensor_models_on_the_caldera_rim():
     from drake_auv.terrain.synthetic import caldera_site
 
-    plan = plan_coverage(caldera_site(cell=1.0), omega=2.0, compute_metrics=False)
+    plan = plan_coverage(caldera_site(cell=1.0), CoverageParameters(omega=2.0),
+                         compute_metrics=False)
     m = evaluate_plan_3d(plan)
     assert m["high_slope"].view_mean_deg < 1.0  # along the normal: ~0 by construction
     assert 0.5 < m["high_slope_fixed_tilt"].view_mean_deg < 10.0  # the rim's slope spread
@@ -78,7 +80,7 @@ def test_faces_seen_from_their_side_equal_the_cameras_view():
 
 
 def test_sampled_coverage_is_near_the_exact_one_within_its_error():
-    plan = plan_coverage(_block(), omega=2.0, compute_metrics=False)
+    plan = plan_coverage(_block(), CoverageParameters(omega=2.0), compute_metrics=False)
     exact = evaluate_plan_3d(plan)
     sampled = evaluate_plan_3d(plan, max_faces=2000, exact_faces=0)
     for key, m in exact.items():

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from drake_auv.cli import main
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.nogo import NoGo
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.readers import write_geotiff
@@ -34,11 +35,11 @@ def test_no_sample_within_omega_of_random_zones(seed, n, omega):
             shapely.box(0, 0, 80, 30))) for _ in range(n)])
     if zones.is_empty:
         return
-    plan = plan_coverage(bathy, omega=omega, no_go=zones, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=omega), no_go=zones, compute_metrics=False)
     for path in (plan.path, plan.lawnmower):
         d = shapely.distance(zones, shapely.points(path.points[:, :2]))
         assert d.min() >= omega - 0.02 * omega, d.min()
-    assert plan.parameters["unreachable_pieces"] == 0
+    assert plan.unreachable_pieces == 0
 
 
 def test_transits_go_around_a_zone():
@@ -135,7 +136,7 @@ def test_no_go_across_the_middle_of_a_monterey_tile(tmp_path):
                              "geometry": {"type": "Polygon", "coordinates": [band]}}))
     bathy = read_bathymetry(tiles[3])
     zone = read_zones(f, bathy)
-    plan = plan_coverage(bathy, omega=20.0, no_go=zone, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=20.0), no_go=zone, compute_metrics=False)
     world = zones_to_world(zone, bathy)
     for path in (plan.path, plan.lawnmower):
         assert shapely.distance(world, shapely.points(path.points[:, :2])).min() >= 20.0 * 0.98

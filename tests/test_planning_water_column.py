@@ -6,6 +6,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.export import report_dict
 from drake_auv.terrain.synthetic import random_seabed
 
@@ -17,7 +18,8 @@ def test_no_sample_above_the_minimum_depth(seed, top, min_depth, omega):
     # A seabed of 8 m relief whose shallowest point is at `top` (it may break the surface).
     base = random_seabed(seed, shape=(40, 50), relief=8.0, smoothness=5.0)
     bathy = base.with_z(base.z - np.nanmax(base.z) + top)
-    plan = plan_coverage(bathy, omega=omega, min_depth=min_depth, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=omega, min_depth=min_depth),
+                         compute_metrics=False)
     for path in (plan.path, plan.lawnmower):
         assert path.points[:, 2].max() <= -min_depth + 1e-9
     shallow = bathy.z > -min_depth
@@ -32,8 +34,9 @@ def test_no_sample_above_the_minimum_depth(seed, top, min_depth, omega):
 
 def test_deep_water_is_not_limited():
     bathy = random_seabed(1, shape=(40, 50))  # around -50 m
-    plan = plan_coverage(bathy, omega=2.0, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0), compute_metrics=False)
     assert report_dict(plan)["water_column"]["path_depth_limited"]["samples_share"] == 0.0
-    capped = plan_coverage(bathy, omega=2.0, min_depth=49.0, compute_metrics=False)
+    capped = plan_coverage(bathy, CoverageParameters(omega=2.0, min_depth=49.0),
+                           compute_metrics=False)
     assert capped.path.points[:, 2].max() <= -49.0
     assert report_dict(capped)["water_column"]["path_depth_limited"]["samples_share"] > 0.1

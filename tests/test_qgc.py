@@ -17,6 +17,7 @@ from drake_auv.autopilot.ardusub import replay_ardusub
 from drake_auv.autopilot.items import LocalLeg, localise
 from drake_auv.autopilot.replay import clearance_report
 from drake_auv.planning.coverage_plan import plan_coverage
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.qgc import admitted_cross_track, read_qgc_plan, write_qgc
 from drake_auv.planning.surface import TerrainSurface
@@ -122,7 +123,7 @@ def check_with_mavsdk(importer, filename):
 @pytest.fixture(scope="module")
 def caldera_plan():
     zone = shapely.box(40.0, 100.0, 60.0, 120.0)
-    return plan_coverage(caldera_site(cell=2.0), omega=4.0, no_go=zone)
+    return plan_coverage(caldera_site(cell=2.0), CoverageParameters(omega=4.0), no_go=zone)
 
 
 def test_caldera_plan_fits_one_file_by_bisection(tmp_path, caldera_plan, mavsdk_importer):
@@ -131,7 +132,7 @@ def test_caldera_plan_fits_one_file_by_bisection(tmp_path, caldera_plan, mavsdk_
     # the smallest tolerance that fits: the budget is nearly used (559 items at the admitted
     # tolerance)
     assert [f.name for f in files] == ["mission.plan"] and 650 < s["items"][0] <= 700
-    admitted = admitted_cross_track(caldera_plan.parameters)
+    admitted = admitted_cross_track(caldera_plan)
     assert s["cross_track_admitted_m"] == pytest.approx(admitted)
     assert s["tolerance_m"] < admitted
     assert check_with_mavsdk(mavsdk_importer, files[0]) == s["items"][0]
@@ -178,7 +179,7 @@ def test_long_missions_are_split_and_chain(tmp_path, caldera_plan, mavsdk_import
 
 @pytest.fixture(scope="module")
 def monterey_plans():
-    return {(t, omega): plan_coverage(read_bathymetry(t), omega=omega)
+    return {(t, omega): plan_coverage(read_bathymetry(t), CoverageParameters(omega=omega))
             for t in MONTEREY for omega in (10.0, 20.0)}
 
 
@@ -216,7 +217,7 @@ def test_random_seabeds_export_and_fly_safe(tmp_path_factory, seed, relief, top,
     comes no nearer than Omega / 2 or than the plan does, and never above 0.5 m depth."""
     raw = random_seabed(seed, (40, 56), 1.0, relief, 5.0)
     bathy = Bathymetry(raw.z - np.nanmax(raw.z) - top, raw.spacing)
-    plan = plan_coverage(bathy, omega=omega, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=omega), compute_metrics=False)
     out = tmp_path_factory.mktemp("rand")
     geo = GeoFrame(plan.bathy, CALDERA_ORIGIN_LONLAT)
     files, s = write_qgc(plan, geo, out, max_items=120, frames=frames)

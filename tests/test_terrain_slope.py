@@ -121,12 +121,13 @@ def _listing_hull():
 @pytest.mark.parametrize("make", [_block, _listing_hull], ids=["block", "listing hull"])
 def test_thin_near_vertical_walls_survive_and_are_sliced(make):
     from drake_auv.planning.coverage_plan import plan_coverage
+    from drake_auv.planning.parameters import CoverageParameters
 
     bathy = make()
     labels = classify(bathy)
     assert labels.n_regions == 1
     assert labels.high.sum() <= 0.12 * labels.valid.sum()  # the wall band, not the deck
-    plan = plan_coverage(bathy, omega=2.0, compute_metrics=False)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0), compute_metrics=False)
     assert len(plan.contours) >= 1 and plan.path.length_by_label()["slice"] > 100.0
     # An opening of 2 cells (the former default) erases such a wall: what this guards.
     assert classify(bathy, opening_radius=2.0).n_regions == 0

@@ -2,6 +2,7 @@
 that registers its arguments and sets `func` to the function that runs it."""
 
 import argparse
+import dataclasses
 
 
 def whole_number(text: str) -> int:
@@ -23,16 +24,25 @@ def whole_number(text: str) -> int:
 
 def check_plan_options(options) -> None:
     """ValueError naming the option, its value and what is allowed for the first (option,
-    value, field) of `options` out of the mission plan step's range for `field` (`PlanStep`:
-    one source of truth for the command line and the mission file), before any work."""
+    value, field) of `options` out of range for `field` of the mission plan step (`PlanStep`,
+    whose planner fields are `CoverageParameters`': one source of truth for the command line,
+    the mission file and the API) or else of `CoverageParameters`, before any work."""
     from drake_auv.mission.steps.plan import PlanStep
-    from drake_auv.params import checks
+    from drake_auv.params import checks, is_number
+    from drake_auv.planning.parameters import CoverageParameters
 
+    allowed = {**checks(CoverageParameters), **checks(PlanStep)}
     for option, value, field in options:
-        check = checks(PlanStep)[field]
+        check = allowed[field]
         what = check.problem(value)
         if what is not None:
-            raise ValueError(f"{option} {value:g} {what}; allowed: {check.allowed()}")
+            shown = f"{value:g}" if is_number(value) else repr(value)
+            raise ValueError(f"{option} {shown} {what}; allowed: {option_range(check)}")
+
+
+def option_range(check) -> str:
+    """What an option checked by `check` allows (an option left out stands for a None)."""
+    return dataclasses.replace(check, nullable=False).allowed()
 
 
 def add_recording_options(parser, playback_speed: float, realtime: bool = True) -> None:

@@ -20,7 +20,16 @@ import json
 import sys
 from pathlib import Path
 
-from drake_auv.commands import check_plan_options, whole_number
+from drake_auv.commands import check_plan_options, option_range, whole_number
+from drake_auv.params import checks, defaults
+from drake_auv.planning.parameters import CoverageParameters
+
+# the options that set `CoverageParameters`, by field
+OPTIONS = {"omega": "--omega", "slope_threshold": "--slope-threshold",
+           "aperture_deg": "--aperture", "overlap": "--overlap",
+           "sweep_angle_deg": "--sweep-angle", "slice_spacing": "--slice-spacing",
+           "slice_count": "--slice-count", "slice_sensor": "--slice-sensor", "order": "--order",
+           "min_area": "--min-area", "min_depth": "--min-depth"}
 
 
 def _lonlat(text: str) -> tuple[float, float]:
@@ -29,6 +38,22 @@ def _lonlat(text: str) -> tuple[float, float]:
     except ValueError:
         raise ValueError(f"--origin-lonlat: expected 'LON,LAT' in degrees, got {text!r}") from None
     return lon, lat
+
+
+def _order(text: str) -> str:
+    """An IHO S-44 order's name in any case (`planning.orders.ORDERS` keys are lower case)."""
+    return text.strip().lower()
+
+
+def _parameter(parser, field: str, text: str, **kwargs) -> None:
+    """The option of `CoverageParameters.field`, its default and range from there: `text` is
+    its help, with {allowed} and {default} filled in."""
+    flag, default = OPTIONS[field], defaults(CoverageParameters)[field]
+    allowed = option_range(checks(CoverageParameters)[field])
+    if "choices" not in kwargs:
+        kwargs["metavar"] = flag.lstrip("-").upper().replace("-", "_")
+    parser.add_argument(flag, dest=field, default=default, **kwargs, help=text.format(
+        allowed=f"in {allowed}" if allowed[:1] in "[(" else allowed, default=default))
 
 
 def add_parser(subparsers) -> None:
@@ -45,33 +70,29 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--no-go", action="append", default=[], metavar="FILE",
                         help="no-go zones (polygons: GeoJSON, Shapefile, GeoPackage, any CRS); "
                              "nothing comes within Omega of them; repeatable")
-    parser.add_argument("--omega", type=float, default=2.0,
-                        help="offset to the terrain, m, > 0 (default 2)")
-    parser.add_argument("--slope-threshold", type=float, default=0.5,
-                        help="delta_s, slope above which terrain is high-slope, > 0 (default 0.5)")
-    parser.add_argument("--aperture", type=float, default=60.0,
-                        help="sensor aperture, degrees in [5, 170] (default 60)")
-    parser.add_argument("--overlap", type=float, default=0.1,
-                        help="overlap of neighbouring lanes, in [0, 0.9] (default 0.1)")
-    parser.add_argument("--sweep-angle", type=float, default=None,
-                        help="lane direction, degrees from +x (default: fewest lanes)")
-    parser.add_argument("--slice-spacing", type=float, default=None,
-                        help="vertical spacing of the slicing planes, m (default: footprint)")
-    parser.add_argument("--slice-count", type=whole_number, default=None,
-                        help="slicing planes per high-slope region, centred on it (default: "
-                             "as many as cover it)")
-    parser.add_argument("--slice-sensor", choices=("normal", "fixed-tilt"), default="normal",
-                        help="on high-slope regions look along the inward normal (default) or "
-                             "with one fixed tilt per region")
-    parser.add_argument("--order", default=None,
-                        help="IHO S-44 ed. 6 survey order: exclusive (200 %% coverage), special, "
-                             "1a (100 %%), 1b, 2 (5 %%); sets the lane spacing")
-    parser.add_argument("--min-area", type=float, default=None,
-                        help="smallest high-slope region kept, m^2, >= 0 (default 100, at "
-                             "least 4 cells; it does not grow with the ROI)")
-    parser.add_argument("--min-depth", type=float, default=1.0,
-                        help="minimum operating depth, m, >= 0: no sample above it, shallower "
-                             "cells are no-go (default 1)")
+    _parameter(parser, "omega", "offset to the terrain, {allowed} (default {default:g})",
+               type=float)
+    _parameter(parser, "slope_threshold", "delta_s, slope above which terrain is high-slope, "
+               "{allowed} (default {default:g})", type=float)
+    _parameter(parser, "aperture_deg", "sensor aperture, {allowed} (default {default:g})",
+               type=float)
+    _parameter(parser, "overlap", "overlap of neighbouring lanes, {allowed} (default "
+               "{default:g})", type=float)
+    _parameter(parser, "sweep_angle_deg", "lane direction, degrees from +x (default: fewest "
+               "lanes)", type=float)
+    _parameter(parser, "slice_spacing", "vertical spacing of the slicing planes, {allowed} "
+               "(default: footprint)", type=float)
+    _parameter(parser, "slice_count", "slicing planes per high-slope region, centred on it, "
+               "{allowed} (default: as many as cover it)", type=whole_number)
+    _parameter(parser, "slice_sensor", "on high-slope regions look along the inward normal "
+               "(default) or with one fixed tilt per region",
+               choices=checks(CoverageParameters)["slice_sensor"].choices)
+    _parameter(parser, "order", "IHO S-44 ed. 6 survey order: exclusive (200 %% coverage), "
+               "special, 1a (100 %%), 1b, 2 (5 %%); sets the lane spacing", type=_order)
+    _parameter(parser, "min_area", "smallest high-slope region kept, {allowed} (default 100 "
+               "m^2, at least 4 cells; it does not grow with the ROI)", type=float)
+    _parameter(parser, "min_depth", "minimum operating depth, {allowed}: no sample above it, "
+               "shallower cells are no-go (default {default:g})", type=float)
     parser.add_argument("--export", default=None,
                         help="comma-separated: cola2 (mission.xml), qgc (mission.plan), "
                              "geojson (WGS 84: the route and the waypoints of the vehicle files "
@@ -120,8 +141,8 @@ def run(args) -> int:
     from drake_auv.commands.outputs import MiB, output_folder
 
     output_folder(args.out, "-o", 20 * MiB)  # path.csv, reports, figures, exports
-    check_plan_options([("--aperture", args.aperture, "aperture_deg"),
-                        ("--overlap", args.overlap, "overlap"), ("--speed", args.speed, "speed")])
+    check_plan_options([(option, getattr(args, field), field) for field, option in OPTIONS.items()]
+                       + [("--speed", args.speed, "speed")])
     from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
     from drake_auv.planning.export import (check_exports, export_warnings, mission_time_line,
                                            output_stages, parse_exports, table3_markdown,
@@ -135,10 +156,10 @@ def run(args) -> int:
         from drake_auv.planning.current import aligned_sweep_angle, parse_current
 
         current = parse_current(args.current, args.tide)
-        if args.align_with_current and args.sweep_angle is not None:
+        if args.align_with_current and args.sweep_angle_deg is not None:
             raise ValueError("give --sweep-angle or --align-with-current, not both")
         if args.align_with_current:
-            args.sweep_angle = aligned_sweep_angle(current)
+            args.sweep_angle_deg = aligned_sweep_angle(current)
     elif args.tide is not None or args.align_with_current:
         raise ValueError("--tide and --align-with-current need --current SPEED,TOWARDS_DEG")
     origin = _lonlat(args.origin_lonlat) if args.origin_lonlat is not None else None
@@ -177,12 +198,8 @@ def run(args) -> int:
     stages = len(PLAN_STAGES) + output_stages(exports, not args.no_figures,
                                               not args.no_3d_metrics)
     with StageBar(stages) as bar:  # one bar, to the last file
-        plan = plan_coverage(bathy, roi=roi, omega=args.omega, aperture_deg=args.aperture,
-                             overlap=args.overlap, slope_threshold=args.slope_threshold,
-                             sweep_angle_deg=args.sweep_angle, slice_spacing=args.slice_spacing,
-                             slice_count=args.slice_count, slice_sensor=args.slice_sensor,
-                             min_area=args.min_area, min_depth=args.min_depth, no_go=no_go,
-                             order=args.order, progress=bar)
+        params = CoverageParameters(**{field: getattr(args, field) for field in OPTIONS})
+        plan = plan_coverage(bathy, params, roi=roi, no_go=no_go, progress=bar)
         flow = None
         if current is not None:
             from drake_auv.planning.current import current_report
@@ -200,7 +217,7 @@ def run(args) -> int:
     if flow is not None:
         from drake_auv.planning.current import summary_lines
 
-        print("\n".join(summary_lines(flow, plan.parameters["sweep_angle_deg"])))
+        print("\n".join(summary_lines(flow, plan.parameters.sweep_angle_deg)))
     upload = upload_line(report)
     if upload is not None:
         print(upload)

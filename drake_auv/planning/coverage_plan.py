@@ -8,7 +8,7 @@ transits -> the lawnmower baseline -> metrics for both.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import ndimage
@@ -16,12 +16,12 @@ from scipy import ndimage
 from drake_auv.planning.boustrophedon import (Decomposition, best_sweep_angle,
                                               boustrophedon_waypoints, cell_lanes, decompose,
                                               exhaustive_walk, sliver_cells, sweep_raster)
-from drake_auv.planning.lawnmower import (check_omega_fits, check_sensor_parameters, lane_spacing,
-                                          plan_lawnmower, wet_grid)
+from drake_auv.planning.lawnmower import check_omega_fits, lane_spacing, plan_lawnmower, wet_grid
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.route import RouteBuilder
-from drake_auv.planning.slicing import (MAX_SLICES, Contour, fixed_depression, order_contours,
-                                        slice_levels, slice_region)
+from drake_auv.planning.slicing import (Contour, fixed_depression, order_contours, slice_levels,
+                                        slice_region)
 from drake_auv.planning.stages import next_stage, stage_bar
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.resources import check_memory
@@ -42,7 +42,11 @@ class CoveragePlan:
         cells: boustrophedon decomposition of the planar area.
         contours: slicing contour pieces in visiting order.
         visit_order: the walk over the graph nodes: ("cell", k) or ("region", r).
-        parameters: the planner's parameters (omega, aperture_deg, ...; sweep angle in degrees).
+        parameters: the `CoverageParameters` the plan used: those asked for, with the sweep
+            angle, sample spacing and sensor range the planner chose where they were None.
+        lane_spacing: distance between neighbouring lanes, m (the survey order's included).
+        unreachable_pieces: lanes and contours the route could not reach (dropped).
+        no_go_rings: exterior rings [[x, y], ...] of the no-go zones (world frame, m).
         metrics: `PlanMetrics` of both paths (None when not computed).
         surface: the shared `TerrainSurface` (heights, normals, distances).
     """
@@ -54,9 +58,27 @@ class CoveragePlan:
     cells: Decomposition
     contours: list[Contour]
     visit_order: list[tuple[str, int]]
-    parameters: dict
+    parameters: CoverageParameters
+    lane_spacing: float
+    unreachable_pieces: int
+    no_go_rings: list[list[list[float]]]
     metrics: object = None
     surface: TerrainSurface = field(default=None, repr=False)
+
+    def parameter_record(self) -> dict:
+        """The parameters as report.json records them: those the plan used, its lane spacing,
+        unreachable pieces and no-go rings, the survey order by its name."""
+        from drake_auv.planning.orders import survey_order
+
+        p = self.parameters
+        return dict(omega=p.omega, aperture_deg=p.aperture_deg, overlap=p.overlap,
+                    slope_threshold=p.slope_threshold, sweep_angle_deg=p.sweep_angle_deg,
+                    slice_spacing=p.slice_spacing, slice_count=p.slice_count,
+                    lane_spacing=self.lane_spacing, sample_spacing=p.sample_spacing,
+                    sensor_range=p.sensor_range, slice_sensor=p.slice_sensor,
+                    min_depth=p.min_depth, unreachable_pieces=self.unreachable_pieces,
+                    order=None if p.order is None else survey_order(p.order).name,
+                    no_go_rings=self.no_go_rings)
 
 
 def _region_adjacency(dec: Decomposition, bathy: Bathymetry, regions: np.ndarray):
@@ -118,70 +140,35 @@ def check_samples(bathy: Bathymetry, omega: float, sample_spacing: float) -> Non
                  f"sample spacing {sample_spacing:.3g} m: the path's samples along one lane")
 
 
-def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_deg: float = 60.0,
-                  overlap: float = 0.1, slope_threshold: float = 0.5,
-                  sweep_angle_deg: float | None = None, slice_spacing: float | None = None,
-                  slice_count: int | None = None,
-                  closing_radius: float | None = None, opening_radius: float | None = None,
-                  min_area: float | None = None, sample_spacing: float | None = None,
-                  sensor_range: float | None = None, slice_sensor: str = "normal",
-                  min_depth: float = 1.0, no_go=None, order: str | None = None,
-                  baseline: bool = True,
-                  compute_metrics: bool = True, progress: bool = False) -> CoveragePlan:
-    """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) at offset `omega`.
+def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParameters(), *,
+                  roi=None, no_go=None, baseline: bool = True, compute_metrics: bool = True,
+                  progress: bool = False) -> CoveragePlan:
+    """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) with `params`.
 
     Args:
+        params: the planner's parameters (`CoverageParameters`: defaults and ranges).
         roi: rectangle (xmin, ymin, xmax, ymax) or polygon [(x, y), ...] in map coordinates of
             the bathymetry's CRS (world metres when it has none).
-        omega: offset to the terrain, m (> 0).
-        aperture_deg: sensor aperture, degrees in (0, 180).
-        overlap: overlap of neighbouring lanes and contours, [0, 1).
-        slope_threshold: delta_s > 0 of the classification.
-        sweep_angle_deg: lane direction of the planar cells, degrees from +x (None: fewest lanes).
-        slice_spacing: vertical spacing of the slicing planes, m (None: from the footprint).
-        slice_count: number of slicing planes per high-slope region, centred on its elevation
-            range (None: as many as cover the region at `slice_spacing`).
-        closing_radius, opening_radius, min_area: classification clean-up (see `classify`).
-        sample_spacing: largest distance between path samples, m (default Omega / 4).
-        sensor_range: largest range at which the sensor sees, m (default 2 Omega), for metrics.
-        slice_sensor: on high-slope regions the sensor looks along the inward surface normal
-            ("normal") or keeps one tilt per region matched to its median slope ("fixed-tilt").
-        min_depth: minimum operating depth, m (>= 0). Cells shallower than it are no-go; no
-            sample lies above z = -min_depth (where Omega above the seabed would be, the path
-            runs at the minimum depth instead; `report_dict` says how much of it).
         no_go: shapely (Multi)Polygon of no-go zones in the map coordinates of the grid's CRS
             (`terrain.zones.read_zones`); no lane, contour or transit comes within Omega of
             them, transits go around them (`planning.nogo`).
-        order: IHO S-44 survey order ("exclusive", "special", "1a", "1b", "2"): the lane
-            spacing is divided by its coverage factor (`planning.orders`); None: 100 %.
         baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
         compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
         progress: show a progress bar over the `PLAN_STAGES`, or a caller's tqdm bar to
             advance by them (`planning.stages`).
-    """
-    check_sensor_parameters(omega, aperture_deg, overlap)
-    survey = None
-    if order is not None:
-        from drake_auv.planning.orders import survey_order
 
-        survey = survey_order(order)
+    Where Omega above the seabed would be above z = -`params.min_depth`, the path runs at the
+    minimum depth instead (`report_dict` says how much of it).
+    """
     if not isinstance(bathy, Bathymetry):
         raise ValueError(f"plan_coverage needs a Bathymetry, got {type(bathy).__name__}")
-    if slice_spacing is not None and not (np.isfinite(slice_spacing) and slice_spacing > 0):
-        raise ValueError(f"slice_spacing must be > 0 m, got {slice_spacing}")
-    if slice_count is not None and not (int(slice_count) == slice_count
-                                        and 1 <= slice_count <= MAX_SLICES):
-        raise ValueError(f"slice_count must be a whole number in [1, {MAX_SLICES}], got "
-                         f"{slice_count}")
-    if sweep_angle_deg is not None and not np.isfinite(sweep_angle_deg):
-        raise ValueError(f"sweep_angle_deg must be a finite angle in degrees, got {sweep_angle_deg}")
-    if slice_sensor not in ("normal", "fixed-tilt"):
-        raise ValueError(f"slice_sensor must be 'normal' or 'fixed-tilt', got {slice_sensor!r}")
-    ds = omega / 4.0 if sample_spacing is None else float(sample_spacing)
-    if not (np.isfinite(ds) and ds > 0):
-        raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
-    if sensor_range is not None and not (np.isfinite(sensor_range) and sensor_range > 0):
-        raise ValueError(f"sensor_range must be > 0 m, got {sensor_range}")
+    omega, min_depth = params.omega, params.min_depth
+    survey = None
+    if params.order is not None:
+        from drake_auv.planning.orders import survey_order
+
+        survey = survey_order(params.order)
+    ds = omega / 4.0 if params.sample_spacing is None else float(params.sample_spacing)
     if roi is not None:
         bathy = crop_to_roi(bathy, roi)
     check_omega_fits(omega, bathy)
@@ -190,23 +177,24 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     nogo = None
     if no_go is not None:
         bathy, nogo = _apply_no_go(bathy, no_go, omega)
-    labels = classify(bathy, slope_threshold, closing_radius, opening_radius, min_area)
+    labels = classify(bathy, params.slope_threshold, params.closing_radius,
+                      params.opening_radius, params.min_area)
     surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0))
-    spacing = lane_spacing(omega, aperture_deg, overlap) / (1.0 if survey is None else survey.coverage)
+    spacing = (lane_spacing(omega, params.aperture_deg, params.overlap)
+               / (1.0 if survey is None else survey.coverage))
     # every high-slope region's slicing planes, refused (too many) before any route is built,
     # and so before the bar starts: a refusal stays one line
     levels = {r: slice_levels(surface, labels.regions == r, labels.slope, spacing,
-                              slice_spacing, slice_count)
+                              params.slice_spacing, params.slice_count)
               for r in range(1, labels.n_regions + 1)}
     bar, owned = stage_bar(progress, len(PLAN_STAGES))
     bar.set_postfix_str(PLAN_STAGES[0])
     next_stage(bar, PLAN_STAGES[1])  # classified (with the slicing planes)
     planar = labels.planar
-    if planar.any():
-        angle = (best_sweep_angle(bathy, planar, spacing) if sweep_angle_deg is None
-                 else np.radians(float(sweep_angle_deg)))
+    if params.sweep_angle_deg is not None:
+        angle = np.radians(float(params.sweep_angle_deg))
     else:
-        angle = 0.0 if sweep_angle_deg is None else np.radians(float(sweep_angle_deg))
+        angle = best_sweep_angle(bathy, planar, spacing) if planar.any() else 0.0
     dec = decompose(bathy, planar, angle)
     next_stage(bar, PLAN_STAGES[2])
     # Graph over planar cells (0..C-1) and high-slope regions (C..C+R-1).
@@ -241,7 +229,8 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
         r = node - n_cells + 1
         visit.append(("region", r))
         mask = labels.regions == r
-        depression = fixed_depression(labels.slope[mask]) if slice_sensor == "fixed-tilt" else None
+        depression = (fixed_depression(labels.slope[mask]) if params.slice_sensor == "fixed-tilt"
+                      else None)
         per_level = slice_region(surface, mask, r, levels[r], omega, ds, min_length=spacing,
                                  depression=depression)
         start = here if here is not None else np.append(positions[node], surface.z[mask].min())
@@ -252,27 +241,20 @@ def plan_coverage(bathy: Bathymetry, *, roi=None, omega: float = 2.0, aperture_d
     path = route.build()
     lawn = None
     if baseline:
-        lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=aperture_deg, overlap=overlap,
-                              lane_spacing_m=spacing,
-                              sample_spacing=ds, surface=surface, min_depth=min_depth,
-                              nogo=nogo)
+        lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=params.aperture_deg,
+                              overlap=params.overlap, lane_spacing_m=spacing, sample_spacing=ds,
+                              surface=surface, min_depth=min_depth, nogo=nogo)
     next_stage(bar, PLAN_STAGES[5])
-    params = dict(omega=omega, aperture_deg=aperture_deg, overlap=overlap,
-                  slope_threshold=slope_threshold, sweep_angle_deg=float(np.degrees(angle)),
-                  slice_spacing=slice_spacing, slice_count=slice_count, lane_spacing=spacing,
-                  sample_spacing=ds,
-                  sensor_range=2.0 * omega if sensor_range is None else float(sensor_range),
-                  slice_sensor=slice_sensor, min_depth=float(min_depth),
-                  unreachable_pieces=route.unreachable,
-                  order=None if survey is None else survey.name,
-                  no_go_rings=[] if nogo is None else _exterior_rings(nogo.zones))
-    plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
-                        None, surface)
+    used = replace(params, sweep_angle_deg=float(np.degrees(angle)), sample_spacing=ds,
+                   sensor_range=(2.0 * omega if params.sensor_range is None
+                                 else float(params.sensor_range)), min_depth=float(min_depth))
+    plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, used, spacing,
+                        route.unreachable, [] if nogo is None else _exterior_rings(nogo.zones),
+                        surface=surface)
     if compute_metrics and baseline:
         from drake_auv.planning.metrics import evaluate_plan
 
-        plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, params,
-                            evaluate_plan(plan), surface)
+        plan = replace(plan, metrics=evaluate_plan(plan))
     next_stage(bar)
     if owned:
         bar.close()

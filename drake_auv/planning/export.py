@@ -102,9 +102,9 @@ def _ratio(a: float, b: float) -> float | None:
 def _depth_limited(path: PlannedPath, plan) -> dict:
     """Samples held at the minimum operating depth with less than Omega of altitude."""
     p = plan.parameters
-    ceiling = -p["min_depth"]
+    ceiling = -p.min_depth
     alt = path.points[:, 2] - plan.surface.elevation(path.points[:, 0], path.points[:, 1])
-    held = (path.points[:, 2] >= ceiling - 1e-9) & (alt < p["omega"] - 1e-6)
+    held = (path.points[:, 2] >= ceiling - 1e-9) & (alt < p.omega - 1e-6)
     return {"samples_share": float(held.mean()),
             "length_m": float(path.segment_lengths()[held[1:]].sum()),
             "least_altitude_m": float(alt[held].min()) if held.any() else None}
@@ -113,7 +113,7 @@ def _depth_limited(path: PlannedPath, plan) -> dict:
 def water_column_summary(plan) -> dict:
     """The minimum operating depth and how much of each path it holds shallower than Omega
     above the seabed (the coverage those parts lose shows in the metrics)."""
-    out = {"min_depth_m": plan.parameters["min_depth"],
+    out = {"min_depth_m": plan.parameters.min_depth,
            "path_depth_limited": _depth_limited(plan.path, plan)}
     if plan.lawnmower is not None:
         out["lawnmower_depth_limited"] = _depth_limited(plan.lawnmower, plan)
@@ -131,11 +131,11 @@ def _water_column_line(wc: dict) -> str:
 
 
 def _order(plan) -> dict | None:
-    if plan.parameters.get("order") is None:
+    if plan.parameters.order is None:
         return None
     from drake_auv.planning.orders import order_report, survey_order
 
-    return order_report(plan, survey_order(plan.parameters["order"]))
+    return order_report(plan, survey_order(plan.parameters.order))
 
 
 def _order_line(o: dict | None) -> str:
@@ -255,7 +255,7 @@ def report_dict(plan, metrics_3d=None, speed: float = 0.5, reference_table: bool
     labels = plan.labels
     dx, dy = plan.bathy.spacing
     out = {
-        "parameters": plan.parameters,
+        "parameters": plan.parameter_record(),
         "grid": {"shape": list(plan.bathy.shape), "spacing_m": [dx, dy], "crs": plan.bathy.crs},
         "classification": {
             "high_slope_regions": labels.n_regions,
@@ -312,7 +312,7 @@ def report_markdown(plan, metrics_3d=None, speed: float = 0.5, reference_table: 
 
 
 def _markdown(plan, metrics_3d, rep: dict) -> str:
-    p = plan.parameters
+    p = rep["parameters"]
     lines = ["# Coverage plan report", "", mission_time_line(rep["mission_time"]), ""]
     warnings = export_warnings(rep)
     if warnings:
@@ -444,8 +444,8 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
         from drake_auv.planning.cola2 import export_cola2, read_cola2
 
         next_stage(bar, "mission.xml")
-        extras["cola2"] = export_cola2(plan.path, plan.surface, plan.parameters["omega"],
-                                       plan.parameters["min_depth"], geo, outdir / "mission.xml",
+        extras["cola2"] = export_cola2(plan.path, plan.surface, plan.parameters.omega,
+                                       plan.parameters.min_depth, geo, outdir / "mission.xml",
                                        surge_velocity, tolerance_xy, heave_in_3d)
         written.append(outdir / "mission.xml")
         missions.append(read_cola2(outdir / "mission.xml"))

@@ -149,7 +149,7 @@ def fig_slope(plan, geo=None) -> Figure:
 def fig_classification(plan, geo=None) -> Figure:
     fig = Figure(figsize=_figsize(plan.bathy))
     ax = _plan_axes(fig, plan.bathy, f"Classification: {plan.labels.n_regions} high-slope "
-                    f"region(s), delta_s = {plan.parameters['slope_threshold']}", geo)
+                    f"region(s), delta_s = {plan.parameters.slope_threshold}", geo)
     _classification_image(ax, plan)
     return fig
 
@@ -176,7 +176,7 @@ def fig_cells(plan, geo=None) -> Figure:
 def fig_lanes(plan, geo=None) -> Figure:
     fig = Figure(figsize=_figsize(plan.bathy))
     ax = _plan_axes(fig, plan.bathy, f"Lanes in each cell, spacing "
-                    f"{plan.parameters['lane_spacing']:.2f} m", geo)
+                    f"{plan.lane_spacing:.2f} m", geo)
     _classification_image(ax, plan, alpha=0.5)
     _path_lines(ax, plan.path.select(plan.path.labels != "slice"),
                 colours={"planar": "tab:blue", "transit": "0.6"})

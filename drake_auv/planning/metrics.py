@@ -179,7 +179,7 @@ def evaluate_plan(plan) -> PlanMetrics:
     """Table 3 for a `CoveragePlan`: per region, total, lawnmower."""
     surface = plan.surface
     p = plan.parameters
-    aperture, rng, omega = p["aperture_deg"], p["sensor_range"], p["omega"]
+    aperture, rng, omega = p.aperture_deg, p.sensor_range, p.omega
     weights = surface_area_weights(surface)
     valid = surface.valid
     high = plan.labels.high

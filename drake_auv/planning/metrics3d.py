@@ -124,7 +124,7 @@ def evaluate_plan_3d(plan, max_faces: int = SAMPLED_FACES,
     and of the other faces each (`sampled_faces`), the figure then a stratified estimate with
     its standard error (`coverage_se`)."""
     p = plan.parameters
-    aperture, rng = np.radians(p["aperture_deg"]), p["sensor_range"]
+    aperture, rng = np.radians(p.aperture_deg), p.sensor_range
     mesh = bathymetry_to_mesh(plan.bathy)
     caster = RayCaster(mesh)
     vis = FaceVisibility(caster)
@@ -138,7 +138,7 @@ def evaluate_plan_3d(plan, max_faces: int = SAMPLED_FACES,
              for k, lab in enumerate(names) if lab != "transit"}
     imaging = list(poses)
     groups = {"high_slope": (["slice"], high_face)}
-    if p.get("slice_sensor", "normal") == "normal":
+    if p.slice_sensor == "normal":
         m = path.labels.astype(str) == "slice"
         poses["fixed_tilt"] = (path.points[m], fixed_tilt_axes(plan, path.points[m],
                                                                path.sensor_dir[m]), high_face)

@@ -91,7 +91,7 @@ def order_report(plan, order: SurveyOrder, beam_spacing_deg: float = 0.25,
     a 0.5 m/s survey and a 10 Hz ping rate."""
     p = plan.parameters
     surface = plan.surface
-    counts = coverage_multiplicity(surface, plan.path, p["aperture_deg"], p["sensor_range"])
+    counts = coverage_multiplicity(surface, plan.path, p.aperture_deg, p.sensor_range)
     from drake_auv.planning.metrics import surface_area_weights
 
     w = surface_area_weights(surface)
@@ -103,14 +103,14 @@ def order_report(plan, order: SurveyOrder, beam_spacing_deg: float = 0.25,
     if unseen.any():
         dist = ndimage.distance_transform_edt(unseen, sampling=surface.bathy.spacing[::-1])
         gap = float(2.0 * dist.max())
-    across = p["omega"] * np.radians(beam_spacing_deg)
+    across = p.omega * np.radians(beam_spacing_deg)
     along = speed / ping_rate
     resolution = SOUNDINGS_PER_FEATURE * max(across, along)
     size = max(resolution, gap)
     depth = float(-np.nanmax(surface.bathy.z))  # shallowest: the strictest 1a requirement
     required = order.required_feature(depth)
     return {"order": order.name, "coverage_target_percent": 100.0 * order.coverage,
-            "lane_spacing_m": p["lane_spacing"],
+            "lane_spacing_m": plan.lane_spacing,
             "achieved_percent": 100.0 * achieved, "passes_needed": need,
             "mean_passes_per_cell": float((counts[valid] * w[valid]).sum() / w[valid].sum()),
             "detectable_feature_m": size, "largest_gap_m": gap,

@@ -60,18 +60,18 @@ WPNAV_RADIUS_DEFAULT = 2.0  # m, ArduSub's WPNAV_RADIUS default, used for a 0 ac
 _BISECTION_STEPS = 12
 
 
-def admitted_cross_track(parameters: dict) -> float:
-    """The largest distance (m) a flown leg may stray from the planned path without opening a
-    gap between neighbouring lanes.
+def admitted_cross_track(plan) -> float:
+    """The largest distance (m) a flown leg may stray from the `CoveragePlan`'s path without
+    opening a gap between neighbouring lanes.
 
     Lanes are `lane_spacing` apart under a footprint F = 2 Omega tan(a / 2); a lane shifted
     sideways by e and raised by h loses e + h tan(a / 2) of its overlap share (F - spacing) / 2.
     Over all 3D errors of length d that loss is at most d / cos(a / 2), so d may reach
     (F - spacing) cos(a / 2) / 2 (with overlap o and no survey order: o Omega sin(a / 2)).
     """
-    half = np.radians(parameters["aperture_deg"]) / 2.0
-    footprint = 2.0 * parameters["omega"] * np.tan(half)
-    return float(max(footprint - parameters["lane_spacing"], 0.0) * np.cos(half) / 2.0)
+    half = np.radians(plan.parameters.aperture_deg) / 2.0
+    footprint = 2.0 * plan.parameters.omega * np.tan(half)
+    return float(max(footprint - plan.lane_spacing, 0.0) * np.cos(half) / 2.0)
 
 
 def _waypoint_legs(wp: Waypoints) -> tuple[LocalLeg, ...]:
@@ -142,7 +142,7 @@ def _flown_path(path: PlannedPath, wp: Waypoints, surface, spacing: float) -> Pl
 def _coverage(path: PlannedPath, plan) -> float:
     """Coverage of the valid cells, as `metrics.evaluate_plan` computes the total's."""
     p, s = plan.parameters, plan.surface
-    m = evaluate_path(path, s, p["aperture_deg"], p["sensor_range"], p["omega"],
+    m = evaluate_path(path, s, p.aperture_deg, p.sensor_range, p.omega,
                       {"total": (np.ones(len(path), dtype=bool), s.valid)},
                       surface_area_weights(s))
     return m["total"].coverage
@@ -196,7 +196,7 @@ def budget_mission(plan, max_items: int = DEFAULT_MAX_ITEMS,
     check_options(max_items, frames)
     p, surface, path = plan.parameters, plan.surface, plan.path
     labels = ALTITUDE_LABELS if frames == "terrain" else ()
-    omega, min_depth = p["omega"], p["min_depth"]
+    omega, min_depth = p.omega, p.min_depth
     pts = path.points
     altitude = pts[:, 2] - surface.elevation(pts[:, 0], pts[:, 1])
     # Lane samples held at the minimum depth (less than Omega above the seabed) are flown in
@@ -206,7 +206,7 @@ def budget_mission(plan, max_items: int = DEFAULT_MAX_ITEMS,
                 np.where(ceiling, "depth limited", path.labels).astype(object))
     full = Waypoints(np.arange(len(path)), pts, altitude, path.heading, path.labels,
                      np.isin(path.labels.astype(str), list(labels)))
-    admitted = max(admitted_cross_track(p), 1e-6)
+    admitted = max(admitted_cross_track(plan), 1e-6)
 
     def safe(tol):
         idx = mission_waypoints(path, surface, tol, labels).index
@@ -296,7 +296,7 @@ def write_qgc(plan, geo: GeoFrame, outdir, max_items: int = DEFAULT_MAX_ITEMS,
     coverage_after (the plan's total coverage, and the same computed on the flight the
     replay gives), clearance (`clearance_report` of that flight)."""
     mission = budget_mission(plan, max_items, frames)
-    zones = [geo.to_lonlat(ring) for ring in plan.parameters.get("no_go_rings", [])]
+    zones = [geo.to_lonlat(ring) for ring in plan.no_go_rings]
     outdir = Path(outdir)
     n = len(mission.parts)
     files = [outdir / ("mission.plan" if n == 1 else f"mission_{k + 1}.plan") for k in range(n)]
@@ -308,7 +308,7 @@ def write_qgc(plan, geo: GeoFrame, outdir, max_items: int = DEFAULT_MAX_ITEMS,
                       allow_nan=False)  # a NaN in an autopilot's file is a bug: refused
         counts.append(_items(len(part)))
     p = plan.parameters
-    flown = _flown_path(plan.path, mission.waypoints, plan.surface, p["sample_spacing"])
+    flown = _flown_path(plan.path, mission.waypoints, plan.surface, p.sample_spacing)
     before = (plan.metrics.total.coverage if plan.metrics is not None
               else _coverage(plan.path, plan))
     pos, _ = _replay(mission.waypoints, plan.surface, 1.0)
@@ -317,7 +317,7 @@ def write_qgc(plan, geo: GeoFrame, outdir, max_items: int = DEFAULT_MAX_ITEMS,
                "cross_track_admitted_m": mission.admitted,
                "waypoints_added_for_safety": mission.added,
                "coverage_before": float(before), "coverage_after": float(_coverage(flown, plan)),
-               "clearance": clearance_report(pos, plan.surface, p["omega"], p["min_depth"])}
+               "clearance": clearance_report(pos, plan.surface, p.omega, p.min_depth)}
     return files, summary
 
 

@@ -22,10 +22,9 @@ import contourpy
 import numpy as np
 from scipy import ndimage
 
+from drake_auv.planning.parameters import MAX_SLICES
 from drake_auv.planning.polyline import length, resample
 from drake_auv.planning.surface import TerrainSurface
-
-MAX_SLICES = 1000  # slicing planes per high-slope region (a slice_count or a slice_spacing)
 
 
 @dataclass(frozen=True)

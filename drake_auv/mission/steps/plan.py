@@ -11,7 +11,8 @@ import numpy as np
 
 from drake_auv.mission.spec import ANGLE_DEG, DEPTH_M, SPEED_MS, MissionFileError
 from drake_auv.mission.steps.step import MissionStep
-from drake_auv.params import checks, param, validate
+from drake_auv.params import checks, like, param, validate
+from drake_auv.planning.parameters import CoverageParameters
 
 
 @dataclass(frozen=True)
@@ -26,6 +27,8 @@ class PlanStep:
             (None: from the footprint); coverage only.
         slope_threshold, aperture_deg, overlap, min_area_m2: classification and sensor
             parameters of `plan_coverage` (deg, fraction, m^2); coverage only.
+        The planner's parameters take their defaults and ranges from `CoverageParameters`
+        (`omega` is required here).
         depth: depth of the contour, m; contour only, required there.
         end_width_m, end_heading_deg, end_overrun_m: contour only: fly around the end of a
             long structure, `end_width_m` wide, facing `end_heading_deg` (deg from +x, None:
@@ -35,15 +38,14 @@ class PlanStep:
     """
 
     KIND: ClassVar[str] = "plan"
-    omega: float = param(low=0.5, high=100.0, unit="m")
+    omega: float = like(CoverageParameters, "omega", required=True)
     method: str = param("coverage", kind="choice", choices=("coverage", "contour"))
-    slice_count: int | None = param(None, low=1, high=20, integer=True, nullable=True)
-    slice_spacing: float | None = param(None, low=0.0, high=50.0, low_open=True, unit="m",
-                                        nullable=True)
-    slope_threshold: float = param(0.5, low=0.0, high=10.0, low_open=True)
-    aperture_deg: float = param(60.0, low=5.0, high=170.0, unit="deg")
-    overlap: float = param(0.1, low=0.0, high=0.9)
-    min_area_m2: float | None = param(None, low=0.0, unit="m^2", nullable=True)
+    slice_count: int | None = like(CoverageParameters, "slice_count")
+    slice_spacing: float | None = like(CoverageParameters, "slice_spacing")
+    slope_threshold: float = like(CoverageParameters, "slope_threshold")
+    aperture_deg: float = like(CoverageParameters, "aperture_deg")
+    overlap: float = like(CoverageParameters, "overlap")
+    min_area_m2: float | None = like(CoverageParameters, "min_area")
     depth: float | None = param(None, **DEPTH_M)
     end_width_m: float | None = param(None, low=0.0, high=1000.0, low_open=True, unit="m",
                                       nullable=True)
@@ -67,12 +69,10 @@ def nominal_plan(step: PlanStep, site):
         return path, None
     from drake_auv.planning.coverage_plan import plan_coverage
 
-    kwargs = dict(omega=step.omega, aperture_deg=step.aperture_deg, overlap=step.overlap,
-                  slope_threshold=step.slope_threshold, slice_spacing=step.slice_spacing,
-                  slice_count=step.slice_count, sensor_range=site.max_range)
-    if step.min_area_m2 is not None:
-        kwargs["min_area"] = step.min_area_m2
-    plan = plan_coverage(site.prior, **kwargs)
+    plan = plan_coverage(site.prior, CoverageParameters(
+        omega=step.omega, aperture_deg=step.aperture_deg, overlap=step.overlap,
+        slope_threshold=step.slope_threshold, slice_spacing=step.slice_spacing,
+        slice_count=step.slice_count, sensor_range=site.max_range, min_area=step.min_area_m2))
     return plan.path, plan
 
 
