@@ -44,7 +44,8 @@ class CoverageParameters:
     aperture_deg: float = param(60.0, low=5.0, high=170.0, unit="deg")
     overlap: float = param(0.1, low=0.0, high=0.9)
     slope_threshold: float = param(0.5, low=0.0, high=10.0, low_open=True)
-    sweep_angle_deg: float | None = param(None, unit="deg", nullable=True)
+    sweep_angle_deg: float | None = param(None, unit="deg", nullable=True,
+                                          note="a finite angle in degrees")
     slice_spacing: float | None = param(None, low=0.0, high=50.0, low_open=True, unit="m",
                                         nullable=True)
     slice_count: int | None = param(None, low=1, high=MAX_SLICES, integer=True, nullable=True)
