@@ -24,12 +24,39 @@ from drake_auv.commands import check_plan_options, option_range, whole_number
 from drake_auv.params import checks, defaults
 from drake_auv.planning.parameters import CoverageParameters
 
-# the options that set `CoverageParameters`, by field
-OPTIONS = {"omega": "--omega", "slope_threshold": "--slope-threshold",
-           "aperture_deg": "--aperture", "overlap": "--overlap",
-           "sweep_angle_deg": "--sweep-angle", "slice_spacing": "--slice-spacing",
-           "slice_count": "--slice-count", "slice_sensor": "--slice-sensor", "order": "--order",
-           "min_area": "--min-area", "min_depth": "--min-depth"}
+
+def _order(text: str) -> str:
+    """An IHO S-44 order's name in any case (`planning.orders.ORDERS` keys are lower case)."""
+    return text.strip().lower()
+
+
+# The options that set `CoverageParameters`: (option, field, help with {allowed} and {default}
+# filled in from the field, argparse keywords).
+PARAMETER_OPTIONS = (
+    ("--omega", "omega", "offset to the terrain, {allowed} (default {default:g})",
+     {"type": float}),
+    ("--slope-threshold", "slope_threshold", "delta_s, slope above which terrain is "
+     "high-slope, {allowed} (default {default:g})", {"type": float}),
+    ("--aperture", "aperture_deg", "sensor aperture, {allowed} (default {default:g})",
+     {"type": float}),
+    ("--overlap", "overlap", "overlap of neighbouring lanes, {allowed} (default {default:g})",
+     {"type": float}),
+    ("--sweep-angle", "sweep_angle_deg", "lane direction, degrees from +x (default: fewest "
+     "lanes)", {"type": float}),
+    ("--slice-spacing", "slice_spacing", "vertical spacing of the slicing planes, {allowed} "
+     "(default: footprint)", {"type": float}),
+    ("--slice-count", "slice_count", "slicing planes per high-slope region, centred on it, "
+     "{allowed} (default: as many as cover it)", {"type": whole_number}),
+    ("--slice-sensor", "slice_sensor", "on high-slope regions look along the inward normal "
+     "(default) or with one fixed tilt per region",
+     {"choices": checks(CoverageParameters)["slice_sensor"].choices}),
+    ("--order", "order", "IHO S-44 ed. 6 survey order: exclusive (200 %% coverage), special, "
+     "1a (100 %%), 1b, 2 (5 %%); sets the lane spacing", {"type": _order}),
+    ("--min-area", "min_area", "smallest high-slope region kept, {allowed} (default 100 m^2, at "
+     "least 4 cells; it does not grow with the ROI)", {"type": float}),
+    ("--min-depth", "min_depth", "minimum operating depth, {allowed}: no sample above it, "
+     "shallower cells are no-go (default {default:g})", {"type": float}))
+OPTIONS = {field: option for option, field, _, _ in PARAMETER_OPTIONS}  # by field
 
 
 def _lonlat(text: str) -> tuple[float, float]:
@@ -38,22 +65,6 @@ def _lonlat(text: str) -> tuple[float, float]:
     except ValueError:
         raise ValueError(f"--origin-lonlat: expected 'LON,LAT' in degrees, got {text!r}") from None
     return lon, lat
-
-
-def _order(text: str) -> str:
-    """An IHO S-44 order's name in any case (`planning.orders.ORDERS` keys are lower case)."""
-    return text.strip().lower()
-
-
-def _parameter(parser, field: str, text: str, **kwargs) -> None:
-    """The option of `CoverageParameters.field`, its default and range from there: `text` is
-    its help, with {allowed} and {default} filled in."""
-    flag, default = OPTIONS[field], defaults(CoverageParameters)[field]
-    allowed = option_range(checks(CoverageParameters)[field])
-    if "choices" not in kwargs:
-        kwargs["metavar"] = flag.lstrip("-").upper().replace("-", "_")
-    parser.add_argument(flag, dest=field, default=default, **kwargs, help=text.format(
-        allowed=f"in {allowed}" if allowed[:1] in "[(" else allowed, default=default))
 
 
 def add_parser(subparsers) -> None:
@@ -70,29 +81,13 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--no-go", action="append", default=[], metavar="FILE",
                         help="no-go zones (polygons: GeoJSON, Shapefile, GeoPackage, any CRS); "
                              "nothing comes within Omega of them; repeatable")
-    _parameter(parser, "omega", "offset to the terrain, {allowed} (default {default:g})",
-               type=float)
-    _parameter(parser, "slope_threshold", "delta_s, slope above which terrain is high-slope, "
-               "{allowed} (default {default:g})", type=float)
-    _parameter(parser, "aperture_deg", "sensor aperture, {allowed} (default {default:g})",
-               type=float)
-    _parameter(parser, "overlap", "overlap of neighbouring lanes, {allowed} (default "
-               "{default:g})", type=float)
-    _parameter(parser, "sweep_angle_deg", "lane direction, degrees from +x (default: fewest "
-               "lanes)", type=float)
-    _parameter(parser, "slice_spacing", "vertical spacing of the slicing planes, {allowed} "
-               "(default: footprint)", type=float)
-    _parameter(parser, "slice_count", "slicing planes per high-slope region, centred on it, "
-               "{allowed} (default: as many as cover it)", type=whole_number)
-    _parameter(parser, "slice_sensor", "on high-slope regions look along the inward normal "
-               "(default) or with one fixed tilt per region",
-               choices=checks(CoverageParameters)["slice_sensor"].choices)
-    _parameter(parser, "order", "IHO S-44 ed. 6 survey order: exclusive (200 %% coverage), "
-               "special, 1a (100 %%), 1b, 2 (5 %%); sets the lane spacing", type=_order)
-    _parameter(parser, "min_area", "smallest high-slope region kept, {allowed} (default 100 "
-               "m^2, at least 4 cells; it does not grow with the ROI)", type=float)
-    _parameter(parser, "min_depth", "minimum operating depth, {allowed}: no sample above it, "
-               "shallower cells are no-go (default {default:g})", type=float)
+    for option, field, text, kwargs in PARAMETER_OPTIONS:
+        default = defaults(CoverageParameters)[field]
+        allowed = option_range(checks(CoverageParameters)[field])
+        if "choices" not in kwargs:
+            kwargs = {**kwargs, "metavar": option.lstrip("-").upper().replace("-", "_")}
+        parser.add_argument(option, dest=field, default=default, **kwargs, help=text.format(
+            allowed=f"in {allowed}" if allowed[:1] in "[(" else allowed, default=default))
     parser.add_argument("--export", default=None,
                         help="comma-separated: cola2 (mission.xml), qgc (mission.plan), "
                              "geojson (WGS 84: the route and the waypoints of the vehicle files "
