@@ -50,6 +50,7 @@ def run(args) -> int:
     from drake_auv.commands.outputs import MiB, output_folder
     from drake_auv.commands.simulate import draw_path, report
     from drake_auv.planning.lawnmower import lane_spacing, plan_lawnmower
+    from drake_auv.planning.parameters import CoverageParameters
     from drake_auv.terrain.synthetic import random_seabed
     from drake_auv.vehicle.flight import fly_path
     from drake_auv.visualization import Scene
@@ -62,8 +63,8 @@ def run(args) -> int:
     cell = 1.0
     shape = (int(round(length / cell)) + 1, int(round(width / cell)) + 1)
     seabed = random_seabed(seed=args.seed, shape=shape, cell=cell, relief=args.relief)
-    path = plan_lawnmower(seabed, omega=args.altitude, aperture_deg=args.aperture_deg,
-                          overlap=args.overlap)
+    path = plan_lawnmower(seabed, CoverageParameters(
+        omega=args.altitude, aperture_deg=args.aperture_deg, overlap=args.overlap))
     spacing = lane_spacing(args.altitude, args.aperture_deg, args.overlap)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

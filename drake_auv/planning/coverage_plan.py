@@ -241,9 +241,9 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
     path = route.build()
     lawn = None
     if baseline:
-        lawn = plan_lawnmower(bathy, omega=omega, aperture_deg=params.aperture_deg,
-                              overlap=params.overlap, lane_spacing_m=spacing, sample_spacing=ds,
-                              surface=surface, min_depth=min_depth, nogo=nogo)
+        # lanes along the fewest turns whatever the plan's sweep angle, at its sample spacing
+        lawn = plan_lawnmower(bathy, replace(params, sweep_angle_deg=None, sample_spacing=ds),
+                              lane_spacing_m=spacing, surface=surface, nogo=nogo)
     next_stage(bar, PLAN_STAGES[5])
     used = replace(params, sweep_angle_deg=float(np.degrees(angle)), sample_spacing=ds,
                    sensor_range=(2.0 * omega if params.sensor_range is None

@@ -15,6 +15,7 @@ import numpy as np
 from drake_auv.planning.boustrophedon import (best_sweep_angle, boustrophedon_waypoints,
                                               cell_lanes, decompose, exhaustive_walk,
                                               sliver_cells)
+from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.route import RouteBuilder
 from drake_auv.planning.surface import TerrainSurface
@@ -25,22 +26,6 @@ def lane_spacing(omega: float, aperture_deg: float, overlap: float) -> float:
     """Distance between lanes, m: the down-looking footprint 2 Omega tan(aperture / 2) shrunk
     by the overlap."""
     return 2.0 * omega * np.tan(np.radians(aperture_deg) / 2.0) * (1.0 - overlap)
-
-
-def check_sensor_parameters(omega: float, aperture_deg: float, overlap: float) -> None:
-    """ValueError naming the parameter and its range when one is out of range."""
-    if not (np.isfinite(omega) and omega > 0):
-        raise ValueError(f"omega (offset to the terrain) must be > 0 m, got {omega}")
-    if not (np.isfinite(aperture_deg) and 0 < aperture_deg < 180):
-        raise ValueError(f"aperture_deg must be in (0, 180) degrees, got {aperture_deg}")
-    if not (np.isfinite(overlap) and 0 <= overlap < 1):
-        raise ValueError(f"overlap must be in [0, 1), got {overlap}")
-
-
-def check_min_depth(min_depth: float) -> None:
-    """ValueError naming the minimum operating depth when it is out of range."""
-    if not (np.isfinite(min_depth) and min_depth >= 0):
-        raise ValueError(f"min_depth (minimum operating depth) must be >= 0 m, got {min_depth}")
 
 
 def check_omega_fits(omega: float, bathy: Bathymetry) -> None:
@@ -57,7 +42,6 @@ def wet_grid(bathy: Bathymetry, min_depth: float) -> Bathymetry:
     """`bathy` with the cells shallower than `min_depth` (elevation above -min_depth, m: land,
     or water too shallow to operate in) made no-data, so no lane covers them. ValueError when
     no cell is left."""
-    check_min_depth(min_depth)
     z = bathy.z
     wet = z <= -min_depth
     if not wet.any():
@@ -71,39 +55,33 @@ def wet_grid(bathy: Bathymetry, min_depth: float) -> Bathymetry:
     return bathy.with_z(np.where(wet, z, np.nan))
 
 
-def plan_lawnmower(bathy: Bathymetry, *, omega: float = 2.0, aperture_deg: float = 60.0,
-                   overlap: float = 0.1, sweep_angle_deg: float | None = None,
-                   sample_spacing: float | None = None, enforce_clearance: bool = True,
-                   surface: TerrainSurface | None = None, min_depth: float = 1.0,
+def plan_lawnmower(bathy: Bathymetry, params: CoverageParameters = CoverageParameters(), *,
+                   enforce_clearance: bool = True, surface: TerrainSurface | None = None,
                    nogo=None, lane_spacing_m: float | None = None) -> PlannedPath:
     """Lawnmower over the valid cells of `bathy`; labels "lawnmower" and "transit".
 
     Args:
-        omega: altitude, m (> 0).
-        aperture_deg: sensor aperture, degrees in (0, 180).
-        overlap: lane overlap in [0, 1).
-        sweep_angle_deg: lane direction, degrees from world +x (None: fewest turns).
-        sample_spacing: largest distance between samples, m (default Omega / 4).
+        params: the planner's parameters the lawnmower flies by: `omega` (the altitude, m),
+            `aperture_deg` and `overlap` (the lane spacing), `sweep_angle_deg` (lane
+            direction from world +x; None: fewest turns), `sample_spacing` (None: Omega / 4),
+            `min_depth` (no sample above z = -min_depth).
         surface: a prebuilt `TerrainSurface` of `bathy` to reuse.
-        min_depth: minimum operating depth, m (>= 0): no sample above z = -min_depth.
         nogo: a `planning.nogo.NoGo` the lanes keep out of and the transits go around.
         lane_spacing_m: distance between lanes, m (default `lane_spacing` of the sensor; the
             coverage planner passes its survey order's).
     """
-    check_sensor_parameters(omega, aperture_deg, overlap)
-    check_min_depth(min_depth)
+    omega, min_depth = params.omega, params.min_depth
     check_omega_fits(omega, bathy)
     bathy = wet_grid(bathy, min_depth)
-    spacing = lane_spacing(omega, aperture_deg, overlap) if lane_spacing_m is None else lane_spacing_m
+    spacing = (lane_spacing(omega, params.aperture_deg, params.overlap) if lane_spacing_m is None
+               else lane_spacing_m)
     if not (np.isfinite(spacing) and spacing > 0):
         raise ValueError(f"lane_spacing_m must be > 0 m, got {lane_spacing_m}")
-    ds = omega / 4.0 if sample_spacing is None else float(sample_spacing)
-    if not ds > 0:
-        raise ValueError(f"sample_spacing must be > 0 m, got {sample_spacing}")
+    ds = omega / 4.0 if params.sample_spacing is None else float(params.sample_spacing)
     surface = TerrainSurface(bathy, min(min(bathy.spacing), omega / 4.0)) if surface is None else surface
     valid = bathy.valid
-    angle = (best_sweep_angle(bathy, valid, spacing) if sweep_angle_deg is None
-             else np.radians(float(sweep_angle_deg)))
+    angle = (best_sweep_angle(bathy, valid, spacing) if params.sweep_angle_deg is None
+             else np.radians(float(params.sweep_angle_deg)))
     dec = decompose(bathy, valid, angle)
     centroids = np.array([c.centroid(dec.frame) for c in dec.cells])
     route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
