@@ -73,8 +73,9 @@ def plan_run(grid, out) -> dict:
 
 def phases(grid) -> dict:
     """Wall and CPU seconds of each stage of a default plan of `grid`, in this process."""
+    from drake_auv.formats.geojson import write_geojson
+    from drake_auv.formats.registry import check_exports
     from drake_auv.planning.coverage_plan import plan_coverage
-    from drake_auv.planning.export import check_exports, write_geojson
     from drake_auv.planning.figures import write_figures
     from drake_auv.planning.metrics3d import evaluate_plan_3d
     from drake_auv.terrain.readers import read_bathymetry

@@ -27,13 +27,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import yaml  # noqa: E402
 
+from drake_auv.formats.outputs import write_outputs  # noqa: E402
 from drake_auv.mission.config import load_mission  # noqa: E402
 from drake_auv.mission.plan import plan_mission  # noqa: E402
 from drake_auv.mission.report.outputs import write_outputs as write_report  # noqa: E402
 from drake_auv.mission.report.summary import summarise  # noqa: E402
 from drake_auv.mission.runner import run_mission  # noqa: E402
 from drake_auv.mission.site import load_site  # noqa: E402
-from drake_auv.planning.export import write_outputs  # noqa: E402
 from drake_auv.scenarios import DATA_DIR  # noqa: E402
 from drake_auv.signals import VehicleState  # noqa: E402
 from drake_auv.terrain.readers import read_bathymetry  # noqa: E402

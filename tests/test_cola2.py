@@ -11,10 +11,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from drake_auv.autopilot.cola2 import held_band, replay_cola2
-from drake_auv.autopilot.replay import clearance_report
 from drake_auv.autopilot.items import localise
-from drake_auv.planning.cola2 import (Cola2Sections, cola2_sections, export_cola2, read_cola2,
-                                      write_cola2)
+from drake_auv.autopilot.replay import clearance_report
+from drake_auv.formats.cola2 import (Cola2Sections, cola2_sections, export_cola2, read_cola2,
+                                     write_cola2)
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame

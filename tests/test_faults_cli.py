@@ -132,12 +132,12 @@ def _link(path):
 
 
 def test_an_os_error_during_the_work_is_one_line(tmp_path, capsys, grid, monkeypatch):
-    import drake_auv.planning.export
+    import drake_auv.formats.outputs
 
     def full(plan, outdir, **_):
         raise OSError(errno.ENOSPC, "No space left on device", str(outdir) + "/path.csv")
 
-    monkeypatch.setattr(drake_auv.planning.export, "write_outputs", full)
+    monkeypatch.setattr(drake_auv.formats.outputs, "write_outputs", full)
     code = main(["plan", str(grid), "--no-figures", "--no-3d-metrics", "-o", str(tmp_path)])
     err = capsys.readouterr().err.strip().splitlines()[-1]  # after the progress bar
     assert code == 2 and err == f"drake-auv plan: error: {tmp_path}/path.csv: No space left " \

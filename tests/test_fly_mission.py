@@ -9,12 +9,12 @@ import pytest
 import yaml
 
 from drake_auv.cli import main
+from drake_auv.formats.outputs import write_outputs
 from drake_auv.mission.config import MissionFileError, load_mission
 from drake_auv.mission.plan import plan_mission
 from drake_auv.mission.report.summary import summarise
 from drake_auv.mission.runner import run_mission
 from drake_auv.mission.site import load_site
-from drake_auv.planning.export import write_outputs
 from drake_auv.scenarios import DATA_DIR
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.site_files import write_site_files

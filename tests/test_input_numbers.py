@@ -9,10 +9,10 @@ import pytest
 import yaml
 
 from drake_auv.cli import main
+from drake_auv.formats import outputs
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.yaml_text import load_yaml
 from drake_auv.output_files import json_ready, write_json
-from drake_auv.planning import export
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.readers import read_bathymetry, write_geotiff
 
@@ -72,12 +72,12 @@ def test_json_holds_null_with_the_reason_never_nan_or_infinity(tmp_path):
 
 
 def test_plans_report_json_is_strict(tmp_path, monkeypatch):
-    report_dict = export.report_dict
+    report_dict = outputs.report_dict
 
     def with_nan(plan, m3d, *args):
         return {**report_dict(plan, m3d, *args), "undefined": math.nan}
 
-    monkeypatch.setattr(export, "report_dict", with_nan)
+    monkeypatch.setattr(outputs, "report_dict", with_nan)
     z = -20.0 - 0.2 * np.clip(np.arange(30.0)[None, :] - 10.0, 0.0, 8.0) * np.ones((25, 1))
     grid = tmp_path / "g.npz"
     np.savez(grid, z=z, spacing=[1.0, 1.0])
@@ -151,8 +151,8 @@ def test_an_explore_region_larger_than_the_memory_is_refused_at_load():
 def test_a_hold_longer_than_an_hour_in_a_flown_file_is_refused_naming_the_item(tmp_path):
     import re
 
-    from drake_auv.planning.cola2 import read_cola2
-    from drake_auv.planning.qgc import read_qgc_plan
+    from drake_auv.formats.cola2 import read_cola2
+    from drake_auv.formats.qgc import read_qgc_plan
 
     yy, xx = np.mgrid[0:40, 0:30] * 1.0
     tif = tmp_path / "small.tif"

@@ -72,7 +72,7 @@ def test_the_reference_table_when_asked_for(tmp_path, small_tif):
 @pytest.mark.parametrize("seconds, text", [(42.4, "42 s"), (750.0, "12.5 min"),
                                            (131_760.0, "36.6 h")])
 def test_human_duration(seconds, text):
-    from drake_auv.planning.export import human_duration
+    from drake_auv.planning.report import human_duration
 
     assert human_duration(seconds) == text
 
@@ -170,12 +170,12 @@ def test_what_does_not_apply_is_left_out_of_the_report():
     """A gentle slope: no high-slope region, so no row for it, and no "nan" or "n/a"."""
     from drake_auv.planning.coverage_plan import plan_coverage
     from drake_auv.planning.parameters import CoverageParameters
-    from drake_auv.planning.export import report_markdown
+    from drake_auv.planning.report import report_dict, report_markdown
 
     x = np.arange(40.0)[None, :] * np.ones((30, 1))
     plan = plan_coverage(Bathymetry(-20.0 + 0.05 * x, (1.0, 1.0)), CoverageParameters(omega=2.0))
     assert plan.labels.n_regions == 0 and plan.metrics.high_slope.samples == 0
-    text = report_markdown(plan)
+    text = report_markdown(plan, report_dict(plan))
     assert "| Planar region |" in text and "| High-slope region |" not in text
     assert "nan" not in text and "n/a" not in text and "Length ratio" in text
 
@@ -248,9 +248,9 @@ class _RecordingBar:
 
 
 def test_one_progress_bar_ends_when_the_last_file_is_written(tmp_path):
+    from drake_auv.formats.outputs import output_stages, write_outputs
     from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
     from drake_auv.planning.parameters import CoverageParameters
-    from drake_auv.planning.export import output_stages, write_outputs
 
     yy, xx = np.mgrid[0:40, 0:30] * 1.0
     bathy = Bathymetry(-40.0 + np.clip(xx - 12.0, 0.0, 8.0) * 0.9 + 0.02 * yy, (1.0, 1.0),

@@ -11,9 +11,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
+from drake_auv.formats.geojson import path_to_geojson
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.parameters import CoverageParameters
-from drake_auv.planning.export import path_to_geojson
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.path import PlannedPath
 from drake_auv.scenarios import DATA_DIR as DATA

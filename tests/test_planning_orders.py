@@ -6,8 +6,8 @@ import pytest
 from drake_auv.cli import main
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.parameters import CoverageParameters
-from drake_auv.planning.export import report_dict
 from drake_auv.planning.orders import ORDERS, coverage_multiplicity, survey_order
+from drake_auv.planning.report import report_dict
 from drake_auv.terrain.synthetic import random_seabed
 
 

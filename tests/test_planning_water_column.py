@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.parameters import CoverageParameters
-from drake_auv.planning.export import report_dict
+from drake_auv.planning.report import report_dict
 from drake_auv.terrain.synthetic import random_seabed
 
 

@@ -1,6 +1,6 @@
 """The items of a vehicle mission file, as its reader returns them, and in the local frame.
 
-A reader (`drake_auv.planning.cola2.read_cola2`, `drake_auv.planning.qgc.read_qgc_plan`)
+A reader (`drake_auv.formats.cola2.read_cola2`, `drake_auv.formats.qgc.read_qgc_plan`)
 returns a `VehicleMission`: the file's items in order, positions in WGS 84 as the file holds
 them, every vertical reference with the mode the autopilot holds it in. `localise` turns them
 into `LocalLeg`s in a site's local frame (world xy, z up) for the replay and the pilot.

@@ -3,7 +3,7 @@
 Both replays (`autopilot.cola2.replay_cola2`, `autopilot.ardusub.replay_ardusub`) give the
 positions the vehicle passes; `clearance_report` says how close they come to the seabed and to
 the sea surface, the exports' acceptance (at least 0.5 Omega from the prior seabed, no shallower
-than the minimum depth).
+than the minimum depth), and `clearance_warnings` states each violation in a line.
 """
 
 from __future__ import annotations
@@ -41,3 +41,21 @@ def clearance_report(positions: np.ndarray, surface, omega: float, min_depth: fl
             "closer_than_half_omega": int(len(close)),
             "shallower_than_min_depth": int((-p[:, 2] < min_depth - tol).sum()),
             "closer_than_reachable": int((d[close] < reach - tol).sum())}
+
+
+def clearance_warnings(name: str, r: dict, omega: float, min_depth: float) -> list[str]:
+    """One line per violation a `clearance_report` `r` records, for the vehicle file `name`:
+    samples nearer than 0.5 omega to the prior seabed, or shallower than `min_depth` (m)."""
+    out = []
+    if r["closer_than_half_omega"]:
+        cause = ("all where the minimum depth leaves no more" if not r["closer_than_reachable"]
+                 else f"{r['closer_than_reachable']} of them where the minimum depth does not "
+                      "force it")
+        out.append(f"{name}: flown as its autopilot flies it, {r['closer_than_half_omega']} of "
+                   f"{r['samples']} samples come nearer than Omega / 2 = {0.5 * omega:g} m to "
+                   f"the prior seabed (least {r['min_clearance_m']:.2f} m); {cause}")
+    if r["shallower_than_min_depth"]:
+        out.append(f"{name}: flown as its autopilot flies it, {r['shallower_than_min_depth']} "
+                   f"of {r['samples']} samples are shallower than the {min_depth:g} m minimum "
+                   f"depth (shallowest {r['shallowest_depth_m']:.3f} m)")
+    return out

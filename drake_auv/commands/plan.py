@@ -68,6 +68,8 @@ def _lonlat(text: str) -> tuple[float, float]:
 
 
 def add_parser(subparsers) -> None:
+    from drake_auv.formats.registry import export_help
+
     parser = subparsers.add_parser("plan", help="plan a 3D coverage path on a bathymetric map",
                                    description=__doc__.split("\n")[0])
     parser.add_argument("bathymetry",
@@ -88,10 +90,7 @@ def add_parser(subparsers) -> None:
             kwargs = {**kwargs, "metavar": option.lstrip("-").upper().replace("-", "_")}
         parser.add_argument(option, dest=field, default=default, **kwargs, help=text.format(
             allowed=f"in {allowed}" if allowed[:1] in "[(" else allowed, default=default))
-    parser.add_argument("--export", default=None,
-                        help="comma-separated: cola2 (mission.xml), qgc (mission.plan), "
-                             "geojson (WGS 84: the route and the waypoints of the vehicle files "
-                             "written with it) (default: geojson when georeferenced)")
+    parser.add_argument("--export", default=None, help=export_help())
     parser.add_argument("--origin-lonlat", default=None,
                         help="WGS 84 'LON,LAT' of the world origin, for grids without a CRS "
                              "(the caldera site defaults to the Santorini caldera)")
@@ -139,9 +138,11 @@ def run(args) -> int:
     check_plan_options([(option, getattr(args, field), field) for field, option in OPTIONS.items()]
                        + [("--speed", args.speed, "speed")])
     from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
-    from drake_auv.planning.export import (check_exports, export_warnings, mission_time_line,
-                                           output_stages, parse_exports, table3_markdown,
-                                           upload_line, write_outputs)
+    from drake_auv.formats import ExportOptions
+    from drake_auv.formats.outputs import output_stages, write_outputs
+    from drake_auv.formats.registry import (check_exports, export_notes, export_warnings,
+                                            parse_exports)
+    from drake_auv.planning.report import mission_time_line, table3_markdown
     from drake_auv.planning.stages import StageBar
     from drake_auv.terrain.roi import parse_roi
 
@@ -175,8 +176,8 @@ def run(args) -> int:
         if no_data:  # stated, never silent
             print(f"{args.bathymetry}: {no_data} of {bathy.z.size} cells are no-data (its nodata "
                   "value, mask or NaN): no-go for coverage")
-    exports, _ = check_exports(bathy, exports, origin, args.max_items,
-                               args.ardusub_frames)  # before planning
+    exports, _ = check_exports(bathy, exports, origin, ExportOptions(
+        max_items=args.max_items, ardusub_frames=args.ardusub_frames))  # before planning
     if args.roi and args.roi_file:
         raise ValueError("give --roi or --roi-file, not both")
     roi = parse_roi(args.roi) if args.roi else None
@@ -213,9 +214,8 @@ def run(args) -> int:
         from drake_auv.planning.current import summary_lines
 
         print("\n".join(summary_lines(flow, plan.parameters.sweep_angle_deg)))
-    upload = upload_line(report)
-    if upload is not None:
-        print(upload)
+    for note in export_notes(report):
+        print(note)
     for warning in export_warnings(report):
         print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {len(files)} files to {args.out}")

@@ -1,6 +1,6 @@
 """Waypoints of a `PlannedPath`, the start of the vehicle missions: the COLA2 mission XML
-(`planning.cola2`, sections chosen under COLA2's semantics) and the QGroundControl `.plan`
-(`planning.qgc`, ArduSub), both in WGS 84.
+(`formats.cola2`, sections chosen under COLA2's semantics) and the QGroundControl `.plan`
+(`formats.qgc`, ArduSub), both in WGS 84.
 
 Waypoints: the path's samples thinned per labelled run by Douglas-Peucker in 3D (x, y and the
 coordinate the vehicle holds: altitude above the seabed on terrain-following lanes, elevation

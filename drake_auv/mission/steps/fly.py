@@ -15,12 +15,13 @@ import numpy as np
 from drake_auv.autopilot.items import (FlownMission, item_positions, localise,
                                        position_tolerance)
 from drake_auv.autopilot.semantics import mission_duration
+from drake_auv.formats.registry import VEHICLE_FILES
 from drake_auv.mission.legs import Leg
 from drake_auv.mission.spec import SPEED_MS, TIME_S, MissionFileError
 from drake_auv.mission.steps.step import TIME_SLACK, MissionStep
 from drake_auv.params import checks, param, validate
 
-FLY_FORMATS = {".xml": "cola2", ".plan": "ardusub"}
+FLY_FORMATS = {suffix: f.autopilot for suffix, f in VEHICLE_FILES.items()}  # ".xml": "cola2"
 
 
 @dataclass(frozen=True)
@@ -57,7 +58,7 @@ def flown_mission(step: FlyStep, site, label: str, where: str) -> FlownMission:
     """The fly step's file read and placed in the site's local frame. Raises
     MissionFileError (one line naming `where`) for a site without a CRS, a file that does not
     parse, an item outside the world or above the sea surface."""
-    from drake_auv.autopilot.files import read_vehicle_mission
+    from drake_auv.formats.registry import read_vehicle_mission
     from drake_auv.planning.geo import GeoFrame
 
     if site.prior.crs is None:
@@ -65,7 +66,7 @@ def flown_mission(step: FlyStep, site, label: str, where: str) -> FlownMission:
                                "positions cannot be placed",
                                "a site whose prior raster or site.crs gives its CRS")
     try:
-        mission = read_vehicle_mission(step.file, step.autopilot, step.heave_in_3d)
+        mission = read_vehicle_mission(step.file, step.heave_in_3d)
     except (ValueError, OSError) as err:
         raise MissionFileError(label, f"{where}.file", " ".join(str(err).split()),
                                f"a valid {step.file.suffix} {step.autopilot} mission") from None

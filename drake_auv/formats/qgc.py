@@ -38,8 +38,9 @@ from pathlib import Path
 import numpy as np
 
 from drake_auv.autopilot.ardusub import replay_ardusub
-from drake_auv.autopilot.replay import clearance_report
 from drake_auv.autopilot.items import MAX_HOLD_S, LocalLeg, MissionItem, VehicleMission
+from drake_auv.autopilot.replay import clearance_report, clearance_warnings
+from drake_auv.formats import Exported, ExportOptions
 from drake_auv.output_files import open_replacing
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.metrics import evaluate_path, surface_area_weights
@@ -320,6 +321,40 @@ def write_qgc(plan, geo: GeoFrame, outdir, max_items: int = DEFAULT_MAX_ITEMS,
                "clearance": clearance_report(pos, plan.surface, p.omega, p.min_depth)}
     return files, summary
 
+
+def write_export(plan, geo: GeoFrame, outdir: Path, options: ExportOptions,
+                 missions: tuple) -> Exported:
+    """`--export qgc`: mission.plan or mission_1.plan, ... (`write_qgc`), their summary and
+    the missions read back."""
+    files, summary = write_qgc(plan, geo, outdir, max_items=options.max_items,
+                               frames=options.ardusub_frames, speed=options.surge_velocity,
+                               acceptance_radius=options.tolerance_xy)
+    return Exported(files, summary, tuple(read_qgc_plan(f) for f in files))
+
+
+def check_export(options: ExportOptions) -> None:
+    """`check_options` of the export's options."""
+    check_options(options.max_items, options.ardusub_frames)
+
+
+def report_warnings(figures: dict, parameters: dict) -> list[str]:
+    """One line per violation `write_qgc`'s summary records: replayed samples nearer than
+    Omega / 2 to the prior seabed or above the minimum depth."""
+    files = figures["files"]
+    name = f"{files[0] if len(files) == 1 else files[0] + ' to ' + files[-1]} (ArduSub)"
+    return clearance_warnings(name, figures["clearance"], parameters["omega"],
+                              parameters["min_depth"])
+
+
+def report_note(figures: dict) -> str | None:
+    """The files in upload order when the mission is split, else None."""
+    if len(figures["files"]) == 1:
+        return None
+    order = ", then ".join(f"{f} ({n} items)" for f, n in zip(figures["files"],
+                                                              figures["items"]))
+    return (f"QGroundControl: the mission is split into {len(figures['files'])} files of at "
+            f"most {figures['max_items']} items; upload and fly them in this order: {order} "
+            "(each starts at the previous one's last waypoint).")
 
 def _fail(source, where: str, what: str):
     raise ValueError(f"{source}: {where}: {what}")

@@ -30,8 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_auv.autopilot.cola2 import DEFAULT_SURGE, HEAVE_SPEED, held_band
-from drake_auv.autopilot.items import MAX_HOLD_S, MissionItem, VehicleMission
+from drake_auv.autopilot.cola2 import DEFAULT_SURGE, HEAVE_SPEED, held_band, replay_cola2
+from drake_auv.autopilot.items import MAX_HOLD_S, MissionItem, VehicleMission, localise
+from drake_auv.autopilot.replay import clearance_report, clearance_warnings
+from drake_auv.formats import Exported, ExportOptions
 from drake_auv.output_files import replacing
 from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.missions import ALTITUDE_LABELS
@@ -453,3 +455,29 @@ def export_cola2(path: PlannedPath, surface: TerrainSurface, omega: float, min_d
             "sections_over_deviation": over,
             "unresolved_sections": sections.unresolved,
             "replay": clearance_report(positions, surface, omega, min_depth)}
+
+
+def write_export(plan, geo: GeoFrame, outdir: Path, options: ExportOptions,
+                 missions: tuple) -> Exported:
+    """`--export cola2`: mission.xml (`export_cola2`), its figures and the mission read back."""
+    filename = outdir / "mission.xml"
+    figures = export_cola2(plan.path, plan.surface, plan.parameters.omega,
+                           plan.parameters.min_depth, geo, filename, options.surge_velocity,
+                           options.tolerance_xy, options.heave_in_3d)
+    return Exported([filename], figures, (read_cola2(filename),))
+
+
+def report_warnings(figures: dict, parameters: dict) -> list[str]:
+    """One line per violation `export_cola2`'s `figures` record: sections beyond the deviation
+    tolerance or unresolved, and replayed samples nearer than Omega / 2 to the prior seabed or
+    above the minimum depth."""
+    c, name, out = figures, "mission.xml (COLA2)", []
+    if c["sections_over_deviation"]:
+        out.append(f"{name}: {c['sections_over_deviation']} of {c['sections']} sections "
+                   f"stray more than the {c['deviation_tolerance_m']:g} m deviation "
+                   f"tolerance from the path (worst {c['max_deviation_m']:.2f} m)")
+    if c["unresolved_sections"]:
+        out.append(f"{name}: {c['unresolved_sections']} sections hold the lowest safe depth "
+                   "(no target kept Omega / 2 from the seabed within the tolerance)")
+    return out + clearance_warnings(name, c["replay"], parameters["omega"],
+                                    parameters["min_depth"])

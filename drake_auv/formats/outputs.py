@@ -1,0 +1,96 @@
+"""The `drake-auv plan` output folder: path.csv (world frame, `PlannedPath.to_csv`), the
+`--export` formats (`registry.EXPORTS`), report.md and report.json (`planning.report`) and the
+PNG figures (`planning.figures`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from drake_auv.formats import ExportOptions
+from drake_auv.formats.registry import EXPORTS, check_exports, export_notes, export_warnings
+from drake_auv.output_files import write_json, write_text
+from drake_auv.planning.report import mission_time, report_dict, report_markdown
+from drake_auv.planning.stages import next_stage, stage_bar
+
+
+def output_stages(exports: tuple[str, ...], figures: bool = True, metrics_3d=True) -> int:
+    """The stages `write_outputs` counts on a progress bar: path.csv, each export, the 3D
+    metrics (when computed), the reports and each figure."""
+    from drake_auv.planning.figures import PLAN_VIEWS, VIEWS_3D
+
+    return (2 + len(exports) + (metrics_3d is True)
+            + (len(PLAN_VIEWS) + len(VIEWS_3D) if figures else 0))
+
+
+def write_outputs(plan, outdir, figures: bool = True, progress=False,
+                  exports: tuple[str, ...] | None = None, origin_lonlat=None,
+                  surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
+                  metrics_3d=True, max_items: int = 700, ardusub_frames: str = "terrain",
+                  heave_in_3d: bool = False, reference_table: bool = False,
+                  current: dict | None = None) -> list[Path]:
+    """Writes path.csv (world frame), report.md, report.json, the `exports` and (with
+    `figures`) the PNG figures into `outdir`; returns the files written.
+
+    Args:
+        progress: a progress bar over the `output_stages`, or a caller's tqdm bar to advance
+            by them (`planning.stages`: one display that ends when the last file is written).
+        exports: names of `registry.EXPORTS`: "cola2" (mission.xml), "qgc" (mission.plan, or
+            mission_1.plan, ... past `max_items`; report.json gains exports.qgc), "geojson"
+            (path.geojson: the route and the waypoints of the vehicle files written with it;
+            lawnmower.geojson; WGS 84); None: "geojson" when the grid is georeferenced (a CRS
+            or `origin_lonlat`), else none. Written in the table's order.
+        origin_lonlat: WGS 84 (lon, lat) of the world origin, for grids without a CRS.
+        surge_velocity, tolerance_xy, max_items, ardusub_frames, heave_in_3d: the exports'
+            `ExportOptions` (`surge_velocity` is also the report's mission time).
+        metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report: True
+            computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
+        reference_table: add the reference's Table 3 (the Santorini caldera) to the reports.
+        current: `planning.current.current_report` of the path, added to report.json
+            (`current`) and report.md.
+    """
+    options = ExportOptions(surge_velocity, tolerance_xy, max_items, ardusub_frames,
+                            heave_in_3d)
+    exports, geo = check_exports(plan.bathy, exports, origin_lonlat, options)
+    mission_time(plan, surge_velocity)  # the speed, checked before any file is written
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    written, extras, missions = [], {}, ()
+    bar, owned = stage_bar(progress, output_stages(exports, figures, metrics_3d), "outputs")
+    bar.set_postfix_str("path.csv")
+    plan.path.to_csv(outdir / "path.csv")
+    written.append(outdir / "path.csv")
+    for fmt in EXPORTS.values():
+        if fmt.name not in exports:
+            continue
+        next_stage(bar, fmt.stage)
+        exported = fmt.write(plan, geo, outdir, options, missions)
+        written += exported.files
+        if exported.figures is not None:
+            extras[fmt.name] = exported.figures
+        missions += exported.missions
+    m3d = metrics_3d if isinstance(metrics_3d, dict) else None
+    if metrics_3d is True:
+        from drake_auv.planning.metrics3d import evaluate_plan_3d
+
+        next_stage(bar, "3D metrics")
+        m3d = evaluate_plan_3d(plan)
+    next_stage(bar, "reports")
+    rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
+    markdown = report_markdown(plan, rep, m3d, export_warnings(rep), export_notes(rep))
+    if current is not None:
+        from drake_auv.planning.current import current_markdown
+
+        markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
+        rep["current"] = current
+    write_text(outdir / "report.md", markdown)
+    write_json(outdir / "report.json", rep)
+    written += [outdir / "report.md", outdir / "report.json"]
+    next_stage(bar)
+    if figures:
+        from drake_auv.planning.figures import write_figures
+
+        written += write_figures(plan, outdir, progress=bar, geo=geo)
+    if owned:
+        bar.close()
+    return written
