@@ -13,8 +13,8 @@ from drake_auv.planning.cola2 import read_cola2
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.export import ROUTE_TOLERANCE, write_outputs
-from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.qgc import read_qgc_plan
+from drake_auv.terrain.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.terrain.synthetic import caldera_site
 
 ROUTE = ["kind", "name", "samples", "length_m", "depth_min", "depth_max"]

@@ -130,7 +130,7 @@ def test_plan_figures_read_the_crs_latitude_longitude_and_north(small_tif):
     from drake_auv.planning.coverage_plan import plan_coverage
     from drake_auv.planning.parameters import CoverageParameters
     from drake_auv.planning.figures import fig_slope
-    from drake_auv.planning.geo import GeoFrame
+    from drake_auv.terrain.geo import GeoFrame
     from drake_auv.terrain.readers import read_bathymetry
 
     bathy = read_bathymetry(small_tif)

@@ -159,7 +159,7 @@ def run(args) -> int:
         raise ValueError("--tide and --align-with-current need --current SPEED,TOWARDS_DEG")
     origin = _lonlat(args.origin_lonlat) if args.origin_lonlat is not None else None
     if args.bathymetry == "caldera" and not Path("caldera").exists():
-        from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
+        from drake_auv.terrain.geo import CALDERA_ORIGIN_LONLAT
         from drake_auv.terrain.synthetic import caldera_site
 
         bathy = caldera_site()

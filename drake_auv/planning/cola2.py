@@ -33,7 +33,7 @@ import numpy as np
 from drake_auv.autopilot.cola2 import DEFAULT_SURGE, HEAVE_SPEED, held_band
 from drake_auv.autopilot.items import MAX_HOLD_S, MissionItem, VehicleMission
 from drake_auv.output_files import replacing
-from drake_auv.planning.geo import GeoFrame
+from drake_auv.terrain.geo import GeoFrame
 from drake_auv.planning.missions import ALTITUDE_LABELS
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.surface import TerrainSurface

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from drake_auv.output_files import write_json, write_text
-from drake_auv.planning.geo import GeoFrame
+from drake_auv.terrain.geo import GeoFrame
 from drake_auv.planning.missions import douglas_peucker
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.stages import next_stage, stage_bar

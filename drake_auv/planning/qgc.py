@@ -41,7 +41,7 @@ from drake_auv.autopilot.ardusub import replay_ardusub
 from drake_auv.autopilot.replay import clearance_report
 from drake_auv.autopilot.items import MAX_HOLD_S, LocalLeg, MissionItem, VehicleMission
 from drake_auv.output_files import open_replacing
-from drake_auv.planning.geo import GeoFrame
+from drake_auv.terrain.geo import GeoFrame
 from drake_auv.planning.metrics import evaluate_path, surface_area_weights
 from drake_auv.planning.missions import ALTITUDE_LABELS, Waypoints, mission_waypoints
 from drake_auv.planning.path import PlannedPath
