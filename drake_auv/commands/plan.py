@@ -148,7 +148,7 @@ def run(args) -> int:
     exports = parse_exports(args.export) if args.export is not None else None
     current = None
     if args.current is not None:
-        from drake_auv.planning.current import aligned_sweep_angle, parse_current
+        from drake_auv.vehicle.current_feasibility import aligned_sweep_angle, parse_current
 
         current = parse_current(args.current, args.tide)
         if args.align_with_current and args.sweep_angle_deg is not None:
@@ -197,7 +197,7 @@ def run(args) -> int:
         plan = plan_coverage(bathy, params, roi=roi, no_go=no_go, progress=bar)
         flow = None
         if current is not None:
-            from drake_auv.planning.current import current_report
+            from drake_auv.vehicle.current_feasibility import current_report
 
             flow = current_report(plan.path, current, args.speed)
         files = write_outputs(plan, args.out, figures=not args.no_figures, progress=bar,
@@ -210,7 +210,7 @@ def run(args) -> int:
         print(table3_markdown(plan.metrics))
     print(mission_time_line(report["mission_time"]))
     if flow is not None:
-        from drake_auv.planning.current import summary_lines
+        from drake_auv.vehicle.current_feasibility import summary_lines
 
         print("\n".join(summary_lines(flow, plan.parameters.sweep_angle_deg)))
     upload = upload_line(report)

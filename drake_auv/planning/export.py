@@ -476,7 +476,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
     rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
     markdown = _markdown(plan, m3d, rep)
     if current is not None:
-        from drake_auv.planning.current import current_markdown
+        from drake_auv.vehicle.current_feasibility import current_markdown
 
         markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
         rep["current"] = current

@@ -4,10 +4,11 @@ and thrust limits, warnings, durations at ground speed, lanes aligned with the c
 import numpy as np
 import pytest
 
-from drake_auv.planning.current import (PlanCurrent, aligned_sweep_angle, current_markdown,
-                                        current_report, parse_current, thrust_share)
 from drake_auv.planning.path import PlannedPath
 from drake_auv.vehicle.control import axis_force_limits
+from drake_auv.vehicle.current_feasibility import (PlanCurrent, aligned_sweep_angle,
+                                                   current_markdown, current_report,
+                                                   parse_current, thrust_share)
 from drake_auv.vehicle.model import Girona500Params
 
 
@@ -167,7 +168,7 @@ def test_plan_refuses_a_bad_current(tmp_path, small_tif, capsys, extra, message)
 
 
 def test_the_offer_of_aligned_lanes_states_their_thrust_against_the_plans():
-    from drake_auv.planning.current import summary_lines
+    from drake_auv.vehicle.current_feasibility import summary_lines
 
     path = _two_lanes()  # lanes east and north
     report = current_report(path, PlanCurrent(0.6, 0.0), 0.5)  # towards north
