@@ -26,7 +26,8 @@ from pathlib import Path
 from drake_auv.ocean.spec import OceanSpec
 from drake_auv.params import CHECK, NESTED, nested, param, validate
 from drake_auv.random_streams import MAX_SEED, SEED_RANGE
-from drake_auv.replanning.section import OPTIMIZERS, ReplanningParameters
+from drake_auv.replanning.parameters import ReplanningParameters
+from drake_auv.replanning.section import OPTIMIZERS
 from drake_auv.scenarios import list_scenarios
 from drake_auv.signals import THRUSTER_NAMES
 from drake_auv.sonar.noise import SonarNoise
