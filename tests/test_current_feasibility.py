@@ -115,18 +115,6 @@ def test_bad_currents_are_refused_in_one_line():
         current_report(_two_lanes(), PlanCurrent(), 0.0)
 
 
-@pytest.fixture()
-def small_tif(tmp_path):
-    from drake_auv.terrain.bathymetry import Bathymetry
-    from drake_auv.terrain.readers import write_geotiff
-
-    yy, xx = np.mgrid[0:60, 0:50] * 1.0
-    z = -40.0 + 0.05 * yy + np.clip(xx - 20.0, 0.0, 12.0) * 0.9  # a wall of slope 0.9
-    path = tmp_path / "small.tif"
-    write_geotiff(Bathymetry(z, (1.0, 1.0), (1000.0, 2000.0), "EPSG:32631"), path)
-    return path
-
-
 def test_plan_reports_the_current_and_aligns_the_lanes_with_it(tmp_path, small_tif, capsys):
     import json
 
