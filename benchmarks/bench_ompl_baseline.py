@@ -55,7 +55,8 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from _reference import machine  # noqa: E402
 from drake_auv.planning.polyline import resample  # noqa: E402
 from drake_auv.replanning.fields import SliceMap  # noqa: E402
-from drake_auv.replanning.section import ReplanningParameters, replan_section  # noqa: E402
+from drake_auv.replanning.parameters import ReplanningParameters  # noqa: E402
+from drake_auv.replanning.section import replan_section  # noqa: E402
 
 OMEGA, CLEARANCE, DEPTH, BAND, VOXEL = 6.0, 3.0, -5.0, 1.5, 0.5  # m
 CHECK_STEP, COST_STEP = 0.25, 0.5  # m, motion validity / motion cost spacing

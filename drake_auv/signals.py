@@ -22,8 +22,6 @@ import re
 
 import numpy as np
 
-from drake_auv.vehicle.model import THRUSTER_NAMES
-
 
 class NamedVector:
     """A view naming the entries of the last axis of the array it wraps; subclasses set
@@ -179,9 +177,10 @@ Water = _signal(
 Wrench = _signal(
     "Wrench", ("X", "Y", "Z", "N"),
     "The tracker's body-frame wrench (4): forces along x, y, z (N) and the moment about z (N m).")
+THRUSTER_NAMES = ("surge_port", "surge_starboard", "heave_bow", "heave_stern", "sway")
 Thrust = _signal(
     "Thrust", THRUSTER_NAMES,
-    "The five thrusts (N), in the order of `vehicle.model.THRUSTER_NAMES`.")
+    "The five thrusts (N), in the order of `THRUSTER_NAMES`.")
 
 _STATE_PORTS = ("state", "estimated_state", "true_state", "estimated_in")
 # (system class, port name) or port name -> view; the class entry wins. Not named: arrays of

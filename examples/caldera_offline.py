@@ -17,10 +17,10 @@ import time
 
 from drake_auv.formats.outputs import write_outputs
 from drake_auv.planning.coverage_plan import plan_coverage
-from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
 from drake_auv.planning.metrics3d import evaluate_plan_3d, table3d_markdown
 from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.planning.report import REFERENCE_TABLE3, table3_markdown
+from drake_auv.terrain.geo import CALDERA_ORIGIN_LONLAT
 from drake_auv.terrain.synthetic import caldera_site
 
 

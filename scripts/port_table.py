@@ -110,7 +110,7 @@ def builder_rows() -> list[str]:
     from drake_auv.mission import diagram
     from drake_auv.rosio.recorder import add_mcap_recorder
     from drake_auv.vehicle.diagram import add_girona500
-    from drake_auv.visualization.live import add_mission_view
+    from drake_auv.mission.live_view import add_mission_view
 
     rows = []
     for function in (add_girona500, diagram.add_faults, diagram.add_sonars,

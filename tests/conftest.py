@@ -1,9 +1,10 @@
 """Test-suite settings: property tests draw the same examples on every run and worker (a
 failure is reproducible, CI cannot pass or fail by luck); `broken_open3d`, an Open3D that is
-installed but does not load."""
+installed but does not load; `small_tif`, a small UTM GeoTIFF with a wall for `drake-auv plan`."""
 
 import sys
 
+import numpy as np
 import pytest
 from hypothesis import settings
 
@@ -27,3 +28,16 @@ def broken_open3d(tmp_path, monkeypatch):
     retry_open3d()
     yield
     retry_open3d()
+
+
+@pytest.fixture()
+def small_tif(tmp_path):
+    """A 50 x 60 m GeoTIFF (1 m cells, EPSG:32631) of a gentle slope with a wall of slope 0.9."""
+    from drake_auv.terrain.bathymetry import Bathymetry
+    from drake_auv.terrain.readers import write_geotiff
+
+    yy, xx = np.mgrid[0:60, 0:50] * 1.0
+    z = -40.0 + 0.05 * yy + np.clip(xx - 20.0, 0.0, 12.0) * 0.9  # a wall of slope 0.9
+    path = tmp_path / "small.tif"
+    write_geotiff(Bathymetry(z, (1.0, 1.0), (1000.0, 2000.0), "EPSG:32631"), path)
+    return path

@@ -17,9 +17,9 @@ from drake_auv.formats.cola2 import (Cola2Sections, cola2_sections, export_cola2
                                      write_cola2)
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.parameters import CoverageParameters
-from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.missions import mission_waypoints
 from drake_auv.scenarios import DATA_DIR
+from drake_auv.terrain.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.synthetic import caldera_site, random_seabed
 

@@ -14,10 +14,10 @@ import shapely
 from drake_auv.cli import main
 from drake_auv.formats.outputs import write_outputs
 from drake_auv.planning.coverage_plan import plan_coverage
-from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.missions import douglas_peucker
 from drake_auv.planning.parameters import CoverageParameters
 from drake_auv.scenarios import DATA_DIR
+from drake_auv.terrain.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.synthetic import caldera_site
 

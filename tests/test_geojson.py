@@ -14,8 +14,8 @@ from drake_auv.formats.geojson import ROUTE_TOLERANCE
 from drake_auv.formats.outputs import write_outputs
 from drake_auv.formats.qgc import read_qgc_plan
 from drake_auv.planning.coverage_plan import plan_coverage
-from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.parameters import CoverageParameters
+from drake_auv.terrain.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.terrain.synthetic import caldera_site
 
 ROUTE = ["kind", "name", "samples", "length_m", "depth_min", "depth_max"]

@@ -18,7 +18,7 @@ from pydrake.geometry import Meshcat, MeshcatParams
 import drake_auv.visualization as visualization
 from drake_auv.cli import main
 from drake_auv.mission.legs import Leg
-from drake_auv.visualization.live import CLOCK, LABEL_PREFIX, MissionView
+from drake_auv.mission.live_view import CLOCK, LABEL_PREFIX, MissionView
 
 CHROMIUM = shutil.which("chromium")
 SHORT = ["--set", "limits.max_time_s=30", "--quiet"]

@@ -9,7 +9,7 @@ import yaml
 from drake_auv.mission.config import (REALISTIC_NOISE, FollowStep, MissionFileError, PlanStep,
                                       SurveyStep, apply_overrides, builtin_missions,
                                       load_mission, mission_from_dict, mission_to_dict)
-from drake_auv.replanning.section import ReplanningParameters
+from drake_auv.replanning.parameters import ReplanningParameters
 from drake_auv.sonar.noise import SonarNoise
 from drake_auv.vehicle.navigation import NavigationParams
 

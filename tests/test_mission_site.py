@@ -7,8 +7,8 @@ import yaml
 
 from drake_auv.mission.config import MissionFileError, SiteSpec, load_mission
 from drake_auv.geometry.distance import mesh_distance
-from drake_auv.mission.site import (TARGET_TOLERANCE, check_against_site, load_site,
-                                    prior_offset, shift_prior)
+from drake_auv.mission.plan import check_against_site
+from drake_auv.mission.site import TARGET_TOLERANCE, load_site, prior_offset, shift_prior
 from drake_auv.scenarios import get_scenario
 from drake_auv.terrain.mesh import top_surface
 from sites import BOX_CENTRE, BOX_SIZE, CRS, LOCAL_ORIGIN, SEABED_Z, utm_prior, write_utm_site

@@ -14,7 +14,7 @@ from drake_auv.mission.config import MissionFileError, load_mission, mission_to_
 from drake_auv.mission.spec import mission_keys
 from drake_auv.mission.steps.follow import FollowStep
 from drake_auv.params import ParameterError, param, validate
-from drake_auv.replanning.section import ReplanningParameters
+from drake_auv.replanning.parameters import ReplanningParameters
 from drake_auv.replanning.stomp import StompParameters
 from drake_auv.vehicle.navigation import NavigationParams
 

@@ -9,16 +9,6 @@ import pytest
 from drake_auv.cli import main
 from drake_auv.planning.path import PlannedPath
 from drake_auv.terrain.bathymetry import Bathymetry
-from drake_auv.terrain.readers import write_geotiff
-
-
-@pytest.fixture()
-def small_tif(tmp_path):
-    yy, xx = np.mgrid[0:60, 0:50] * 1.0
-    z = -40.0 + 0.05 * yy + np.clip(xx - 20.0, 0.0, 12.0) * 0.9  # a wall of slope 0.9
-    path = tmp_path / "small.tif"
-    write_geotiff(Bathymetry(z, (1.0, 1.0), (1000.0, 2000.0), "EPSG:32631"), path)
-    return path
 
 
 def test_plan_writes_every_output(tmp_path, small_tif, capsys):
@@ -130,7 +120,7 @@ def test_plan_figures_read_the_crs_latitude_longitude_and_north(small_tif):
     from drake_auv.planning.coverage_plan import plan_coverage
     from drake_auv.planning.parameters import CoverageParameters
     from drake_auv.planning.figures import fig_slope
-    from drake_auv.planning.geo import GeoFrame
+    from drake_auv.terrain.geo import GeoFrame
     from drake_auv.terrain.readers import read_bathymetry
 
     bathy = read_bathymetry(small_tif)

@@ -14,10 +14,10 @@ from scipy.spatial import cKDTree
 from drake_auv.formats.geojson import path_to_geojson
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.parameters import CoverageParameters
-from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.path import PlannedPath
 from drake_auv.scenarios import DATA_DIR as DATA
 from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.geo import GeoFrame
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.synthetic import caldera_site, random_seabed

@@ -19,10 +19,10 @@ from drake_auv.autopilot.replay import clearance_report
 from drake_auv.formats.qgc import admitted_cross_track, read_qgc_plan, write_qgc
 from drake_auv.planning.coverage_plan import plan_coverage
 from drake_auv.planning.parameters import CoverageParameters
-from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.scenarios import DATA_DIR as DATA
 from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.geo import CALDERA_ORIGIN_LONLAT, GeoFrame
 from drake_auv.terrain.readers import read_bathymetry
 from drake_auv.terrain.synthetic import caldera_site, random_seabed
 

@@ -277,9 +277,9 @@ def test_products_when_open3d_does_not_load_give_its_error(tmp_path, sphere_scan
 
 @needs_open3d
 def test_products_of_a_dive_with_enough_returns(tmp_path, sphere_scan):
-    from drake_auv.reconstruction.products import (draw_products, products_markdown,
-                                                   write_products)
+    from drake_auv.reconstruction.products import products_markdown, write_products
     from drake_auv.visualization import Scene
+    from drake_auv.visualization.reconstruction import draw_products
 
     sphere, log = sphere_scan
     origin = np.array([4.5e5, 4.6e6])

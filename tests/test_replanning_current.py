@@ -14,7 +14,8 @@ from drake_auv.planning.path import PlannedPath
 from drake_auv.replanning.cost import ReplanningCost
 from drake_auv.replanning.fields import SliceMap
 from drake_auv.replanning.replanner import Replanner
-from drake_auv.replanning.section import ReplanningParameters, replan_section
+from drake_auv.replanning.parameters import ReplanningParameters
+from drake_auv.replanning.section import replan_section
 
 
 def _wall(y=6.0):

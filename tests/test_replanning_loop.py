@@ -7,7 +7,8 @@ import pytest
 import trimesh
 
 from drake_auv.mapping.octree_map import OctreeMap
-from drake_auv.replanning.section import ReplanningParameters, replan_section
+from drake_auv.replanning.parameters import ReplanningParameters
+from drake_auv.replanning.section import replan_section
 
 OMEGA, SPEED, DT, PERIOD = 6.0, 0.5, 0.1, 1.0
 BLOCK_CENTRE, BLOCK_HALF = np.array([0.0, 0.0, -4.0]), np.array([2.5, 2.5, 6.0])

@@ -8,7 +8,8 @@ import pytest
 
 from drake_auv.replanning.cost import ReplanningCost
 from drake_auv.replanning.fields import SliceMap
-from drake_auv.replanning.section import ReplanningParameters, passed_index, replan_section
+from drake_auv.replanning.parameters import ReplanningParameters
+from drake_auv.replanning.section import passed_index, replan_section
 
 LO, HI = np.array([0.0, 0.0, -8.0]), np.array([10.0, 5.0, -2.0])  # the block, m
 

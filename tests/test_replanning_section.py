@@ -6,9 +6,9 @@ import pytest
 from drake_auv.mapping.lattice import decode
 from drake_auv.replanning.cost import ReplanningCost
 from drake_auv.replanning.fields import DEPTH_MARGIN, SliceMap
-from drake_auv.replanning.section import (ReplanningParameters, collect_section,
-                                           initial_trajectory, passed_index, replan_section,
-                                           resample_polyline)
+from drake_auv.replanning.parameters import ReplanningParameters
+from drake_auv.replanning.section import (collect_section, initial_trajectory, passed_index,
+                                          replan_section, resample_polyline)
 
 WAYPOINTS = np.stack([np.zeros(20), np.arange(20.0), np.full(20, -5.0)], axis=1)
 

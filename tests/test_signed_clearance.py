@@ -20,10 +20,10 @@ from drake_auv.mission.plan import plan_mission
 from drake_auv.mission.report.summary import summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.mission.site import load_site
-from drake_auv.planning.geo import GeoFrame
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.scenarios import get_scenario
 from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.geo import GeoFrame
 from sites import BOX_CENTRE, LOCAL_ORIGIN, SEABED_Z, write_utm_site
 
 

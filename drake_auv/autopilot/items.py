@@ -120,6 +120,11 @@ class LocalLeg:
     yaw: float | None = None
 
 
+def leg_target_z(leg: LocalLeg, seabed_z: float) -> float:
+    """The elevation the item's final vertical reference means over `seabed_z`, m."""
+    return -leg.z if leg.z_mode == "depth" else seabed_z + leg.z
+
+
 def localise(mission: VehicleMission, lonlat_to_local, north_azimuth=None) -> tuple[LocalLeg, ...]:
     """The mission's items as `LocalLeg`s.
 
@@ -205,8 +210,6 @@ def item_positions(mission: VehicleMission, legs: tuple[LocalLeg, ...], seabed_z
     `seabed_z`, (len(legs),) m, the seabed's elevation under each end; NaN: not judged) and a
     COLA2 section's start; and a name for each, for messages ("<source>: item k at lon .., lat
     ..")."""
-    from drake_auv.autopilot.semantics import leg_target_z
-
     points, names = [], []
     for k, (item, leg, seabed) in enumerate(zip(mission.items, legs, seabed_z)):
         name = f"{source}: item {k + 1} at lon {item.lon:.6f}, lat {item.lat:.6f}"

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_auv.autopilot.items import LocalLeg
+from drake_auv.autopilot.items import LocalLeg, leg_target_z
 from drake_auv.signals import Reference, VehicleState
 
 RISE_RATE = 0.3  # m/s, COLA2's no_altitude_goes_up ascent without bottom lock
@@ -45,11 +45,6 @@ RISE_RATE = 0.3  # m/s, COLA2's no_altitude_goes_up ascent without bottom lock
 # and the last seabed elevation the DVL measured (seabed_z, m, NaN: none yet).
 ITEM_FIELDS = ("index", "start_s", "x0", "y0", "z0", "alt0", "reached_s", "seabed_z")
 INDEX, START_S, X0, Y0, Z0, ALT0, REACHED_S, SEABED_Z = range(len(ITEM_FIELDS))
-
-
-def leg_target_z(leg: LocalLeg, seabed_z: float) -> float:
-    """The elevation the item's final vertical reference means over `seabed_z`, m."""
-    return -leg.z if leg.z_mode == "depth" else seabed_z + leg.z
 
 
 def start_record(autopilot: str, legs: tuple[LocalLeg, ...], index: int, t: float,

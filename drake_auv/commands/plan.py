@@ -149,7 +149,7 @@ def run(args) -> int:
     exports = parse_exports(args.export) if args.export is not None else None
     current = None
     if args.current is not None:
-        from drake_auv.planning.current import aligned_sweep_angle, parse_current
+        from drake_auv.vehicle.current_feasibility import aligned_sweep_angle, parse_current
 
         current = parse_current(args.current, args.tide)
         if args.align_with_current and args.sweep_angle_deg is not None:
@@ -160,7 +160,7 @@ def run(args) -> int:
         raise ValueError("--tide and --align-with-current need --current SPEED,TOWARDS_DEG")
     origin = _lonlat(args.origin_lonlat) if args.origin_lonlat is not None else None
     if args.bathymetry == "caldera" and not Path("caldera").exists():
-        from drake_auv.planning.geo import CALDERA_ORIGIN_LONLAT
+        from drake_auv.terrain.geo import CALDERA_ORIGIN_LONLAT
         from drake_auv.terrain.synthetic import caldera_site
 
         bathy = caldera_site()
@@ -198,7 +198,7 @@ def run(args) -> int:
         plan = plan_coverage(bathy, params, roi=roi, no_go=no_go, progress=bar)
         flow = None
         if current is not None:
-            from drake_auv.planning.current import current_report
+            from drake_auv.vehicle.current_feasibility import current_report
 
             flow = current_report(plan.path, current, args.speed)
         files = write_outputs(plan, args.out, figures=not args.no_figures, progress=bar,
@@ -211,7 +211,7 @@ def run(args) -> int:
         print(table3_markdown(plan.metrics))
     print(mission_time_line(report["mission_time"]))
     if flow is not None:
-        from drake_auv.planning.current import summary_lines
+        from drake_auv.vehicle.current_feasibility import summary_lines
 
         print("\n".join(summary_lines(flow, plan.parameters.sweep_angle_deg)))
     for note in export_notes(report):

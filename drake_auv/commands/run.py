@@ -101,7 +101,8 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
     start = time.perf_counter()
     realtime = check_live_options(meshcat, realtime, meshcat_port)
     from drake_auv.mission.config import load_mission
-    from drake_auv.mission.site import check_against_site, load_site
+    from drake_auv.mission.plan import check_against_site
+    from drake_auv.mission.site import load_site
 
     overrides = [*overrides, *([] if reconstruction else ["outputs.reconstruction=false"])]
     spec = load_mission(mission, seed=seed, overrides=overrides)

@@ -35,7 +35,7 @@ from drake_auv.autopilot.items import MAX_HOLD_S, MissionItem, VehicleMission, l
 from drake_auv.autopilot.replay import clearance_report, clearance_warnings
 from drake_auv.formats import Exported, ExportOptions
 from drake_auv.output_files import replacing
-from drake_auv.planning.geo import GeoFrame
+from drake_auv.terrain.geo import GeoFrame
 from drake_auv.planning.missions import ALTITUDE_LABELS
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.surface import TerrainSurface

@@ -15,7 +15,7 @@ import numpy as np
 
 from drake_auv.formats import Exported, ExportOptions
 from drake_auv.output_files import write_json
-from drake_auv.planning.geo import GeoFrame
+from drake_auv.terrain.geo import GeoFrame
 from drake_auv.planning.missions import douglas_peucker
 from drake_auv.planning.path import PlannedPath
 

@@ -46,7 +46,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
         metrics_3d: add the occluded 3D metrics (`planning.metrics3d`) to the report: True
             computes them, a dict of `evaluate_plan_3d` is used as it is, False skips them.
         reference_table: add the reference's Table 3 (the Santorini caldera) to the reports.
-        current: `planning.current.current_report` of the path, added to report.json
+        current: `vehicle.current_feasibility.current_report` of the path, added to report.json
             (`current`) and report.md.
     """
     options = ExportOptions(surge_velocity, tolerance_xy, max_items, ardusub_frames,
@@ -79,7 +79,7 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
     rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
     markdown = report_markdown(plan, rep, m3d, export_warnings(rep), export_notes(rep))
     if current is not None:
-        from drake_auv.planning.current import current_markdown
+        from drake_auv.vehicle.current_feasibility import current_markdown
 
         markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
         rep["current"] = current

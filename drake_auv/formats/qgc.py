@@ -42,7 +42,7 @@ from drake_auv.autopilot.items import MAX_HOLD_S, LocalLeg, MissionItem, Vehicle
 from drake_auv.autopilot.replay import clearance_report, clearance_warnings
 from drake_auv.formats import Exported, ExportOptions
 from drake_auv.output_files import open_replacing
-from drake_auv.planning.geo import GeoFrame
+from drake_auv.terrain.geo import GeoFrame
 from drake_auv.planning.metrics import evaluate_path, surface_area_weights
 from drake_auv.planning.missions import ALTITUDE_LABELS, Waypoints, mission_waypoints
 from drake_auv.planning.path import PlannedPath

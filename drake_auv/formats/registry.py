@@ -14,7 +14,7 @@ from pathlib import Path
 
 from drake_auv.autopilot.items import VehicleMission
 from drake_auv.formats import ExportOptions, cola2, geojson, qgc
-from drake_auv.planning.geo import GeoFrame
+from drake_auv.terrain.geo import GeoFrame
 
 
 @dataclass(frozen=True)

@@ -272,7 +272,7 @@ def add_visualizers(builder: DiagramBuilder, scene, spec: MissionSpec, plan: Mis
                     ocean: Ocean | None = None) -> None:
     """What `scene` draws while the mission flies: the vehicle and its trail, the on-line map,
     with a sea the current at the vehicle (the `ocean`'s `water`), and in a live scene the
-    leg, the replanner's section, the reference and the mission clock (`visualization.live`).
+    leg, the replanner's section, the reference and the mission clock (`mission.live_view`).
     Each layer is named in the scene's legend."""
     from drake_auv.visualization.current import CurrentVisualizer
     from drake_auv.visualization.octree import OctreeVisualizer, octree_legend
@@ -288,7 +288,7 @@ def add_visualizers(builder: DiagramBuilder, scene, spec: MissionSpec, plan: Mis
         builder.Connect(vehicle.dynamics.state_output, arrow.state_input)
         builder.Connect(ocean.water_output, arrow.water_input)
     if scene.live:  # the leg, the replanner's section and the reference, for a browser
-        from drake_auv.visualization.live import add_mission_view
+        from drake_auv.mission.live_view import add_mission_view
 
         cap = spec.limits.max_time_s if spec.limits.max_time_s is not None else plan.budget
         add_mission_view(builder, scene, plan.legs, supervisor.leg_output, estimated,

@@ -16,9 +16,9 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import LeafSystem
 
-from drake_auv.signals import VehicleState
+from drake_auv.signals import THRUSTER_NAMES, VehicleState
 from drake_auv.sonar.returns import SonarReturns
-from drake_auv.vehicle.model import NUM_THRUSTERS, STATE_SIZE, THRUSTER_NAMES
+from drake_auv.vehicle.model import NUM_THRUSTERS, STATE_SIZE
 
 
 def silenced(returns: SonarReturns) -> SonarReturns:

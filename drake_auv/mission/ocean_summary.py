@@ -7,8 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drake_auv.signals import Reference, VehicleState, Water
-from drake_auv.vehicle.model import THRUSTER_NAMES
+from drake_auv.signals import THRUSTER_NAMES, Reference, VehicleState, Water
 
 
 def ocean_summary(result) -> dict | None:

@@ -1,5 +1,7 @@
 """From a mission file to what the Diagram flies: the off-line plan and the legs.
 
+`check_against_site` first judges what only the loaded site can (the start, each step's kind's
+`check_site`).
 `plan_mission` asks every step's kind (`drake_auv.mission.steps`), in the file's order, to
 prepare (the `plan` step runs the coverage planner or the offset contour on the site's prior
 map; a `fly` step reads its exported file and places its items in the local frame), then to
@@ -16,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drake_auv.mission.legs import Leg
-from drake_auv.mission.site import Site, check_in_water
+from drake_auv.mission.site import Site, check_in_water, check_inside
 from drake_auv.mission.spec import MissionSpec
 from drake_auv.mission.steps import STEPS
 from drake_auv.mission.steps.step import Planning
@@ -67,6 +69,20 @@ class MissionPlan:
     def legs_of(self, behaviour: str) -> dict[int, object]:
         """{leg index: parameters} of the legs `behaviour` flies (empty: none)."""
         return self.behaviours.get(behaviour, {})
+
+
+def check_against_site(spec: MissionSpec, site: Site) -> None:
+    """Checks the mission values only the site can judge, against the prior map (what the
+    operator knows) and the world's bounds: the start inside the world's bounds and in the
+    water (`check_in_water`: against the world itself), and each step's own (its kind's
+    `check_site`: follow depths above the seabed under the structure, plan offsets and contour
+    depths that leave water). Raises MissionFileError (one line) on the first problem."""
+    label = spec.source.name if spec.source is not None else spec.name
+    if spec.site.start is not None:
+        x, y = check_inside(site, spec.site.start, "site.start", label)
+        check_in_water(site, [x, y, spec.site.start[2]], label, "site.start", "")
+    for i, step in enumerate(spec.steps):
+        STEPS[step.KIND].check_site(site, step, f"steps[{i}].{step.KIND}", label)
 
 
 def plan_mission(spec: MissionSpec, site: Site) -> MissionPlan:

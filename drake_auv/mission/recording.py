@@ -48,7 +48,7 @@ def prepare_scene(scene, site: Site, plan: MissionPlan) -> None:
 
 def leg_starts(result: MissionResult) -> list[tuple[float, str]]:
     """[(mission time s, label)] of each leg flown, in order, for the recording's clock."""
-    from drake_auv.visualization.live import leg_label
+    from drake_auv.mission.live_view import leg_label
 
     if len(result.times) == 0:
         return []
@@ -61,8 +61,8 @@ def finish_recording(result: MissionResult, scene, filename):
     """Adds the end-of-dive layers (on-line map, coverage, and the reconstruction that
     `write_outputs` left beside `filename`) and the clock's legs, and writes the standalone
     HTML."""
-    from drake_auv.reconstruction.products import draw_products
     from drake_auv.visualization.octree import draw_octree, octree_legend
+    from drake_auv.visualization.reconstruction import draw_products
     from drake_auv.visualization.sensors import coverage_legend, draw_coverage
 
     world, target = result.site.world, result.site.target_faces

@@ -26,8 +26,8 @@ from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.mission.config import MissionSpec
 from drake_auv.mission.diagram import MissionHandles, build_mission_diagram
 from drake_auv.mission.log_spool import LogSpool
-from drake_auv.mission.plan import MissionPlan, plan_mission
-from drake_auv.mission.site import Site, load_site, check_against_site
+from drake_auv.mission.plan import MissionPlan, check_against_site, plan_mission
+from drake_auv.mission.site import Site, load_site
 from drake_auv.mission.supervisor import responses_from_log
 from drake_auv.progress import RunProgress
 from drake_auv.signals import (LegSignal, Profile, ReplanningStep, VehicleState, Water,

@@ -33,8 +33,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from drake_auv.mission.config import MissionFileError, MissionSpec, SiteSpec
-from drake_auv.mission.steps import STEPS
+from drake_auv.mission.spec import MissionFileError, SiteSpec
 from drake_auv.random_streams import generator
 from drake_auv.scenarios import get_scenario
 from drake_auv.signals import VehicleState
@@ -361,16 +360,3 @@ def check_path_in_water(path, site: Site, label: str, where: str) -> None:
                                f"{-z[k]:.2f} m is {what}", "a path in the water the planner "
                                "planned on the prior map")
 
-
-def check_against_site(spec: MissionSpec, site: Site) -> None:
-    """Checks the mission values only the site can judge, against the prior map (what the
-    operator knows) and the world's bounds: the start inside the world's bounds and in the
-    water (`check_in_water`: against the world itself), and each step's own (its kind's
-    `check_site`: follow depths above the seabed under the structure, plan offsets and contour
-    depths that leave water). Raises MissionFileError (one line) on the first problem."""
-    label = spec.source.name if spec.source is not None else spec.name
-    if spec.site.start is not None:
-        x, y = check_inside(site, spec.site.start, "site.start", label)
-        check_in_water(site, [x, y, spec.site.start[2]], label, "site.start", "")
-    for i, step in enumerate(spec.steps):
-        STEPS[step.KIND].check_site(site, step, f"steps[{i}].{step.KIND}", label)

@@ -26,10 +26,11 @@ from pathlib import Path
 from drake_auv.ocean.spec import OceanSpec
 from drake_auv.params import CHECK, NESTED, nested, param, validate
 from drake_auv.random_streams import MAX_SEED, SEED_RANGE
-from drake_auv.replanning.section import OPTIMIZERS, ReplanningParameters
+from drake_auv.replanning.parameters import ReplanningParameters
+from drake_auv.replanning.section import OPTIMIZERS
 from drake_auv.scenarios import list_scenarios
+from drake_auv.signals import THRUSTER_NAMES
 from drake_auv.sonar.noise import SonarNoise
-from drake_auv.vehicle.model import THRUSTER_NAMES
 from drake_auv.vehicle.navigation import NavigationParams
 
 # The "realistic" sonar (docs/sensors.md, "Sonar model"): 10 cm range noise, 5 % of returns
@@ -234,7 +235,7 @@ class SonarSilentFault:
 
 @dataclass(frozen=True)
 class ThrusterFailureFault:
-    """One thruster (`vehicle.model.THRUSTER_NAMES`) gives no force from `start_s` s on
+    """One thruster (`signals.THRUSTER_NAMES`) gives no force from `start_s` s on
     (None: no fault); the allocation is not told."""
 
     thruster: str = param("surge_port", kind="choice", choices=THRUSTER_NAMES)

@@ -3,15 +3,12 @@ docs/replanning.md, "Cost"), pure numpy."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from drake_auv.planning.polyline import Polyline
 from drake_auv.replanning.fields import SliceMap
+from drake_auv.replanning.parameters import ReplanningParameters
 
-if TYPE_CHECKING:
-    from drake_auv.replanning.section import ReplanningParameters
 
 def inflated_clearance(params: ReplanningParameters, current: np.ndarray | None) -> float:
     """The largest clearance the obstacle term asks, m: `params.clearance` plus tau times the

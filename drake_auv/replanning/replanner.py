@@ -38,8 +38,8 @@ from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.polyline import arc_length, motion_heading
 from drake_auv.random_streams import stream
-from drake_auv.replanning.section import (OPTIMIZERS, ReplanningParameters, SectionPlan,
-                                          replan_section)
+from drake_auv.replanning.parameters import ReplanningParameters
+from drake_auv.replanning.section import OPTIMIZERS, SectionPlan, replan_section
 from drake_auv.signals import BehaviourStatus, ReplannerProgress, ReplanningStep, VehicleState
 
 

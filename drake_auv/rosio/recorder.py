@@ -32,10 +32,10 @@ from pydrake.systems.framework import LeafSystem
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.rosio import messages as m
 from drake_auv.rosio.writer import McapLog, MessageBlock
-from drake_auv.signals import LegSignal, Reference, Response, VehicleState, Water
+from drake_auv.signals import (THRUSTER_NAMES, LegSignal, Reference, Response, VehicleState,
+                               Water)
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.control import rotation_world_body
-from drake_auv.vehicle.model import THRUSTER_NAMES
 
 TOPICS = dict(
     tf="/tf", tf_static="/tf_static", odometry="/odometry/navigation",

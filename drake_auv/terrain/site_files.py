@@ -16,8 +16,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.interpolate import RectBivariateSpline
 
-from drake_auv.planning.geo import GeoFrame
 from drake_auv.terrain.bathymetry import Bathymetry
+from drake_auv.terrain.geo import GeoFrame
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 from drake_auv.terrain.readers import write_geotiff
 

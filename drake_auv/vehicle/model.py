@@ -32,8 +32,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from drake_auv.signals import THRUSTER_NAMES
+
 DEFAULT_MODEL = Path(__file__).resolve().parents[2] / "models" / "girona500.yaml"
-THRUSTER_NAMES = ("surge_port", "surge_starboard", "heave_bow", "heave_stern", "sway")
 FRD_TO_FLU = np.diag([1.0, -1.0, -1.0])  # the same matrix takes FLU back to FRD
 WRENCH_ROWS = (0, 1, 2, 5)  # surge X, sway Y, heave Z, yaw N rows of a 6-DOF wrench
 STATE_SIZE = 12

@@ -12,7 +12,7 @@ overlay, so the legend reaches the two views differently:
   then;
 - the live view (`drake-auv run --meshcat`): read-only entries in Meshcat's control panel,
   one button per entry named "look: name" (a click does nothing), and the clock as a slider
-  the mission moves (`visualization.live`).
+  the mission moves (`mission.live_view`).
 """
 
 from __future__ import annotations

@@ -66,7 +66,7 @@ def _local_meshcat(live: bool, port: int | None) -> Meshcat:
 class Scene:
     """One Meshcat scene (served on localhost only). Attributes: `meshcat`, `root` (scene-tree
     prefix), `live` (a browser watches it while the mission flies: the mission Diagram then
-    also draws the leg, the replanner's section and the reference, `visualization.live`),
+    also draws the leg, the replanner's section and the reference, `mission.live_view`),
     `recording`, `bounds` (box of the meshes and paths drawn), `camera_framed`, `legend`
     ({name: `LegendEntry`}, in the order drawn) and `clock_legs` ([(mission time s, the leg's
     label)], by time: what the recording's clock names)."""

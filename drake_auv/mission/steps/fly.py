@@ -59,7 +59,7 @@ def flown_mission(step: FlyStep, site, label: str, where: str) -> FlownMission:
     MissionFileError (one line naming `where`) for a site without a CRS, a file that does not
     parse, an item outside the world or above the sea surface."""
     from drake_auv.formats.registry import read_vehicle_mission
-    from drake_auv.planning.geo import GeoFrame
+    from drake_auv.terrain.geo import GeoFrame
 
     if site.prior.crs is None:
         raise MissionFileError(label, where, "the site has no CRS, so the file's WGS 84 "

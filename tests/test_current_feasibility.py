@@ -4,10 +4,11 @@ and thrust limits, warnings, durations at ground speed, lanes aligned with the c
 import numpy as np
 import pytest
 
-from drake_auv.planning.current import (PlanCurrent, aligned_sweep_angle, current_markdown,
-                                        current_report, parse_current, thrust_share)
 from drake_auv.planning.path import PlannedPath
 from drake_auv.vehicle.control import axis_force_limits
+from drake_auv.vehicle.current_feasibility import (PlanCurrent, aligned_sweep_angle,
+                                                   current_markdown, current_report,
+                                                   parse_current, thrust_share)
 from drake_auv.vehicle.model import Girona500Params
 
 
@@ -114,18 +115,6 @@ def test_bad_currents_are_refused_in_one_line():
         current_report(_two_lanes(), PlanCurrent(), 0.0)
 
 
-@pytest.fixture()
-def small_tif(tmp_path):
-    from drake_auv.terrain.bathymetry import Bathymetry
-    from drake_auv.terrain.readers import write_geotiff
-
-    yy, xx = np.mgrid[0:60, 0:50] * 1.0
-    z = -40.0 + 0.05 * yy + np.clip(xx - 20.0, 0.0, 12.0) * 0.9  # a wall of slope 0.9
-    path = tmp_path / "small.tif"
-    write_geotiff(Bathymetry(z, (1.0, 1.0), (1000.0, 2000.0), "EPSG:32631"), path)
-    return path
-
-
 def test_plan_reports_the_current_and_aligns_the_lanes_with_it(tmp_path, small_tif, capsys):
     import json
 
@@ -167,7 +156,7 @@ def test_plan_refuses_a_bad_current(tmp_path, small_tif, capsys, extra, message)
 
 
 def test_the_offer_of_aligned_lanes_states_their_thrust_against_the_plans():
-    from drake_auv.planning.current import summary_lines
+    from drake_auv.vehicle.current_feasibility import summary_lines
 
     path = _two_lanes()  # lanes east and north
     report = current_report(path, PlanCurrent(0.6, 0.0), 0.5)  # towards north
