@@ -65,3 +65,25 @@ def test_sensor_streams_keep_the_built_in_ones():
     assert [stream_of(name) for name in BUILT_IN] == [(name,) for name in BUILT_IN]
     assert stream_of(EXTRA)[0] == "sensors" and stream_of(EXTRA) == stream_of(EXTRA)
     assert stream_of(EXTRA) != stream_of("port_multibeam")
+
+
+def test_the_sonars_and_the_dvl_are_sensors():
+    import trimesh
+
+    from drake_auv.geometry.raycast import RayCaster
+    from drake_auv.sonar.altimeter import DvlAltimeter, DvlParams
+    from drake_auv.sonar.beams import MOUNT_ROTATIONS
+    from drake_auv.sonar.multibeam import MultibeamSonar
+    from drake_auv.sonar.profiler import PencilBeamProfiler
+    from drake_auv.sonar.sensor import Sensor
+
+    caster = RayCaster(trimesh.creation.box((10.0, 10.0, 1.0)))
+    multibeam = MultibeamSonar(caster, mount="starboard", rate=5.0, max_range=12.0,
+                               stream=stream_of(EXTRA))
+    dvl = DvlAltimeter(caster, DvlParams(rate=4.0, max_range=30.0))
+    for sensor, period, max_range in ((multibeam, 0.2, 12.0), (dvl, 0.25, 30.0),
+                                      (PencilBeamProfiler(caster), 0.1, 20.0)):
+        assert isinstance(sensor, Sensor)
+        assert (sensor.period, sensor.max_range) == (period, max_range)
+    assert np.array_equal(multibeam.mount.rotation, MOUNT_ROTATIONS["starboard"])
+    assert np.array_equal(dvl.mount.rotation, np.eye(3))
