@@ -59,12 +59,12 @@ class MissionSupervisor(LeafSystem):
         rules: the `SafetyRules` (default thresholds).
         sensors: the names of the sonars whose returns it watches (`mission.safety.
             relied_sensors`: a leg relying on one that falls silent is held), an input
-            `{name}_returns` each.
+            `{name}_returns` each (none: no silent-sonar rule).
     """
 
     def __init__(self, legs: tuple[Leg, ...], behaviour_ports: dict[str, int],
                  period: float = 0.5, rules: SafetyRules | None = None,
-                 sensors=("multibeam", "profiler")):
+                 sensors=()):
         super().__init__()
         if not legs:
             raise ValueError("a mission needs at least one leg")
