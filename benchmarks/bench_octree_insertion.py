@@ -31,8 +31,8 @@ import octomap
 
 from _reference import machine
 from bench_long_mission import long_mission
-from drake_auv.mapping.scan_log import SOURCES
 from drake_auv.mission.runner import run_mission
+from drake_auv.sonar.sensor import BUILT_IN
 
 RESOLUTION = 0.5
 
@@ -86,7 +86,7 @@ def replay_merged(batches, merge: int):
             run = []
 
     for b in batches:
-        if SOURCES[b.source] != "multibeam":
+        if BUILT_IN[b.source] != "multibeam":
             tree.insertPointCloud(endpoints(b), b.origin, maxrange=float(b.max_range),
                                   lazy_eval=False)
             continue
@@ -117,7 +117,7 @@ def main() -> None:
         for name, lazy in (("lazy", True), ("eager", False)):
             tree, times, sizes = replay(batches, lazy)
             trees[name] = tree
-            per = "; ".join(f"{SOURCES[s]} median {1e3 * np.median(times[sources == s]):.3f} "
+            per = "; ".join(f"{BUILT_IN[s]} median {1e3 * np.median(times[sources == s]):.3f} "
                             f"mean {1e3 * times[sources == s].mean():.3f} ms"
                             for s in np.unique(sources))
             print(f"{name}: {times.sum():.2f} s for the replay; {per}")
@@ -130,7 +130,7 @@ def main() -> None:
     reference = trees["eager"].getLabels(points)
     same = np.array_equal(trees["lazy"].getLabels(points), reference)
     print(f"labels equal at {len(centres)} hit voxels and 200000 random points: {same}")
-    multibeam = sources == SOURCES.index("multibeam")
+    multibeam = sources == BUILT_IN.index("multibeam")
     pings = int(multibeam.sum())
     for merge in args.merge:
         one, merged = [], []

@@ -42,6 +42,8 @@ STREAMS = {
     "faults": 8,            # reserved: random fault times and magnitudes
     "ocean.turbulence": 9,  # the current's Ornstein-Uhlenbeck turbulence (the Ocean system)
     "ocean.waves": 10,      # the wave components' frequencies, directions and phases
+    "sensors": 11,          # a configured sensor's noise, child (c, n): c the CRC-32 of its
+                            # name (`sonar.sensor.stream_of`), n its update
 }
 
 

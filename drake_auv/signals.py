@@ -147,14 +147,21 @@ Response = _signal(
     "start time (s), start pose (m, rad) and target (m).",
     start=("x0", "z0"), target=("x1", "z1"))
 Watch = _signal(
-    "Watch", ("multibeam_hit_s", "profiler_hit_s", "tracking_since_s", "tracking_error0_m",
-              "x", "y", "z", "drift_since_s", "drift_error0_m", "drift_x", "drift_y",
-              "drift_z", "drift_windows"),
-    "The supervisor's `watch` group (13): last return time of each sonar (s), tracking error "
-    "above threshold since (s, -1: not) and what it was then (m), previous estimated position "
+    "Watch", ("tracking_since_s", "tracking_error0_m", "x", "y", "z", "drift_since_s",
+              "drift_error0_m", "drift_x", "drift_y", "drift_z", "drift_windows"),
+    "The supervisor's `watch` group (11): tracking error above threshold since (s, -1: not) "
+    "and what it was then (m), previous estimated position "
     "(m), the drift window's start (s) and tracking error then (m), the motion the reference "
     "did not command since then (world, m) and how many windows in a row drifted.",
     position=("x", "z"), drift=("drift_x", "drift_z"))
+DvlMeasurement = _signal(
+    "DvlMeasurement", ("altitude", "count"),
+    "The DVL altimeter's `measurement` group (2): the last altitude (m, NaN without bottom "
+    "lock) and the measurements made so far.")
+DvlBeams = _signal(
+    "DvlBeams", ("time", "range_0", "range_1", "range_2", "range_3"),
+    "The DVL altimeter's `beams` group (5): the last measurement's time (s) and its four "
+    "slant ranges (m, NaN: no echo or no measurement).", ranges=("range_0", "range_3"))
 LegProgress = _signal(
     "LegProgress", ("bearing", "turned", "start_x", "start_y"),
     "A leg's progress record (4): last bearing from the loops' centre and the angle turned "

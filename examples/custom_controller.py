@@ -112,18 +112,18 @@ def build(site, spec, plan, caster, follower=None):
     vehicle = add_girona500(builder, navigation=navigation,
                             initial_state=plan.start_state)
     estimated = vehicle.navigation.estimated_state_output
-    multibeam, profiler, returns = add_sonars(builder, caster, vehicle, spec, plan,
-                                              site.max_range, estimated, faults={})
+    sonars, returns = add_sonars(builder, caster, vehicle, spec, plan, site.max_range,
+                                 estimated, faults={})
     mapper = builder.AddNamedSystem("octree_mapper",
                                     OctreeMapper(resolution=spec.replanner.voxel_m))
-    builder.Connect(returns["multibeam"], mapper.multibeam_input)
-    builder.Connect(returns["profiler"], mapper.profiler_input)
+    for name, port in returns.items():
+        builder.Connect(port, mapper.returns_inputs[name])
     wiring = Wiring(builder, spec, plan, site, caster, vehicle, estimated, mapper, returns,
-                    profiler)
+                    sonars["profiler"])
     supervisor, *_ = add_behaviours(builder, wiring,
                                     own=None if follower is None else {"replan": follower})
     camera, multibeam_coverage = add_coverage_recorders(
-        builder, caster, vehicle, spec, site, site.max_range, multibeam)
+        builder, caster, vehicle, spec, site, site.max_range, sonars["multibeam"])
     logs = (LogVectorOutput(vehicle.dynamics.state_output, builder, 0.1),
             LogVectorOutput(supervisor.leg_output, builder, SUPERVISOR_PERIOD))
     return builder.Build(), supervisor, multibeam_coverage, camera, logs

@@ -68,7 +68,7 @@ def test_dvl_returns_map_the_seabed_under_the_vehicle():
                                20.0 * np.tan(np.radians(30.0)) * np.sqrt(0.5), atol=1e-9)
     mapper = OctreeMapper(resolution=0.5)
     mapper_context = mapper.CreateDefaultContext()
-    mapper.dvl_input.FixValue(mapper_context, AbstractValue.Make(returns))
+    mapper.returns_inputs["dvl"].FixValue(mapper_context, AbstractValue.Make(returns))
     Simulator(mapper, mapper_context).AdvanceTo(0.15)
     assert mapper.scan_log(mapper_context).count == 1  # recorded once
     occupied = mapper.map_output.Eval(mapper_context).map.occupied_points()

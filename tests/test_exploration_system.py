@@ -13,7 +13,7 @@ from drake_auv.cli import main
 from drake_auv.exploration.planner import ExploreParameters
 from drake_auv.exploration.view_planner import ViewPlanner
 from drake_auv.mapping.mapper import OnlineMap
-from drake_auv.mapping.scan_log import SOURCES, ScanLog
+from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.mission.config import MissionFileError, load_mission, mission_from_dict
 from drake_auv.mission.plan import plan_mission
 from drake_auv.mission.steps.explore import NO_RETURN_CLEAR_M
@@ -141,7 +141,7 @@ def test_explore_dive_gains_coverage_without_contact():
     assert exploration["viewpoints"] >= 3 and exploration["strategy"] == "gain"
     assert 0.0 < exploration["believed_coverage"] < 1.0 and exploration["stopped"] == "time"
     # the DVL's beams reach the map: the seabed under the vehicle is in the scan log
-    dvl = [b for b in result.scan_log.batches() if b.source == SOURCES.index("dvl")]
+    dvl = [b for b in result.scan_log.batches() if b.source == result.scan_log.sources.index("dvl")]
     assert len(dvl) > 100 and all(len(b.ranges) == 4 for b in dvl)
     # explore's map (and its copies) clears along a beam without an echo only 12 m
     assert spec.steps[0].no_return_clear_m == NO_RETURN_CLEAR_M == 12.0

@@ -90,7 +90,8 @@ def _supervisor(behaviour="replan"):
     legs = (Leg("survey", 0, behaviour, "finished", 1000.0),)
     builder = DiagramBuilder()
     sup = builder.AddSystem(MissionSupervisor(
-        legs, {"path": 0, "follow": 1, "replan": 2, "response": 3}, 0.5))
+        legs, {"path": 0, "follow": 1, "replan": 2, "response": 3}, 0.5,
+        sensors=("multibeam", "profiler")))
     diagram = builder.Build()
     simulator = Simulator(diagram)
     root = simulator.get_mutable_context()

@@ -2,6 +2,7 @@
 way a run's sources seed their draws."""
 
 import re
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,7 @@ from drake_auv.signals import NavigationError, VehicleState
 from drake_auv.sonar.altimeter import DvlAltimeter
 from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.sonar.profiler import PencilBeamProfiler
+from drake_auv.sonar.sensor import stream_of
 from drake_auv.vehicle.navigation import NavigationParams, update_error
 
 PACKAGE = Path(__file__).resolve().parents[1] / "drake_auv"
@@ -91,8 +93,11 @@ def test_each_sonar_draws_from_its_own_stream():
     caster = RayCaster(trimesh.creation.box((50.0, 50.0, 1.0)))
     sonars = [MultibeamSonar(caster, seed=4), PencilBeamProfiler(caster, seed=4),
               DvlAltimeter(caster, seed=4)]
-    assert [s.stream for s in sonars] == ["multibeam", "profiler", "dvl"]
-    assert MultibeamSonar(caster, stream="profiler").stream == "profiler"
+    assert [s.stream for s in sonars] == [("multibeam",), ("profiler",), ("dvl",)]
+    assert MultibeamSonar(caster, stream="profiler").stream == ("profiler",)
+    # a configured sensor: a child of the `sensors` stream keyed by its name
+    extra = MultibeamSonar(caster, stream=stream_of("starboard_multibeam"))
+    assert extra.stream == ("sensors", zlib.crc32(b"starboard_multibeam"))
     with pytest.raises(ValueError, match="not in the table"):
         MultibeamSonar(caster, stream="sidescan")
 

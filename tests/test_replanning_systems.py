@@ -29,14 +29,14 @@ def _wall_returns(sequence, x_wall=8.0):
 def test_mapper_records_each_update_once_and_maps_it():
     mapper = OctreeMapper(resolution=0.5, period=0.1, multibeam_stride=1)
     context = mapper.CreateDefaultContext()
-    mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(1)))
+    mapper.returns_inputs["multibeam"].FixValue(context, AbstractValue.Make(_wall_returns(1)))
     simulator = Simulator(mapper, context)
     simulator.AdvanceTo(0.35)  # four updates, one new scan
     assert mapper.scan_log(context).count == 1
     online = mapper.map_output.Eval(context)
     assert online.map.num_scans == 1
     assert np.all(np.abs(online.map.occupied_points()[:, 0] - 8.0) <= 0.5)
-    mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(2, 9.0)))
+    mapper.returns_inputs["multibeam"].FixValue(context, AbstractValue.Make(_wall_returns(2, 9.0)))
     simulator.AdvanceTo(0.55)
     again = mapper.map_output.Eval(context)
     assert again is online and again.map.num_scans == 2  # caught up, not rebuilt
@@ -46,7 +46,7 @@ def test_mapper_records_each_update_once_and_maps_it():
 def test_the_mappers_insertion_options_reach_every_contexts_map():
     mapper = OctreeMapper(resolution=0.5, discretize=True)
     context = mapper.CreateDefaultContext()
-    mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(1)))
+    mapper.returns_inputs["multibeam"].FixValue(context, AbstractValue.Make(_wall_returns(1)))
     Simulator(mapper, context).AdvanceTo(0.15)
     online = mapper.map_output.Eval(context)
     assert online.map.discretize and len(online.map.occupied_points()) > 0
@@ -59,7 +59,7 @@ def test_each_context_has_its_own_map():
     mapper = OctreeMapper(resolution=0.5)
     first, second = mapper.CreateDefaultContext(), mapper.CreateDefaultContext()
     for context in (first, second):
-        mapper.multibeam_input.FixValue(context, AbstractValue.Make(_wall_returns(1)))
+        mapper.returns_inputs["multibeam"].FixValue(context, AbstractValue.Make(_wall_returns(1)))
     Simulator(mapper, first).AdvanceTo(0.25)
     assert len(mapper.map_output.Eval(first).map.occupied_points()) > 0
     assert mapper.scan_log(second).count == 0
@@ -102,7 +102,7 @@ def test_online_map_copy_rebuilds_its_own_octree():
 def test_mapper_rejects_bad_parameters():
     with pytest.raises(ValueError, match="period"):
         OctreeMapper(period=0.0)
-    with pytest.raises(ValueError, match="multibeam_stride"):
+    with pytest.raises(ValueError, match="multibeam's stride"):
         OctreeMapper(multibeam_stride=0)
     with pytest.raises(ValueError, match="resolution"):
         OctreeMapper(resolution=0.0)

@@ -47,7 +47,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from drake_auv.mapping.scan_log import SOURCES
+from drake_auv.sonar.sensor import BUILT_IN
 
 UNKNOWN, FREE, OCCUPIED = -1, 0, 1
 FACES = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
@@ -206,7 +206,7 @@ def multibeam_returns(batches) -> tuple[np.ndarray, np.ndarray]:
     in `ScanBatch`es."""
     points, directions = [np.zeros((0, 3))], [np.zeros((0, 3))]
     for b in batches or ():
-        if b.source == SOURCES.index("multibeam"):
+        if b.source == BUILT_IN.index("multibeam"):
             hit = np.isfinite(b.ranges)
             points.append(b.points())
             directions.append(np.asarray(b.directions, float)[hit])

@@ -1,4 +1,4 @@
-"""`OctreeMapper`: the on-line octree map, built from the multibeam, profiler and DVL returns.
+"""`OctreeMapper`: the on-line octree map, built from the sonars' and the DVL's returns.
 
 All of it lives in the Context. The state is the log of the returns received so far (a
 `ScanLog`, immutable and persistent, so Drake's state copies are free and each Context's
@@ -11,9 +11,10 @@ not its future (a state set by hand). Copying a Context rebuilds its octree from
 (`OnlineMap.__deepcopy__`, reading the log back from its file). So two Contexts of one
 diagram never share a map. A step's cost is the batches since the last one, never the log.
 
-Ports: inputs `multibeam_returns`, `profiler_returns`, `dvl_returns` (`SonarReturns`; any
-may be left unconnected: the DVL's four beams map what lies under the vehicle); outputs `map`
-(`OnlineMap`) and `scan_log` (`ScanLog`, the recorded returns).
+Ports: an input `{name}_returns` (`SonarReturns`) per source it is given (by default the
+built-in `multibeam`, `profiler` and `dvl`; any may be left unconnected: the DVL's four beams
+map what lies under the vehicle); outputs `map` (`OnlineMap`) and `scan_log` (`ScanLog`, the
+recorded returns, whose `sources` are the mapper's, built-in ones first).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from pydrake.systems.framework import LeafSystem
 from drake_auv.mapping.octree_map import OctreeMap
 from drake_auv.mapping.scan_log import ScanBatch, ScanLog
 from drake_auv.sonar.returns import SonarReturns
+from drake_auv.sonar.sensor import BUILT_IN, source_table
 
 
 class OnlineMap:
@@ -76,19 +78,25 @@ class OctreeMapper(LeafSystem):
         period: recording period, s, in [0.01, 10]; returns of an update already recorded
             (same `sequence`) are skipped, so a period shorter than the sensors' is harmless,
             a longer one drops the pings in between.
-        multibeam_stride: record every n-th multibeam beam (profiler beams are all kept).
+        multibeam_stride: record every n-th beam of the built-in multibeam (the profiler's and
+            the DVL's are all kept).
+        extra: {name: stride} the configured sensors' returns recorded besides the built-in
+            ones (every stride-th beam), after them in the log's `sources`.
         no_return_clear_m: how far a beam without an echo clears free water in the map, m
             (`OctreeMap`; inf: to the sonar's range).
         discretize: OctoMap's discretised insertion, one ray per endpoint voxel (`OctreeMap`).
     """
 
     def __init__(self, resolution: float = 0.5, period: float = 0.1, multibeam_stride: int = 2,
-                 no_return_clear_m: float = np.inf, discretize: bool = False):
+                 no_return_clear_m: float = np.inf, discretize: bool = False,
+                 extra: dict[str, int] | None = None):
         super().__init__()
+        extra = dict(extra or {})
         if not (np.isfinite(period) and 0.01 <= period <= 10.0):
             raise ValueError(f"OctreeMapper period must be in [0.01, 10] s, got {period}")
-        if int(multibeam_stride) != multibeam_stride or multibeam_stride < 1:
-            raise ValueError(f"multibeam_stride must be an integer >= 1, got {multibeam_stride}")
+        for name, stride in {"multibeam": multibeam_stride, **extra}.items():
+            if int(stride) != stride or stride < 1:
+                raise ValueError(f"{name}'s stride must be an integer >= 1, got {stride}")
         if not (np.isfinite(resolution) and 0.01 < resolution <= 10.0):
             raise ValueError(f"OctreeMapper resolution must be in (0.01, 10] m, got {resolution}")
         if not no_return_clear_m > 0:
@@ -99,13 +107,18 @@ class OctreeMapper(LeafSystem):
         self.period = float(period)
         self.multibeam_stride = int(multibeam_stride)
         self.discretize = bool(discretize)
+        self.sources = source_table(extra)
+        # {source name: every how many beams are recorded}, in the order of `sources`
+        self.strides = {**{name: 1 for name in BUILT_IN}, "multibeam": self.multibeam_stride,
+                        **{name: int(stride) for name, stride in extra.items()}}
         model = AbstractValue.Make(SonarReturns.empty(20.0))
-        self.multibeam_input = self.DeclareAbstractInputPort("multibeam_returns", model)
-        self.profiler_input = self.DeclareAbstractInputPort("profiler_returns", model.Clone())
-        self.dvl_input = self.DeclareAbstractInputPort("dvl_returns", model.Clone())
-        self._log_index = self.DeclareAbstractState(AbstractValue.Make(ScanLog()))
-        # The `sequence` of the last batch recorded from each sonar.
-        self._sequences = self.DeclareDiscreteState(np.array([-1.0, -1.0, -1.0]))
+        self.returns_inputs = {name: self.DeclareAbstractInputPort(f"{name}_returns",
+                                                                   model.Clone())
+                               for name in self.sources}
+        self._log_index = self.DeclareAbstractState(AbstractValue.Make(
+            ScanLog(sources=self.sources)))
+        # The `sequence` of the last batch recorded from each source, in `sources` order.
+        self._sequences = self.DeclareDiscreteState(np.full(len(self.sources), -1.0))
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.period, 0.0, self._update_log)
         self.map_output = self.DeclareAbstractOutputPort(
             "map", lambda: AbstractValue.Make(OnlineMap(self.resolution, self.no_return_clear_m,
@@ -117,15 +130,14 @@ class OctreeMapper(LeafSystem):
     def _update_log(self, context, state):
         log = context.get_abstract_state(self._log_index).get_value()
         sequences = context.get_discrete_state(self._sequences).get_value().copy()
-        for k, (port, source, stride) in enumerate((
-                (self.multibeam_input, "multibeam", self.multibeam_stride),
-                (self.profiler_input, "profiler", 1), (self.dvl_input, "dvl", 1))):
+        for k, (port, stride) in enumerate(zip(self.returns_inputs.values(),
+                                               self.strides.values())):
             if not port.HasValue(context):
                 continue
             returns = port.Eval(context)
             if returns.sequence == sequences[k] or len(returns) == 0:
                 continue
-            log = log.append(ScanBatch.make(returns.time, source, returns.origin_nav,
+            log = log.append(ScanBatch.make(returns.time, k, returns.origin_nav,
                                             returns.directions_nav[::stride],
                                             returns.ranges[::stride], returns.max_range))
             sequences[k] = returns.sequence

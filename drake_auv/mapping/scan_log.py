@@ -25,6 +25,9 @@ records. An empty log has no store; its first append opens one, so a fresh Conte
 nothing with an earlier run. Reading an old batch (an octree rebuilt for a copied Context,
 `points.ply`) reads its record back.
 
+A batch's `source` is an index into its log's `sources`, the names of the sensors that feed
+it (`sonar.sensor.source_table`: the built-in ones first, so their indices never change).
+
 Frame: the navigation frame (the world as the vehicle believes it), metres, seconds.
 """
 
@@ -37,7 +40,8 @@ from typing import Iterator
 
 import numpy as np
 
-SOURCES = ("multibeam", "profiler", "dvl")
+from drake_auv.sonar.sensor import BUILT_IN
+
 CACHE_BATCHES = 64  # the newest batches a store also keeps in memory
 CHUNK_BATCHES = 1024  # record offsets frozen into one array of a version's history
 # A record: this header, then the directions (n, 3) and ranges (n,) as little-endian float32.
@@ -56,7 +60,7 @@ class ScanBatch:
     """One sensor update: beams from one origin (a multibeam fan, the profiler's pings).
 
     Attributes:
-        time: s. source: index into `SOURCES`. origin: (3,) sensor origin, m.
+        time: s. source: index into its log's `sources`. origin: (3,) sensor origin, m.
         directions: (n, 3) unit beam directions (float32). ranges: (n,) m, NaN: no return.
         max_range: m (beams without a return clear free space up to it).
     """
@@ -69,8 +73,11 @@ class ScanBatch:
     max_range: float
 
     @classmethod
-    def make(cls, time, source: str, origin, directions, ranges, max_range) -> "ScanBatch":
-        return cls(float(time), SOURCES.index(source), _frozen(origin, np.float64),
+    def make(cls, time, source: int | str, origin, directions, ranges,
+             max_range) -> "ScanBatch":
+        """The batch, its arrays frozen; `source`: an index, or a `BUILT_IN` source's name."""
+        return cls(float(time), BUILT_IN.index(source) if isinstance(source, str) else
+                   int(source), _frozen(origin, np.float64),
                    _frozen(directions, np.float32), _frozen(ranges, np.float32),
                    float(max_range))
 
@@ -149,10 +156,11 @@ class ScanStore:
 @dataclass(frozen=True, eq=False, slots=True)
 class _Batches:
     """Some consecutive batches of a log, oldest first, read from its store when asked
-    (`batches()`, what `reconstruction.pointcloud.from_scan_log` reads)."""
+    (`batches()`, what `reconstruction.pointcloud.from_scan_log` reads); `sources`: the log's."""
 
     store: ScanStore
     offsets: list
+    sources: tuple
 
     def batches(self) -> list[ScanBatch]:
         return [self.store.get(offset, remember=False) for offset in self.offsets]
@@ -173,7 +181,8 @@ class ScanLog:
     """A version of the log: `count` batches, the newest in `store` at `offset`; `returns`: the
     beams with a return (finite range) of all `count` batches. Its history: `parent`, the
     previous version while it lies in the current chunk (None at a multiple of
-    `CHUNK_BATCHES`), and `chunk`, the frozen offsets of the batches before that."""
+    `CHUNK_BATCHES`), and `chunk`, the frozen offsets of the batches before that. `sources`:
+    the names a batch's `source` indexes (every version of a log has its first's)."""
 
     count: int = 0
     parent: "ScanLog | None" = None
@@ -181,6 +190,7 @@ class ScanLog:
     offset: int = -1
     returns: int = 0
     chunk: _Chunk | None = None
+    sources: tuple = BUILT_IN
 
     def __deepcopy__(self, memo):
         return self  # immutable, and so are the versions it points to
@@ -196,14 +206,14 @@ class ScanLog:
         returns = self.returns + int(np.count_nonzero(np.isfinite(batch.ranges)))
         count = self.count + 1
         if count % CHUNK_BATCHES:
-            return ScanLog(count, self, store, offset, returns, self.chunk)
+            return ScanLog(count, self, store, offset, returns, self.chunk, self.sources)
         # The chunk is full: its offsets become one array, and its versions can go.
         node, tail = self, [offset]
         while node.count > count - CHUNK_BATCHES:
             tail.append(node.offset)
             node = node.parent
         return ScanLog(count, None, store, offset, returns,
-                       _Chunk(_frozen(tail[::-1], np.int64), self.chunk, count))
+                       _Chunk(_frozen(tail[::-1], np.int64), self.chunk, count), self.sources)
 
     def _offsets_since(self, older: "ScanLog | None") -> list[int] | None:
         """The offsets of the batches after version `older`, oldest first (None when `older`
@@ -247,7 +257,7 @@ class ScanLog:
         when its `batches()` is called: a whole dive in bounded memory."""
         offsets = self._offsets_since(None)
         for start in range(0, len(offsets), size):
-            yield _Batches(self.store, offsets[start:start + size])
+            yield _Batches(self.store, offsets[start:start + size], self.sources)
 
     def iter_batches(self) -> Iterator[ScanBatch]:
         """Every batch, oldest first, read one at a time."""

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 
 import yaml
@@ -26,9 +27,9 @@ from drake_auv.mission.overrides import apply_overrides, one_line
 from drake_auv.ocean.spec import OceanSpecError, ocean_from_raw, ocean_to_raw
 from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, TOP_KEYS,
                                     FaultsSpec, LimitsSpec, MissionFileError, MissionSpec,
-                                    NavigationJumpFault, PayloadSpec, ReplannerSpec, SiteSpec,
-                                    SonarNoiseSpec, SonarSilentFault, ThrusterFailureFault,
-                                    mission_keys)
+                                    NavigationJumpFault, PayloadSpec, ReplannerSpec, SensorSpec,
+                                    SiteSpec, SonarNoiseSpec, SonarSilentFault,
+                                    ThrusterFailureFault, mission_keys)
 from drake_auv.mission.steps import STEPS, step_specs
 from drake_auv.mission.steps.explore import ExploreStep
 from drake_auv.mission.steps.fly import FLY_FORMATS, FlyStep
@@ -38,7 +39,9 @@ from drake_auv.mission.steps.survey import SurveyStep
 from drake_auv.mission.yaml_text import MAX_BYTES, MAX_VALUES, YamlLimitError, load_yaml_file
 from drake_auv.params import NESTED, ParameterError, is_number, checks
 from drake_auv.sonar.noise import SonarNoise
+from drake_auv.sonar.sensor import BUILT_IN
 
+SENSOR_NAME = re.compile(r"[a-z][a-z0-9_]*")  # a port's, a topic's and a system's name
 BUILTIN_DIR = Path(__file__).resolve().parent / "missions"
 
 
@@ -126,6 +129,23 @@ class _Reader:
             rule(self, obj, where)
         return obj
 
+    def payload(self, raw) -> PayloadSpec:
+        """The `payload` section, its `sensors` mapping read into `SensorSpec`s in order."""
+        raw = dict(self.mapping(raw, "payload", (*mission_keys(PayloadSpec), "sensors")))
+        table = raw.pop("sensors", None) or {}
+        if not isinstance(table, dict):
+            self.fail("payload.sensors", f"{table!r} is not a mapping",
+                      "a mapping of sensor name to " + ", ".join(mission_keys(SensorSpec)))
+        sensors = []
+        for name, body in table.items():
+            where = f"payload.sensors.{name}"
+            if not isinstance(name, str) or not SENSOR_NAME.fullmatch(name) or name in BUILT_IN:
+                self.fail(where, "is not a sensor name", "lower-case letters, digits and _, "
+                          "a letter first; not " + ", ".join(BUILT_IN))
+            sensors.append(dataclasses.replace(self.section(SensorSpec, body, where), name=name))
+        return dataclasses.replace(self.section(PayloadSpec, raw, "payload"),
+                                   sensors=tuple(sensors))
+
     def sonar_noise(self, raw) -> SonarNoiseSpec:
         allowed = "clean, realistic or a mapping of " + ", ".join(mission_keys(SonarNoise))
         if raw == "clean":
@@ -196,7 +216,8 @@ class _Reader:
             what = check.problem(value)
             if what is not None:
                 self.fail(key, f"{value!r} {what}", check.allowed())
-        sections = {key: self.section(cls, raw.get(key), key) for key, cls in SECTIONS.items()}
+        sections = {key: self.payload(raw.get(key)) if cls is PayloadSpec
+                    else self.section(cls, raw.get(key), key) for key, cls in SECTIONS.items()}
         steps = self.steps(raw["steps"])
         self.prior_needed(sections["site"], steps)
         return MissionSpec(**top, **sections,
@@ -268,8 +289,10 @@ def mission_to_dict(spec: MissionSpec) -> dict:
     (`mission_from_dict` reads it back to an equal spec); still water leaves `ocean` out."""
     noise = spec.sonar_noise
     sea = {} if spec.ocean is None else dict(ocean=ocean_to_raw(spec.ocean))
-    return dict(name=spec.name, description=spec.description, seed=spec.seed,
-                **{key: _plain(getattr(spec, key)) for key in SECTIONS},
+    sections = {key: _plain(getattr(spec, key)) for key in SECTIONS}
+    if spec.payload.sensors:
+        sections["payload"]["sensors"] = {s.name: _plain(s) for s in spec.payload.sensors}
+    return dict(name=spec.name, description=spec.description, seed=spec.seed, **sections,
                 sonar_noise=dict(noise.params) if noise.preset == "custom" else noise.preset,
                 faults={name: _plain(getattr(spec.faults, name)) for name in FAULT_CLASSES},
                 **sea, steps=[{s.KIND: _plain(s)} for s in spec.steps])
@@ -315,6 +338,6 @@ def load_mission(source, seed: int | None = None, overrides=()) -> MissionSpec:
 __all__ = ["BUILTIN_DIR", "FAULT_CLASSES", "FLY_FORMATS", "REALISTIC_NOISE", "RULES",
            "STEPS", "TOP_KEYS", "ExploreStep", "FaultsSpec", "FlyStep", "FollowStep",
            "LimitsSpec", "MissionFileError", "MissionSpec", "NavigationJumpFault",
-           "PayloadSpec", "PlanStep", "ReplannerSpec", "SiteSpec", "SonarNoiseSpec",
+           "PayloadSpec", "PlanStep", "ReplannerSpec", "SensorSpec", "SiteSpec", "SonarNoiseSpec",
            "SonarSilentFault", "SurveyStep", "step_specs", "ThrusterFailureFault", "apply_overrides", "builtin_missions",
            "load_mission", "mission_from_dict", "mission_to_dict"]

@@ -39,7 +39,7 @@ from pydrake.systems.primitives import ConstantValueSource, LogVectorOutput, Por
 from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.mapping.mapper import OctreeMapper
-from drake_auv.mission.config import MissionSpec
+from drake_auv.mission.config import MissionSpec, SensorSpec
 from drake_auv.mission.faults import NavigationJump, SonarSilence, ThrusterFailure
 from drake_auv.mission.plan import MissionPlan, plan_mission
 from drake_auv.mission.steps import behaviour_step
@@ -50,8 +50,11 @@ from drake_auv.mission.supervisor import MissionSupervisor
 from drake_auv.ocean.system import TURBULENCE_PERIOD_S, Ocean
 from drake_auv.random_streams import generator
 from drake_auv.sonar.altimeter import DvlAltimeter
+from drake_auv.sonar.beams import SonarMount
 from drake_auv.sonar.multibeam import MultibeamSonar
+from drake_auv.sonar.noise import SonarNoise
 from drake_auv.sonar.profiler import FOLLOWING_SETUP, PencilBeamProfiler
+from drake_auv.sonar.sensor import BUILT_IN, Sensor, stream_of
 from drake_auv.vehicle.diagram import VehicleSystems, add_girona500
 from drake_auv.vehicle.path_reference import PathReference
 
@@ -67,8 +70,7 @@ class MissionHandles:
     plan: MissionPlan
     caster: RayCaster
     vehicle: VehicleSystems
-    multibeam: MultibeamSonar
-    profiler: PencilBeamProfiler
+    sonars: dict  # name -> the payload's sonars (`sonar_table`): a `Sensor` each
     mapper: OctreeMapper
     supervisor: MissionSupervisor
     camera_coverage: CoverageRecorder
@@ -82,6 +84,14 @@ class MissionHandles:
     dvl: DvlAltimeter | None = None  # with a step that needs one (fly, explore)
     ocean: Ocean | None = None  # with a sea (`ocean:` not none): the water at the vehicle
     mcap: object = None  # with an `McapLog`: the `rosio.McapRecorder` writing into it
+
+    @property
+    def multibeam(self) -> MultibeamSonar:
+        return self.sonars["multibeam"]
+
+    @property
+    def profiler(self) -> PencilBeamProfiler:
+        return self.sonars["profiler"]
 
     @property
     def path_reference(self) -> PathReference:
@@ -131,32 +141,56 @@ def add_faults(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSp
     return faults, estimated
 
 
+def sonar_table(spec: MissionSpec) -> dict[str, SensorSpec]:
+    """{name: `SensorSpec`} of the mission's sonars, in their order as sources of the map: the
+    built-in multibeam (looking to `payload.multibeam_mount`, every
+    `replanner.multibeam_stride`-th beam mapped) and pencil-beam profiler (the horizontal head
+    of profile following), then the `payload.sensors` configured."""
+    return {"multibeam": SensorSpec("multibeam", "multibeam", spec.payload.multibeam_mount,
+                                    map_stride=spec.replanner.multibeam_stride),
+            "profiler": SensorSpec("profiler", "profiler", "horizontal",
+                                   rate_hz=FOLLOWING_SETUP["update_rate"]),
+            **{sensor.name: sensor for sensor in spec.payload.sensors}}
+
+
+def make_sonar(caster: RayCaster, sensor: SensorSpec, max_range: float,
+               noise: SonarNoise | None, seed: int, **options) -> Sensor:
+    """The sonar system of `sensor` (its noise drawn from the stream of its name,
+    `sonar.sensor.stream_of`); `options` go to its class (`axis_hits_output` of a multibeam,
+    `planes` of a profiler)."""
+    common = dict(max_range=max_range, mount=SonarMount.named(sensor.mount, sensor.position_m),
+                  noise=noise, seed=seed, stream=stream_of(sensor.name), **options)
+    if sensor.kind == "multibeam":
+        return MultibeamSonar(caster, num_beams=sensor.num_beams, fan_deg=sensor.fan_deg,
+                              rate=sensor.rate_hz, **common)
+    setup = {key: value for key, value in FOLLOWING_SETUP.items()
+             if key not in ("max_range", "update_rate")}
+    return PencilBeamProfiler(caster, update_rate=sensor.rate_hz, **setup, **common)
+
+
 def add_sonars(builder: DiagramBuilder, caster: RayCaster, vehicle: VehicleSystems,
                spec: MissionSpec, plan: MissionPlan, max_range: float, estimated, faults):
-    """The payload multibeam and the pencil-beam profiler (its head tilted to the vertical
-    plane on vertical-following legs), ray casting on the true world, placing their returns
-    with the `estimated` state; a silent-sonar fault gates their returns (added to
-    `faults`). Returns (multibeam, profiler, {sensor: returns port})."""
+    """The sonars of `sonar_table(spec)` (the profiler's head tilted to the vertical plane on
+    vertical-following legs), each named by its key, ray casting on the true world, placing
+    their returns with the `estimated` state; a silent-sonar fault gates the built-in ones'
+    returns (added to `faults`). Returns ({name: sonar}, {name: its returns port})."""
     noise = spec.sonar_noise.to_noise()
-    multibeam = builder.AddNamedSystem("multibeam", MultibeamSonar(
-        caster, max_range=max_range, mount=spec.payload.multibeam_mount, noise=noise,
-        seed=spec.seed, axis_hits_output=True))
-    options = {**FOLLOWING_SETUP, "max_range": max_range}
-    profiler = builder.AddNamedSystem("profiler", PencilBeamProfiler(
-        caster, scan_plane="horizontal", noise=noise, seed=spec.seed,
-        planes=plan.profiler_planes or None, **options))
+    options = {"multibeam": dict(axis_hits_output=True),
+               "profiler": dict(planes=plan.profiler_planes or None)}
     silent = spec.faults.sonar_silent
-    returns = {}
-    for name, sonar in (("multibeam", multibeam), ("profiler", profiler)):
+    sonars, returns = {}, {}
+    for name, sensor in sonar_table(spec).items():
+        sonar = sonars[name] = builder.AddNamedSystem(name, make_sonar(
+            caster, sensor, max_range, noise, spec.seed, **options.get(name, {})))
         builder.Connect(vehicle.dynamics.state_output, sonar.true_state_input)
         builder.Connect(estimated, sonar.estimated_state_input)
         returns[name] = sonar.returns_output
-        if silent.start_s is not None and silent.sensor in (name, "both"):
+        if silent.start_s is not None and silent.sensor in (name, "both") and name in BUILT_IN:
             gate = faults[f"sonar_silent_{name}"] = builder.AddNamedSystem(
                 f"{name}_silence", SonarSilence(silent.start_s, silent.duration_s, max_range))
             builder.Connect(sonar.returns_output, gate.returns_input)
             returns[name] = gate.returns_output
-    return multibeam, profiler, returns
+    return sonars, returns
 
 
 def add_ocean(builder: DiagramBuilder, vehicle: VehicleSystems, spec: MissionSpec,
@@ -208,9 +242,8 @@ def add_behaviours(builder: DiagramBuilder, wiring: Wiring, own: dict | None = N
     names = ["path", *(name for name in plan.behaviours if name != "path"), "response"]
     switch = builder.AddNamedSystem("reference_switch", PortSwitch(8))
     ports = {name: switch.DeclareInputPort(name).get_index() for name in names}
-    supervisor = builder.AddNamedSystem("mission_supervisor",
-                                        MissionSupervisor(plan.legs, ports,
-                                                          SUPERVISOR_PERIOD))
+    supervisor = builder.AddNamedSystem("mission_supervisor", MissionSupervisor(
+        plan.legs, ports, SUPERVISOR_PERIOD, sensors=tuple(wiring.returns)))
     path_reference = builder.AddNamedSystem("path_reference", PathReference(
         plan.legs_of("path"), terrain=terrain_elevation(wiring.site),
         clearance=wiring.spec.replanner.params.clearance))
@@ -318,21 +351,23 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
     vehicle = add_girona500(builder, navigation=replace(spec.navigation, seed=spec.seed),
                             initial_state=plan.start_state)
     faults, estimated = add_faults(builder, vehicle, spec)
-    multibeam, profiler, returns = add_sonars(builder, caster, vehicle, spec, plan, max_range,
-                                              estimated, faults)
+    sonars, returns = add_sonars(builder, caster, vehicle, spec, plan, max_range, estimated,
+                                 faults)
+    table = sonar_table(spec)
     mapper = builder.AddNamedSystem("octree_mapper", OctreeMapper(
-        resolution=spec.replanner.voxel_m, multibeam_stride=spec.replanner.multibeam_stride,
+        resolution=spec.replanner.voxel_m, multibeam_stride=table["multibeam"].map_stride,
         discretize=spec.replanner.discretize, no_return_clear_m=min(  # a step may set it
-            (getattr(s, "no_return_clear_m", np.inf) for s in spec.steps), default=np.inf)))
-    builder.Connect(returns["multibeam"], mapper.multibeam_input)
-    builder.Connect(returns["profiler"], mapper.profiler_input)
+            (getattr(s, "no_return_clear_m", np.inf) for s in spec.steps), default=np.inf),
+        extra={name: s.map_stride for name, s in table.items() if name not in BUILT_IN}))
+    for name, port in returns.items():
+        builder.Connect(port, mapper.returns_inputs[name])
     wiring = Wiring(builder, spec, plan, site, caster, vehicle, estimated, mapper, returns,
-                    profiler)
+                    sonars["profiler"])
     supervisor, switch, behaviours = add_behaviours(builder, wiring)
     dvl, replanner = wiring.added.get("dvl"), behaviours.get("replan")
     ocean = add_ocean(builder, vehicle, spec, site, plan, dvl)
     camera, multibeam_coverage = add_coverage_recorders(builder, caster, vehicle, spec, site,
-                                                        max_range, multibeam)
+                                                        max_range, sonars["multibeam"])
     logs = {
         "state": LogVectorOutput(vehicle.dynamics.state_output, builder, LOG_PERIOD),
         "estimated_state": LogVectorOutput(estimated, builder, LOG_PERIOD),
@@ -351,7 +386,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
 
         recorder = add_mcap_recorder(
             builder, mcap, vehicle, estimated, switch.get_output_port(), supervisor,
-            {"multibeam": multibeam, "profiler": profiler, **({"dvl": dvl} if dvl else {})},
+            {**sonars, **({"dvl": dvl} if dvl else {})},
             {**returns, **({"dvl": dvl.returns_output} if dvl else {})},
             {"multibeam": multibeam_coverage, "camera": camera}, site, plan.nominal, mapper,
             replanner, ocean)
@@ -364,7 +399,7 @@ def build_mission_diagram(site: Site, spec: MissionSpec, plan: MissionPlan | Non
                         switch, replanner, ocean)
     diagram = builder.Build()
     diagram.set_name(f"mission_{spec.name}")
-    handles = MissionHandles(plan, caster, vehicle, multibeam, profiler, mapper, supervisor,
+    handles = MissionHandles(plan, caster, vehicle, sonars, mapper, supervisor,
                              camera, multibeam_coverage, logs, faults, behaviours, dvl, ocean,
                              recorder)
     return diagram, handles

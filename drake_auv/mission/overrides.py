@@ -13,7 +13,7 @@ import re
 import yaml
 
 from drake_auv.mission.spec import (FAULT_CLASSES, REALISTIC_NOISE, SECTIONS, TOP_KEYS,
-                                    MissionFileError, mission_keys)
+                                    MissionFileError, SensorSpec, mission_keys)
 from drake_auv.mission.steps import step_specs
 from drake_auv.mission.yaml_text import load_yaml
 from drake_auv.ocean.spec import OCEAN_KEYS, PARTS
@@ -123,6 +123,21 @@ def _set(raw: dict, parts: list[str], value, label: str):
             node, keys, offset = sea[part], tuple(checks(PARTS[part])), 2
         else:
             fail(1, f"{part} is a value, not a section", [f"ocean.{part}"])
+    elif head == "payload" and rest[0] == "sensors":  # payload.sensors.<name>.<key>
+        if not isinstance(raw.get(head), dict):
+            raw[head] = {}
+        if len(rest) == 1:
+            raw[head]["sensors"] = value
+            return
+        if not isinstance(raw[head].get("sensors"), dict):
+            raw[head]["sensors"] = {}
+        table, name = raw[head]["sensors"], rest[1]
+        if len(rest) == 2:
+            table[name] = value
+            return
+        if not isinstance(table.get(name), dict):
+            table[name] = {}
+        node, keys, offset = table[name], tuple(mission_keys(SensorSpec)), 3
     elif head in SECTIONS:
         if not isinstance(raw.get(head), dict):
             raw[head] = {}

@@ -52,7 +52,6 @@ from drake_auv.signals import Reference, Response, VehicleState
 
 RESPONSES = ("none", "hold", "back_off", "abort")
 CAUSES = ("none", "sonar_silent", "tracking_error", "navigation_jump")
-SENSORS = ("multibeam", "profiler")
 DRIFT_WINDOWS = 2  # windows in a row of uncommanded motion that make a tracking fault
 
 
@@ -117,7 +116,7 @@ def drifting(rules: SafetyRules, drift, error0: float, error: float, elapsed: fl
 
 
 def relied_sensors(behaviour: str) -> tuple[str, ...]:
-    """The sonars (`SENSORS`) a leg flown by `behaviour` relies on."""
+    """The sonars (by name) a leg flown by `behaviour` relies on."""
     return {"follow": ("profiler",), "replan": ("multibeam",)}.get(behaviour, ())
 
 

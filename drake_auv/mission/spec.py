@@ -30,7 +30,9 @@ from drake_auv.replanning.parameters import ReplanningParameters
 from drake_auv.replanning.section import OPTIMIZERS
 from drake_auv.scenarios import list_scenarios
 from drake_auv.signals import THRUSTER_NAMES
+from drake_auv.sonar.beams import MOUNT_ROTATIONS
 from drake_auv.sonar.noise import SonarNoise
+from drake_auv.sonar.sensor import source_table
 from drake_auv.vehicle.navigation import NavigationParams
 
 # The "realistic" sonar (docs/sensors.md, "Sonar model"): 10 cm range noise, 5 % of returns
@@ -48,6 +50,7 @@ DEPTH_M = dict(low=0.0, high=11000.0, low_open=True, unit="m", nullable=True)
 TIME_S = dict(low=0.0, low_open=True, unit="s", nullable=True)
 SPEED_MS = dict(low=0.05, high=1.4, unit="m/s")
 ANGLE_DEG = dict(low=-360.0, high=360.0, unit="deg")
+SENSOR_KINDS = ("multibeam", "profiler")
 
 
 class MissionFileError(ValueError):
@@ -181,17 +184,52 @@ class ReplannerSpec:
 
 
 @dataclass(frozen=True)
+class SensorSpec:
+    """A payload sonar of the `payload.sensors` table (docs/mission.md, "Payload sensors"),
+    built like the built-in ones (`mission.diagram.sonar_table`): ray casting on the true
+    world to the site's `max_range_m`, with the mission's `sonar_noise`, its returns mapped,
+    logged and recorded under its name.
+
+    Attributes:
+        name: the sensor's name (the table's key: its system, ports, topics and point-cloud
+            source), not one of `sonar.sensor.BUILT_IN`.
+        kind: "multibeam" (a fan of `num_beams` over `fan_deg` at `rate_hz` pings/s) or
+            "profiler" (the pencil-beam head of profile following, `rate_hz` batches/s).
+        mount: the sensor frame's rotation on the vehicle (`sonar.beams.MOUNT_ROTATIONS`: a
+            multibeam's fan plane, a profiler's scan plane); position_m: its origin in the
+            body frame, m.
+        map_stride: every n-th beam goes into the on-line map.
+    """
+
+    name: str = ""
+    kind: str = param("multibeam", kind="choice", choices=SENSOR_KINDS)
+    mount: str = param("starboard", kind="choice", choices=tuple(MOUNT_ROTATIONS))
+    position_m: tuple = param((0.0, 0.0, 0.0), kind="vector", names=("x", "y", "z"), unit="m")
+    rate_hz: float = param(10.0, low=0.1, high=30.0, unit="Hz")
+    num_beams: int = param(480, low=1, high=2048, integer=True)
+    fan_deg: float = param(120.0, low=0.0, high=360.0, high_open=True, unit="deg")
+    map_stride: int = param(1, low=1, high=16, integer=True)
+
+    def __post_init__(self):
+        validate(self)
+
+
+@dataclass(frozen=True)
 class PayloadSpec:
     """Attributes: multibeam_mount: where the multibeam looks; camera_range_m: distance up to
-    which the camera resolves the surface, m; camera_aperture_deg: its full aperture, deg."""
+    which the camera resolves the surface, m; camera_aperture_deg: its full aperture, deg;
+    sensors: the configured sonars (`SensorSpec`, the file's `sensors:` mapping of name to
+    keys), carried besides the built-in multibeam, profiler and DVL."""
 
     multibeam_mount: str = param("port", kind="choice",
                                  choices=("port", "starboard", "down", "forward"))
     camera_range_m: float = param(12.0, low=0.5, high=50.0, unit="m")
     camera_aperture_deg: float = param(60.0, low=5.0, high=170.0, unit="deg")
+    sensors: tuple = ()
 
     def __post_init__(self):
         validate(self)
+        source_table(tuple(s.name for s in self.sensors))  # unique names, none built-in
 
 
 @dataclass(frozen=True)

@@ -15,12 +15,13 @@ selects the switch's `response` input, fed by `response_reference`; an abort end
 
 Discrete-state groups, each with its view in `drake_auv.signals`: `leg` (`LegSignal`),
 `progress` (of the current leg: `LegProgress`), `outcomes` (per leg: 0 not ended, 1 goal
-reached, 2 timed out, 3 aborted), `done` (1 after the last leg or an abort), `watch` (`Watch`)
+reached, 2 timed out, 3 aborted), `done` (1 after the last leg or an abort), `watch` (`Watch`),
+`heard` (per watched sensor, in `sensors` order: the time of its last update with beams, s)
 and `response` (`Response`).
 
 Ports: inputs `estimated_state` (`VehicleState`), one `<behaviour>_status`
 (`BehaviourStatus`) per behaviour it sequences (`path_status`, `follow_status`, ...: a leg's
-goal reads its own behaviour's), `multibeam_returns`, `profiler_returns` (`SonarReturns`),
+goal reads its own behaviour's), `{name}_returns` (`SonarReturns`) per watched sensor,
 `reference` (`Reference`), `map` (`OnlineMap`) (all but the first may be left unconnected: the
 rule that needs one is then off); outputs `leg` (`LegSignal`), `behaviour` (`InputPortIndex`), `response` (`Response`,
 the group, for a log) and `response_reference` (`Reference`).
@@ -35,7 +36,7 @@ from pydrake.systems.framework import EventStatus, InputPortIndex, LeafSystem
 from drake_auv.mapping.mapper import OnlineMap
 from drake_auv.mission.legs import (Leg, advance_progress, goal_reached, leg_share,
                                     start_progress)
-from drake_auv.mission.safety import (CAUSES, DRIFT_WINDOWS, RESPONSES, SENSORS, SafetyRules,
+from drake_auv.mission.safety import (CAUSES, DRIFT_WINDOWS, RESPONSES, SafetyRules,
                                       abort_target, back_off_target, closing, drifting,
                                       relied_sensors, response_record, response_reference,
                                       uncommanded)
@@ -56,10 +57,14 @@ class MissionSupervisor(LeafSystem):
             behaviour's status is read from the input `<name>_status` (`status_inputs`).
         period: judging period, s, in (0, 5].
         rules: the `SafetyRules` (default thresholds).
+        sensors: the names of the sonars whose returns it watches (`mission.safety.
+            relied_sensors`: a leg relying on one that falls silent is held), an input
+            `{name}_returns` each (none: no silent-sonar rule).
     """
 
     def __init__(self, legs: tuple[Leg, ...], behaviour_ports: dict[str, int],
-                 period: float = 0.5, rules: SafetyRules | None = None):
+                 period: float = 0.5, rules: SafetyRules | None = None,
+                 sensors=()):
         super().__init__()
         if not legs:
             raise ValueError("a mission needs at least one leg")
@@ -80,7 +85,7 @@ class MissionSupervisor(LeafSystem):
                               for name in self.behaviour_ports if name != "response"}
         empty = AbstractValue.Make(SonarReturns.empty(1.0))
         self.returns_inputs = {name: self.DeclareAbstractInputPort(f"{name}_returns", empty)
-                               for name in SENSORS}
+                               for name in sensors}
         self.reference_input = self.DeclareVectorInputPort("reference", Reference.size())
         self.map_input = self.DeclareAbstractInputPort("map", AbstractValue.Make(OnlineMap(0.5)))
         self._leg = self.DeclareDiscreteState(LegSignal.size())
@@ -88,6 +93,7 @@ class MissionSupervisor(LeafSystem):
         self._outcomes = self.DeclareDiscreteState(len(self.legs))
         self._done = self.DeclareDiscreteState(1)
         self._watch = self.DeclareDiscreteState(Watch.size())
+        self._heard = self.DeclareDiscreteState(max(len(self.returns_inputs), 1))
         self._response = self.DeclareDiscreteState(Response.size())
         self.DeclareInitializationDiscreteUpdateEvent(self._start_mission)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update_leg)
@@ -122,24 +128,29 @@ class MissionSupervisor(LeafSystem):
         discrete_state.set_value(self._leg, leg[:])
         discrete_state.set_value(self._progress, start_progress(self.legs[0], x))
         watch = Watch.zeros()
-        watch.multibeam_hit_s = watch.profiler_hit_s = t
         watch.tracking_since_s = -1.0
         watch.position = VehicleState(x).position
         watch.drift_since_s = t
         discrete_state.set_value(self._watch, watch[:])
+        discrete_state.set_value(self._heard, np.full(max(len(self.returns_inputs), 1), t))
 
-    def _watched(self, context, t: float, x: np.ndarray) -> tuple[np.ndarray, bool, bool]:
-        """The `watch` group updated at `t` from the returns, the reference and the estimate
-        `x`; and whether the estimate jumped and the tracking error lasted too long."""
-        watch = Watch(context.get_discrete_state(self._watch).get_value().copy())
-        position = VehicleState(x).position
-        for name in SENSORS:
-            port = self.returns_inputs[name]
+    def _heard_now(self, context) -> dict:
+        """{sensor: the time of its last update with beams (echo or not), s}, updated from the
+        returns in `context`."""
+        heard = dict(zip(self.returns_inputs,
+                         context.get_discrete_state(self._heard).get_value().tolist()))
+        for name, port in self.returns_inputs.items():
             if port.HasValue(context):
                 returns = port.Eval(context)
                 if returns.sequence > 0 and len(returns) > 0:  # beams fired, echo or not
-                    field = f"{name}_hit_s"
-                    setattr(watch, field, max(getattr(watch, field), returns.time))
+                    heard[name] = max(heard[name], returns.time)
+        return heard
+
+    def _watched(self, context, t: float, x: np.ndarray) -> tuple[np.ndarray, bool, bool]:
+        """The `watch` group updated at `t` from the reference and the estimate `x`; and
+        whether the estimate jumped and the tracking error lasted too long."""
+        watch = Watch(context.get_discrete_state(self._watch).get_value().copy())
+        position = VehicleState(x).position
         moved = position - watch.position
         jumped = bool(np.linalg.norm(moved) > self.rules.jump_m)
         watch.position = position
@@ -166,7 +177,7 @@ class MissionSupervisor(LeafSystem):
                 watch.drift_since_s, watch.drift_error0_m, watch.drift = t, error, 0.0
         return watch[:], jumped, tracking
 
-    def _respond(self, context, t: float, x: np.ndarray, watch: np.ndarray, jumped: bool,
+    def _respond(self, context, t: float, x: np.ndarray, heard: dict, jumped: bool,
                  tracking: bool, start: float) -> np.ndarray | None:
         """The `response` group after this period's checks, or None to go on with the leg."""
         rules = self.rules
@@ -187,9 +198,8 @@ class MissionSupervisor(LeafSystem):
                                            abort_target(rules, x))
                 return response_record("back_off", "tracking_error", t, x, target)
         sensors = relied_sensors(self.legs[int(self._leg_now(context).index)].behaviour)
-        watched = Watch(watch)
-        since = [t - max(getattr(watched, f"{s}_hit_s"), start) for s in sensors
-                 if self.returns_inputs[s].HasValue(context)]
+        since = [t - max(heard[s], start) for s in sensors
+                 if s in heard and self.returns_inputs[s].HasValue(context)]
         if mode == "none":
             if since and max(since) >= rules.silence_s:
                 return response_record("hold", "sonar_silent", t, x, position)
@@ -216,8 +226,11 @@ class MissionSupervisor(LeafSystem):
         leg = self.legs[index]
         x = self.state_input.Eval(context)
         watch, jumped, tracking = self._watched(context, t, x)
+        heard = self._heard_now(context)
         discrete_state.set_value(self._watch, watch)
-        record = self._respond(context, t, x, watch, jumped, tracking, start)
+        if heard:
+            discrete_state.set_value(self._heard, list(heard.values()))
+        record = self._respond(context, t, x, heard, jumped, tracking, start)
         if record is not None:
             discrete_state.set_value(self._response, record)
             response = Response(record)

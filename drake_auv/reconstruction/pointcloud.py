@@ -4,7 +4,8 @@ Built from the mapper's `ScanLog`, so in the NAVIGATION frame (where the vehicle
 returns were, drift included), metres, seconds. Files: binary little-endian PLY (`write_ply`,
 `read_ply`, which also reads ASCII and big-endian PLY of other tools) with vertex properties
 `x y z` (float64), `origin_x origin_y origin_z` (float64), `time` (float64, s) and `source`
-(uint8, index into `mapping.scan_log.SOURCES`); LAS/LAZ through the optional `laspy`
+(uint8, index into the cloud's `source_names`, which a header comment lists: `comment drake_auv
+sonar returns; source: 0 multibeam, 1 profiler, 2 dvl, ...`); LAS/LAZ through the optional `laspy`
 (`write_las`, `read_las`). Pure numpy, no Drake.
 """
 
@@ -17,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from drake_auv.mapping.scan_log import SOURCES, ScanLog
+from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.output_files import open_replacing, replacing
+from drake_auv.sonar.sensor import BUILT_IN
 
 POSITION = ("x", "y", "z")
 ORIGIN = ("origin_x", "origin_y", "origin_z")
@@ -27,6 +29,7 @@ _PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short":
               "uint": "u4", "uint32": "u4", "float": "f4", "float32": "f4", "double": "f8",
               "float64": "f8"}
 _PLY_FORMATS = {"binary_little_endian": "<", "binary_big_endian": ">", "ascii": None}
+_SOURCES_COMMENT = "drake_auv sonar returns; source: "
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,13 +39,16 @@ class PointCloud:
     Attributes:
         points: (n, 3) return positions, m. origins: (n, 3) sensor origin of each return, m
             (NaN rows when unknown, e.g. a PLY of another tool). times: (n,) s (NaN unknown).
-        sources: (n,) uint8 index into `SOURCES` (0 multibeam, 1 profiler, 2 dvl).
+        sources: (n,) uint8 index into `source_names`.
+        source_names: the sensors' names (a `ScanLog`'s `sources`: the built-in ones, 0
+            multibeam, 1 profiler, 2 dvl, then a mission's configured sensors).
     """
 
     points: np.ndarray
     origins: np.ndarray
     times: np.ndarray
     sources: np.ndarray
+    source_names: tuple = BUILT_IN
 
     def __post_init__(self):
         n = len(self.points)
@@ -64,12 +70,13 @@ class PointCloud:
     def subset(self, mask) -> "PointCloud":
         """The returns selected by a boolean mask or index array."""
         return PointCloud(self.points[mask], self.origins[mask], self.times[mask],
-                          self.sources[mask])
+                          self.sources[mask], self.source_names)
 
     def shifted(self, convert) -> "PointCloud":
         """The cloud with points and origins mapped by `convert` ((n, 3) -> (n, 3)), e.g.
         `site.to_site` from the local frame to the site's coordinates."""
-        return PointCloud(convert(self.points), convert(self.origins), self.times, self.sources)
+        return PointCloud(convert(self.points), convert(self.origins), self.times, self.sources,
+                          self.source_names)
 
     def crop(self, lo, hi, margin: float = 0.0) -> "PointCloud":
         """The returns inside the axis-aligned box [lo - margin, hi + margin], m."""
@@ -87,10 +94,10 @@ class PointCloud:
         return self.subset(np.sort(first))
 
 
-def from_scan_log(log: ScanLog, sources=SOURCES) -> PointCloud:
+def from_scan_log(log: ScanLog, sources=None) -> PointCloud:
     """The returns (beams with a finite range) of every batch in `log` from the named
-    `sources`, in the log's frame (navigation)."""
-    wanted = {SOURCES.index(s) for s in sources}
+    `sources` (None: all of the log's), in the log's frame (navigation)."""
+    wanted = {log.sources.index(s) for s in (log.sources if sources is None else sources)}
     parts = []
     for batch in log.batches():
         if batch.source not in wanted:
@@ -101,24 +108,26 @@ def from_scan_log(log: ScanLog, sources=SOURCES) -> PointCloud:
             parts.append((batch.points(), np.broadcast_to(batch.origin, (n, 3)),
                           np.full(n, batch.time), np.full(n, batch.source, np.uint8)))
     if not parts:
-        return PointCloud(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.uint8))
+        return PointCloud(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.uint8),
+                          log.sources)
     points, origins, times, srcs = (np.concatenate(p) for p in zip(*parts))
-    return PointCloud(points.astype(float), origins.astype(float), times, srcs)
+    return PointCloud(points.astype(float), origins.astype(float), times, srcs, log.sources)
 
 
 def write_ply(cloud: PointCloud, filename) -> None:
     """Writes `cloud` as a binary little-endian PLY (vertex properties in the module doc)."""
-    write_ply_chunks([cloud], len(cloud), filename)
+    write_ply_chunks([cloud], len(cloud), filename, cloud.source_names)
 
 
-def write_ply_chunks(clouds, count: int, filename) -> None:
-    """Writes the `clouds` (an iterable of `PointCloud`, `count` points in all) one after the
-    other as one binary little-endian PLY, holding one chunk in memory at a time."""
+def write_ply_chunks(clouds, count: int, filename, source_names=BUILT_IN) -> None:
+    """Writes the `clouds` (an iterable of `PointCloud`, `count` points in all, indexing
+    `source_names`) one after the other as one binary little-endian PLY, holding one chunk in
+    memory at a time."""
     dtype = np.dtype([(name, "<f8") for name in POSITION + ORIGIN + ("time",)]
                      + [("source", "u1")])
     header = ["ply", "format binary_little_endian 1.0",
-              "comment drake_auv sonar returns; source: " + ", ".join(
-                  f"{k} {s}" for k, s in enumerate(SOURCES)),
+              "comment " + _SOURCES_COMMENT + ", ".join(
+                  f"{k} {s}" for k, s in enumerate(source_names)),
               f"element vertex {count}"]
     header += [f"property double {name}" for name in POSITION + ORIGIN + ("time",)]
     header += ["property uchar source", "end_header"]
@@ -138,17 +147,22 @@ def write_ply_chunks(clouds, count: int, filename) -> None:
 
 
 def _ply_header(f, filename):
-    """(format, [(element, count, [(type, name)])], lines) of a PLY header, `lines` the number
-    of header lines; `f` left after it."""
+    """(format, [(element, count, [(type, name)])], lines, source names) of a PLY header,
+    `lines` the number of header lines, the source names those of its sources comment
+    (`BUILT_IN` without one); `f` left after it."""
     if f.readline().strip() != b"ply":
         raise ValueError(f"{filename}: not a PLY file (no 'ply' magic line)")
-    fmt, elements, lines = None, [], 1
+    fmt, elements, lines, names = None, [], 1, BUILT_IN
     while True:
         line = f.readline()
         lines += 1
         if not line:
             raise ValueError(f"{filename}: corrupt PLY, the header has no end_header")
-        words = line.decode("ascii", errors="replace").split()
+        text = line.decode("ascii", errors="replace")
+        words = text.split()
+        if words[:1] == ["comment"] and _SOURCES_COMMENT in text:
+            names = tuple(item.split()[-1] for item in
+                          text.split(_SOURCES_COMMENT, 1)[1].split(","))
         if not words or words[0] in ("comment", "obj_info"):
             continue
         if words[0] == "end_header":
@@ -167,7 +181,7 @@ def _ply_header(f, filename):
                              f"{line.decode('ascii', errors='replace').strip()!r}")
     if fmt is None:
         raise ValueError(f"{filename}: the PLY header has no (known) format line")
-    return fmt, elements, lines
+    return fmt, elements, lines, names
 
 
 def _ascii_rows(f, path, n: int, width: int, first_line: int) -> np.ndarray:
@@ -204,7 +218,7 @@ def read_ply(filename) -> PointCloud:
     if not path.is_file():
         raise FileNotFoundError(f"point cloud {path} does not exist")
     with open(path, "rb") as f:
-        fmt, elements, header_lines = _ply_header(f, path)
+        fmt, elements, header_lines, source_names = _ply_header(f, path)
         if not elements or elements[0][0] != "vertex":
             raise ValueError(f"{path}: the PLY's first element must be 'vertex', got "
                              f"{[e[0] for e in elements]}")
@@ -242,7 +256,7 @@ def read_ply(filename) -> PointCloud:
     if not np.all(np.isfinite(points)):
         raise ValueError(f"{path}: the PLY has non-finite vertex positions")
     return PointCloud(points, stack(ORIGIN), column.get("time", np.full(n, np.nan)),
-                      column.get("source", np.zeros(n)).astype(np.uint8))
+                      column.get("source", np.zeros(n)).astype(np.uint8), source_names)
 
 
 def optional_module(name: str, needed_for: str, package: str):

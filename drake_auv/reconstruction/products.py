@@ -55,12 +55,13 @@ class MissionSurface:
 def dive_cloud(result, voxel: float = THIN_VOXEL) -> PointCloud:
     """Every return of the dive, one per `voxel` m cube; local frame (navigation). Read from
     the log a chunk of batches at a time, each chunk thinned before the next is read."""
-    parts = [from_scan_log(chunk).thin(voxel) for chunk in result.scan_log.chunks()]
+    log = result.scan_log
+    parts = [from_scan_log(chunk).thin(voxel) for chunk in log.chunks()]
     parts = [p for p in parts if len(p)]
     if not parts:
-        return from_scan_log(ScanLog())
+        return from_scan_log(ScanLog(sources=log.sources))
     cloud = PointCloud(*(np.concatenate([getattr(p, name) for p in parts])
-                         for name in ("points", "origins", "times", "sources")))
+                         for name in ("points", "origins", "times", "sources")), log.sources)
     return cloud.thin(voxel) if len(parts) > 1 else cloud
 
 
@@ -76,7 +77,7 @@ def write_points(result, filename) -> int:
     batches at a time, so memory does not grow with the dive; returns the number of points."""
     log = result.scan_log
     write_ply_chunks((from_scan_log(chunk).shifted(result.site.to_site)
-                      for chunk in log.chunks()), log.returns, filename)
+                      for chunk in log.chunks()), log.returns, filename, log.sources)
     return log.returns
 
 

@@ -27,11 +27,13 @@ from typing import Iterator
 
 import numpy as np
 
-from drake_auv.mapping.scan_log import SOURCES, ScanBatch
+from drake_auv.mapping.scan_log import ScanBatch
 from drake_auv.rosio.messages import rotation_matrix
+from drake_auv.sonar.sensor import BUILT_IN
 
-DEFAULT_TOPICS = dict(odometry="/odometry/navigation", multibeam="/sonar/multibeam/points",
-                      profiler="/sonar/profiler/points", dvl="/sonar/dvl/points")
+# the odometry and the built-in sources' returns (`rosio.recorder.points_topic`)
+DEFAULT_TOPICS = dict(odometry="/odometry/navigation",
+                      **{name: f"/sonar/{name}/points" for name in BUILT_IN})
 ODOMETRY_TYPES = ("nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped")
 RETURNS_TYPES = ("sensor_msgs/msg/PointCloud2", "sensor_msgs/msg/LaserScan")
 TF_TOPICS = ("/tf", "/tf_static")
@@ -220,7 +222,7 @@ def _index(reader, path, topics, given, base_frame, max_range) -> LogIndex:
                          f"or geometry_msgs/PoseStamped); topics in the log: {available}; "
                          f"name it with --topics odometry=TOPIC")
     returns = {}
-    for name in SOURCES:
+    for name in BUILT_IN:
         conns = typed(name, RETURNS_TYPES)
         if conns is None and name in given:
             raise ValueError(f"{path}: no {name} topic {topics[name]}; topics in the log: "
@@ -228,7 +230,7 @@ def _index(reader, path, topics, given, base_frame, max_range) -> LogIndex:
         if conns is not None:
             returns[name] = conns
     if not returns:
-        raise ValueError(f"{path}: no returns topic ({', '.join(topics[s] for s in SOURCES)}: "
+        raise ValueError(f"{path}: no returns topic ({', '.join(topics[s] for s in BUILT_IN)}: "
                          f"sensor_msgs/PointCloud2 or LaserScan); topics in the log: "
                          f"{available}; name them with --topics multibeam=TOPIC,...")
     tf = [c for t in TF_TOPICS for c in by_topic.get(t, [])
@@ -395,7 +397,7 @@ def iter_batches(index: LogIndex, multibeam_stride: int = 1) -> Iterator[ScanBat
                 yield from _batches(index, group, multibeam_stride)
                 group = []
             group_time = log_time
-            group.append((SOURCES.index(wanted[conn.id]), len(group),
+            group.append((BUILT_IN.index(wanted[conn.id]), len(group),
                           reader.deserialize(raw, conn.msgtype)))
         yield from _batches(index, group, multibeam_stride)
     finally:
@@ -404,7 +406,7 @@ def iter_batches(index: LogIndex, multibeam_stride: int = 1) -> Iterator[ScanBat
 
 def _batches(index, group, stride) -> Iterator[ScanBatch]:
     for source, _, msg in sorted(group, key=lambda g: g[:2]):
-        name = SOURCES[source]
+        name = BUILT_IN[source]
         directions, ranges = (scan_beams(msg) if hasattr(msg, "angle_min")
                               else cloud_beams(msg))
         if name == "multibeam":

@@ -264,11 +264,12 @@ def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supe
                       mapper=None, replanner=None, ocean=None) -> McapRecorder:
     """Adds an `McapRecorder` writing into `log` and wires it: `vehicle` (`VehicleSystems`),
     the `estimated` state and `reference` ports, the `supervisor`, `sonars` ({name: a
-    `RangeSonar` or the DVL, for its mount and period}) with their `returns` ports,
+    `sonar.sensor.Sensor`, for its mount, period and range}) with their `returns` ports,
     `coverage` ({name: a `CoverageRecorder`}), the `site`'s world and target, the nominal
     `plan` (a `PlannedPath`), the `mapper`, the `replanner` and the `ocean` when there are."""
     recorder = builder.AddNamedSystem("mcap_recorder", McapRecorder(
-        log, {name: _mount_and_period(sonar) for name, sonar in sonars.items()},
+        log, {name: (sonar.mount, sonar.period, sonar.max_range)
+              for name, sonar in sonars.items()},
         coverage=tuple(coverage), world=site.world, target=site.target_mesh,
         plan=None if plan is None else plan.points, section_input=replanner is not None,
         map_input=mapper is not None, water_input=ocean is not None))
@@ -289,12 +290,3 @@ def add_mcap_recorder(builder, log: McapLog, vehicle, estimated, reference, supe
     if ocean is not None:
         builder.Connect(ocean.water_output, recorder.water_input)
     return recorder
-
-
-def _mount_and_period(sonar):
-    """(SonarMount, period s, max range m) of a `RangeSonar` or a `DvlAltimeter`."""
-    if hasattr(sonar, "model"):
-        return sonar.model.mount, sonar.period, sonar.model.max_range
-    from drake_auv.sonar.beams import SonarMount
-
-    return SonarMount(), 1.0 / sonar.params.rate, sonar.params.max_range

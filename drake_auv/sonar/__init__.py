@@ -1,6 +1,7 @@
-"""Sonars: beam geometry and mounts (`beams`), noise (`noise`) and the `SonarReturns` signal
-(`returns`), pure; the LeafSystems `RangeSonar`, `MultibeamSonar` and `PencilBeamProfiler`
-(`range_sonar`, `multibeam`, `profiler`) import Drake and load on their own."""
+"""Sonars: beam geometry and mounts (`beams`), noise (`noise`), the `SonarReturns` signal
+(`returns`) and the `Sensor` protocol with the built-in source names (`sensor`), pure; the
+LeafSystems `RangeSonar`, `MultibeamSonar` and `PencilBeamProfiler` (`range_sonar`,
+`multibeam`, `profiler`) import Drake and load on their own."""
 
 from drake_auv.sonar.noise import SonarNoise, apply_noise
 from drake_auv.sonar.returns import SonarReturns

@@ -8,7 +8,8 @@ world vertical, so roll and pitch are accounted for) and has bottom lock with at
 `min_beams` valid beams. Noise: each beam's range gets a Gaussian error of
 `range_sigma_fraction` of the range plus `range_sigma_m`, and is lost with `dropout_prob`.
 Without bottom lock the altitude is NaN. Measurement n draws from the run's `dvl` stream,
-child n (`drake_auv.random_streams`).
+child n (`drake_auv.random_streams`). The altimeter is a `sonar.sensor.Sensor` (its mount: the
+body frame; its beams are fixed in it).
 
 This is what an autopilot holding altitude reads (COLA2 altitude mode, ArduSub's frame 10 via
 its downward rangefinder); the true world reaches the mission only through this ray casting.
@@ -41,7 +42,8 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 from drake_auv.geometry.raycast import RayCaster
 from drake_auv.params import param, validate
 from drake_auv.random_streams import generator, stream as random_stream
-from drake_auv.signals import VehicleState
+from drake_auv.signals import DvlBeams, DvlMeasurement, VehicleState
+from drake_auv.sonar.beams import SonarMount
 from drake_auv.sonar.returns import SonarReturns
 from drake_auv.vehicle.control import rotation_world_body
 from drake_auv.vehicle.model import STATE_SIZE
@@ -128,20 +130,23 @@ class DvlAltimeter(LeafSystem):
         world: the true world's `RayCaster`.
         params: the DVL (default `DvlParams()`); noise: False for a perfect DVL.
         seed: the run's seed, drawn through `stream` (`drake_auv.random_streams`).
-        stream: the noise's random stream.
+        stream: the noise's random stream: a name of `drake_auv.random_streams.STREAMS` or
+            (name, *keys).
     """
 
     def __init__(self, world: RayCaster, params: DvlParams | None = None, noise: bool = True,
-                 seed: int = 0, stream: str = "dvl"):
+                 seed: int = 0, stream: str | tuple = "dvl"):
         super().__init__()
         self.caster, self.params = world, params if params is not None else DvlParams()
-        self.noise, self.seed, self.stream = bool(noise), int(seed), str(stream)
-        random_stream(self.seed, self.stream)  # checks the seed and the stream's name
+        self.noise, self.seed = bool(noise), int(seed)
+        self.stream = (stream,) if isinstance(stream, str) else tuple(stream)
+        random_stream(self.seed, *self.stream)  # checks the seed and the stream
         self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
         self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
-        self._measurement = self.DeclareDiscreteState(np.array([np.nan, 0.0]))  # altitude, n
-        # the last measurement's time and its four slant ranges (NaN: no measurement)
-        self._beams = self.DeclareDiscreteState(np.array([0.0] + [np.nan] * 4))
+        measurement, beams = DvlMeasurement.zeros(), DvlBeams.zeros()
+        measurement.altitude, beams.ranges = np.nan, np.nan
+        self._measurement = self.DeclareDiscreteState(measurement[:])
+        self._beams = self.DeclareDiscreteState(beams[:])
         self.DeclarePeriodicDiscreteUpdateEvent(1.0 / self.params.rate, 0.0,
                                                 self._update_measurement)
         self.altitude_output = self.DeclareVectorOutputPort(
@@ -163,37 +168,55 @@ class DvlAltimeter(LeafSystem):
                                    self.input_port_ticket(
                                        self.estimated_state_input.get_index())})
 
+    @property
+    def mount(self) -> SonarMount:
+        """The body frame (the beams are given in it)."""
+        return SonarMount()
+
+    @property
+    def period(self) -> float:
+        return 1.0 / self.params.rate
+
+    @property
+    def max_range(self) -> float:
+        return self.params.max_range
+
+    def _measurement_of(self, context) -> DvlMeasurement:
+        return DvlMeasurement(context.get_discrete_state(self._measurement).get_value())
+
     def _update_measurement(self, context, discrete_state):
-        n = int(context.get_discrete_state(self._measurement)[1])
-        rng = generator(self.seed, self.stream, n) if self.noise else None
+        n = int(self._measurement_of(context).count)
+        rng = generator(self.seed, *self.stream, n) if self.noise else None
         true = self.true_state_input.Eval(context)
-        ranges = measure_ranges(self.caster, self.params, true, rng)
-        discrete_state.set_value(self._measurement, [altitude_of(self.params, true, ranges),
-                                                     n + 1])
-        discrete_state.set_value(self._beams, [context.get_time(), *ranges])
+        measurement, beams = DvlMeasurement.zeros(), DvlBeams.zeros()
+        beams.ranges = measure_ranges(self.caster, self.params, true, rng)
+        measurement.altitude = altitude_of(self.params, true, beams.ranges)
+        measurement.count, beams.time = n + 1, context.get_time()
+        discrete_state.set_value(self._measurement, measurement[:])
+        discrete_state.set_value(self._beams, beams[:])
 
     def _calc_altitude(self, context, output: BasicVector):
-        output.SetAtIndex(0, context.get_discrete_state(self._measurement)[0])
+        output.SetAtIndex(0, self._measurement_of(context).altitude)
 
     def _calc_bottom_lock(self, context, output: BasicVector):
-        output.SetAtIndex(0, float(np.isfinite(context.get_discrete_state(self._measurement)[0])))
+        output.SetAtIndex(0, float(np.isfinite(self._measurement_of(context).altitude)))
 
     def _calc_seabed_elevation(self, context, output: BasicVector):
-        altitude = context.get_discrete_state(self._measurement)[0]
-        output.SetAtIndex(0, self.estimated_state_input.Eval(context)[2] - altitude)
+        altitude = self._measurement_of(context).altitude
+        output.SetAtIndex(0, VehicleState(self.estimated_state_input.Eval(context)).z - altitude)
 
     def _calc_returns(self, context, output):
         """The last measurement's beams at the estimated pose (empty before the first)."""
-        n = int(context.get_discrete_state(self._measurement)[1])
+        n = int(self._measurement_of(context).count)
         if n == 0:
             output.set_value(SonarReturns.empty(self.params.max_range))
             return
-        time, *ranges = context.get_discrete_state(self._beams).get_value()
-        ranges = np.asarray(ranges)
+        beams = DvlBeams(context.get_discrete_state(self._beams).get_value())
+        ranges = np.array(beams.ranges)
         estimated = self.estimated_state_input.Eval(context)
         origin = VehicleState(estimated).position
         directions = beam_directions(self.params, estimated)
-        output.set_value(SonarReturns(float(time), origin, np.zeros(4), ranges, directions,
-                                      origin + directions * ranges[:, None],
+        output.set_value(SonarReturns(float(beams.time), origin, np.zeros(4), ranges,
+                                      directions, origin + directions * ranges[:, None],
                                       self.params.beams_body * ranges[:, None],
                                       self.params.max_range, n))

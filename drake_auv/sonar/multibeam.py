@@ -30,7 +30,7 @@ class MultibeamSonar(RangeSonar):
         beam_width_deg: beam cone angle, deg (0: one ray per beam).
         noise: error options (default: none).
         seed: the run's seed, drawn through `stream` (`drake_auv.random_streams`).
-        stream: the noise's random stream.
+        stream: the noise's random stream (`RangeSonar`).
         max_incidence_deg: grazing limit, deg.
         axis_hits_output: declare the `axis_hits` output (`AxisHits`, true world).
     """
@@ -39,7 +39,7 @@ class MultibeamSonar(RangeSonar):
                  max_range: float = 20.0, mount="down", mount_position=(0.0, 0.0, 0.0),
                  beam_width_deg: float = 0.0, noise: SonarNoise | None = None, seed: int = 0,
                  max_incidence_deg: float = 85.0, axis_hits_output: bool = False,
-                 stream: str = "multibeam"):
+                 stream: str | tuple = "multibeam"):
         if not (np.isfinite(rate) and rate > 0):
             raise ValueError(f"rate must be > 0 pings/s, got {rate}")
         if isinstance(mount, str):

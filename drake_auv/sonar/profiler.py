@@ -40,7 +40,7 @@ class PencilBeamProfiler(RangeSonar):
         mount: a full `SonarMount`, overriding scan_plane and mount_position.
         noise: error options (default: none).
         seed: the run's seed, drawn through `stream` (`drake_auv.random_streams`).
-        stream: the noise's random stream.
+        stream: the noise's random stream (`RangeSonar`).
         max_incidence_deg: grazing limit, deg.
         planes: {mission leg: scan plane} where the head is tilted to another plane than
             `scan_plane` (a tilt unit: vertical on vertical-following legs); with it the
@@ -53,7 +53,7 @@ class PencilBeamProfiler(RangeSonar):
                  mount_position=(0.0, 0.0, 0.0), mount: SonarMount | None = None,
                  noise: SonarNoise | None = None, seed: int = 0,
                  max_incidence_deg: float = 85.0, planes: dict[int, str] | None = None,
-                 stream: str = "profiler"):
+                 stream: str | tuple = "profiler"):
         if scan_plane not in ("horizontal", "vertical"):
             raise ValueError(f"scan_plane must be 'horizontal' or 'vertical', got {scan_plane!r}")
         lo, hi = (float(a) for a in sector_deg)

@@ -4,8 +4,9 @@ Inputs `true_state` (12, to cast against the true world) and `estimated_state` (
 the returns in the navigation frame); output `returns` (`SonarReturns`, the abstract state
 written by a periodic unrestricted update, so the beams are cast at the sensor's rate and not
 at every integrator step). Update n (n = 0, 1, ...) fires at t = n * period; its noise draws
-come from the sonar's stream of the run (`stream`, a name in `drake_auv.random_streams`),
-child n, so the same seed gives the same returns. With `axis_hits`, a second output
+come from the sonar's stream of the run (`stream`, a name in `drake_auv.random_streams` or
+(name, *keys): `sonar.sensor.stream_of`), child n, so the same seed gives the same returns.
+A `RangeSonar` is a `sonar.sensor.Sensor`. With `axis_hits`, a second output
 `axis_hits` (`AxisHits`, true world, for scoring only) holds the faces the beams' axes hit in
 the same update, so a coverage recorder of the same beams need not cast them again.
 """
@@ -38,15 +39,16 @@ class RangeSonar(LeafSystem):
     """Base of the sonar systems; subclasses give the beam angles of each update."""
 
     def __init__(self, world, model: SonarModel, period: float, seed: int = 0,
-                 axis_hits: bool = False, stream: str = "multibeam"):
+                 axis_hits: bool = False, stream: str | tuple = "multibeam"):
         super().__init__()
         if not (np.isfinite(period) and period > 0):
             raise ValueError(f"sonar update period must be > 0 s, got {period}")
         self.caster = as_caster(world)
         self.model = model
         self.period = float(period)
-        self.seed, self.stream = int(seed), str(stream)
-        random_stream(self.seed, self.stream)  # checks the seed and the stream's name
+        self.seed = int(seed)
+        self.stream = (stream,) if isinstance(stream, str) else tuple(stream)
+        random_stream(self.seed, *self.stream)  # checks the seed and the stream
         self.true_state_input = self.DeclareVectorInputPort("true_state", STATE_SIZE)
         self.estimated_state_input = self.DeclareVectorInputPort("estimated_state", STATE_SIZE)
         self._returns_index = self.DeclareAbstractState(
@@ -58,6 +60,15 @@ class RangeSonar(LeafSystem):
             self._hits_index = self.DeclareAbstractState(
                 AbstractValue.Make(AxisHits.empty(model.max_range)))
             self.axis_hits_output = self.DeclareStateOutputPort("axis_hits", self._hits_index)
+
+    @property
+    def mount(self):
+        """The `SonarMount` of the sensor frame on the vehicle."""
+        return self.model.mount
+
+    @property
+    def max_range(self) -> float:
+        return self.model.max_range
 
     def update_angles(self, n: int) -> np.ndarray:
         """Beam angles (rad, scan plane) fired by update n."""
@@ -75,7 +86,7 @@ class RangeSonar(LeafSystem):
     def _update_returns(self, context, state):
         n = context.get_abstract_state(self._returns_index).get_value().sequence
         model = self.scan_model(context)
-        rng = generator(self.seed, self.stream, n) if model.noise.enabled else None
+        rng = generator(self.seed, *self.stream, n) if model.noise.enabled else None
         returns, hits = scan_with_hits(self.caster, model, None,
                                        self.true_state_input.Eval(context),
                                        self.estimated_state_input.Eval(context), rng=rng,

@@ -147,7 +147,7 @@ class Wiring:
                 seed=self.spec.seed))
             self.builder.Connect(self.vehicle.dynamics.state_output, dvl.true_state_input)
             self.builder.Connect(self.estimated, dvl.estimated_state_input)
-            self.builder.Connect(dvl.returns_output, self.mapper.dvl_input)
+            self.builder.Connect(dvl.returns_output, self.mapper.returns_inputs["dvl"])
         return self.added["dvl"]
 
     def log(self, name: str, port, period: float) -> None:
