@@ -48,3 +48,13 @@ def test_a_port_added_without_its_row_fails(doc, monkeypatch):
     assert fresh != doc
     added = [row for row in _table(fresh) if "`extra`" in row]
     assert added == ["| `Replanner` | replanner | out | `extra` | 1 |  |"]
+
+
+def test_the_package_table_names_every_package_and_module(doc):
+    """Every first-level package (a folder with an `__init__.py`) and module of drake_auv has
+    its row in the package table."""
+    root = Path(__file__).resolve().parents[1] / "drake_auv"
+    names = sorted({p.parent.name for p in root.glob("*/__init__.py")}
+                   | {p.stem for p in root.glob("*.py") if p.stem != "__init__"})
+    assert names and all(f"| `drake_auv.{name}` |" in doc for name in names), [
+        name for name in names if f"| `drake_auv.{name}` |" not in doc]
