@@ -1,6 +1,6 @@
 """One progress display for a whole run: its phases in order, each from 0 to 100 %.
 
-`RunProgress(RUN_PHASES)` (setup, dive, results, outputs) draws `[2/4] dive  61 % t = 523 s`
+`RunProgress(RUN_PHASES)` (setup, dive, results, outputs; `plan`'s: `PLAN_PHASES`) draws `[2/4] dive  61 % t = 523 s`
 on standard error. On a terminal it is one line rewritten in place (at most every
 `REDRAW_S`); elsewhere (a CI log, a pipe) a line at each phase's start, at every `LOG_STEP` of
 it and at its end, so a log stays short; disabled (`--quiet`), it prints nothing. A phase's
@@ -21,7 +21,25 @@ LOG_STEP = 0.1  # share of a phase between two lines of a log
 LOG_POLL_S = 1.0  # s of wall time between two estimates when the display is a log
 # a mission run's (`drake-auv run`): load and plan, fly, read the dive back, write the files
 RUN_PHASES = ("setup", "dive", "results", "outputs")
+# `drake-auv plan`'s: the planner's stages, then every output file
+PLAN_PHASES = ("plan", "outputs")
 HELD = 0.999  # the most a phase shows before it ends (drawn as 99 %)
+
+
+def phase_display(progress, phase: str, total: float, note: str = "") -> tuple["RunProgress", bool]:
+    """(display, owned) for work of `total` units called `phase`, begun with `note`: a caller's
+    `RunProgress` that lists `phase` starts it (one display over the caller's phases), one that
+    does not counts these units in its current phase; anything else gets a display of this one
+    phase, shown when `progress` is true, which the caller owns and closes."""
+    if isinstance(progress, RunProgress):
+        if phase in progress.phases:
+            progress.start(phase, total, note)
+        elif note:
+            progress.update(progress.done, note)
+        return progress, False
+    display = RunProgress((phase,), enabled=bool(progress))
+    display.start(phase, total, note)
+    return display, True
 
 
 class RunProgress:

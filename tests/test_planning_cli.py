@@ -2,12 +2,14 @@
 
 import io
 import json
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
 
 from drake_auv.cli import main
 from drake_auv.planning.path import PlannedPath
+from drake_auv.progress import PLAN_PHASES, RunProgress
 from drake_auv.terrain.bathymetry import Bathymetry
 
 
@@ -223,21 +225,30 @@ def test_label_runs_draw_every_segment_once_in_its_label():
         assert np.isfinite(line[[0, -1]]).all() and line.shape[1] == 2
 
 
-class _RecordingBar:
-    """A progress bar that records, at each stage done, its name and the files written."""
+class _RecordingProgress(RunProgress):
+    """The plan command's display (silent) recording, at each unit done, its phase, the name
+    of the unit done and the files written by then."""
 
     def __init__(self, outdir):
-        self.outdir, self.name, self.done = outdir, None, []
+        super().__init__(PLAN_PHASES, enabled=False)
+        self.outdir, self.done_units = outdir, []
 
-    def set_postfix_str(self, name):
-        self.name = name
-
-    def update(self, n=1):
+    def _record(self, name):
         files = sorted(p.name for p in self.outdir.glob("*")) if self.outdir.exists() else []
-        self.done.append((self.name, files))
+        self.done_units.append((self.phase, name, files))
+
+    def advance(self, units=1.0, note=None):
+        self._record(self.note)
+        super().advance(units, note)
+
+    @contextmanager
+    def step(self, note):
+        with super().step(note):
+            yield
+        self._record(note)
 
 
-def test_one_progress_bar_ends_when_the_last_file_is_written(tmp_path):
+def test_one_progress_display_ends_when_the_last_file_is_written(tmp_path):
     from drake_auv.formats.outputs import output_stages, write_outputs
     from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
     from drake_auv.planning.parameters import CoverageParameters
@@ -246,12 +257,17 @@ def test_one_progress_bar_ends_when_the_last_file_is_written(tmp_path):
     bathy = Bathymetry(-40.0 + np.clip(xx - 12.0, 0.0, 8.0) * 0.9 + 0.02 * yy, (1.0, 1.0),
                        (1000.0, 2000.0), "EPSG:32631")
     out = tmp_path / "out"
-    bar = _RecordingBar(out)
-    plan = plan_coverage(bathy, CoverageParameters(omega=2.0), progress=bar)
-    assert [name for name, _ in bar.done] == list(PLAN_STAGES)
-    files = write_outputs(plan, out, progress=bar)
-    stages = bar.done[len(PLAN_STAGES):]
+    progress = _RecordingProgress(out)
+    plan = plan_coverage(bathy, CoverageParameters(omega=2.0), progress=progress)
+    assert [(phase, name) for phase, name, _ in progress.done_units] == [
+        ("plan", stage) for stage in PLAN_STAGES]
+    files = write_outputs(plan, out, progress=progress)
+    stages = progress.done_units[len(PLAN_STAGES):]
+    assert {phase for phase, _, _ in stages} == {"outputs"}
     assert len(stages) == output_stages(("geojson",)) == 4 + 7  # and the 7 figures
-    assert [name for name, _ in stages[:4]] == ["path.csv", "GeoJSON", "3D metrics", "reports"]
-    assert stages[-1][1] == sorted(f.name for f in files)  # 100 % with every file written
-    assert len(stages[-2][1]) == len(files) - 1
+    assert [name for _, name, _ in stages[:4]] == ["path.csv", "GeoJSON", "3D metrics", "reports"]
+    assert progress.share < 1.0 and progress.done == output_stages(("geojson",))
+    assert stages[-1][2] == sorted(f.name for f in files)  # the last unit with every file
+    assert len(stages[-2][2]) == len(files) - 1
+    progress.close()
+    assert progress.share == 1.0

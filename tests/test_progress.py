@@ -164,3 +164,15 @@ def test_a_run_shows_its_phases_and_its_report_names_only_files_it_wrote(tmp_pat
     assert "plan.png" not in named and not (out / "plan.png").exists()
     assert all((out / name).stat().st_size > 0 for name in named), sorted(named)
     assert "n/a" not in text and "- Exploration (next views by gain): " in text
+
+
+def test_a_phase_display_joins_its_callers_or_owns_one():
+    from drake_auv.progress import phase_display
+
+    caller = RunProgress(("plan", "outputs"), enabled=False)
+    display, owned = phase_display(caller, "outputs", 4, "path.csv")
+    assert display is caller and not owned and (caller.phase, caller.note) == ("outputs", "path.csv")
+    display, owned = phase_display(caller, "figures", 7, "a.png")  # counted in "outputs"
+    assert display is caller and not owned and caller.phase == "outputs" and caller.note == "a.png"
+    own, owned = phase_display(False, "figures", 7)
+    assert owned and own.phases == ("figures",) and own.phase == "figures" and not own.enabled

@@ -137,13 +137,13 @@ def run(args) -> int:
     output_folder(args.out, "-o", 20 * MiB)  # path.csv, reports, figures, exports
     check_plan_options([(option, getattr(args, field), field) for field, option in OPTIONS.items()]
                        + [("--speed", args.speed, "speed")])
-    from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
+    from drake_auv.planning.coverage_plan import plan_coverage
     from drake_auv.formats import ExportOptions
-    from drake_auv.formats.outputs import output_stages, write_outputs
+    from drake_auv.formats.outputs import write_outputs
     from drake_auv.formats.registry import (check_exports, export_notes, export_warnings,
                                             parse_exports)
     from drake_auv.planning.report import mission_time_line, table3_markdown
-    from drake_auv.planning.stages import StageBar
+    from drake_auv.progress import PLAN_PHASES, RunProgress
     from drake_auv.terrain.roi import parse_roi
 
     exports = parse_exports(args.export) if args.export is not None else None
@@ -191,17 +191,15 @@ def run(args) -> int:
             roi = read_zones(args.roi_file, bathy, "region of interest")
         if args.no_go:
             no_go = shapely.union_all([read_zones(f, bathy) for f in args.no_go])
-    stages = len(PLAN_STAGES) + output_stages(exports, not args.no_figures,
-                                              not args.no_3d_metrics)
-    with StageBar(stages) as bar:  # one bar, to the last file
+    with RunProgress(PLAN_PHASES) as progress:  # one display, to the last file
         params = CoverageParameters(**{field: getattr(args, field) for field in OPTIONS})
-        plan = plan_coverage(bathy, params, roi=roi, no_go=no_go, progress=bar)
+        plan = plan_coverage(bathy, params, roi=roi, no_go=no_go, progress=progress)
         flow = None
         if current is not None:
             from drake_auv.vehicle.current_feasibility import current_report
 
             flow = current_report(plan.path, current, args.speed)
-        files = write_outputs(plan, args.out, figures=not args.no_figures, progress=bar,
+        files = write_outputs(plan, args.out, figures=not args.no_figures, progress=progress,
                               exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
                               metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
                               ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d,

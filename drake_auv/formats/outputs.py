@@ -11,19 +11,19 @@ from drake_auv.formats import ExportOptions
 from drake_auv.formats.registry import EXPORTS, check_exports, export_notes, export_warnings
 from drake_auv.output_files import write_json, write_text
 from drake_auv.planning.report import mission_time, report_dict, report_markdown
-from drake_auv.planning.stages import next_stage, stage_bar
+from drake_auv.progress import RunProgress, phase_display
 
 
 def output_stages(exports: tuple[str, ...], figures: bool = True, metrics_3d=True) -> int:
-    """The stages `write_outputs` counts on a progress bar: path.csv, each export, the 3D
-    metrics (when computed), the reports and each figure."""
+    """The stages `write_outputs` counts on its progress display: path.csv, each export, the
+    3D metrics (when computed), the reports and each figure."""
     from drake_auv.planning.figures import PLAN_VIEWS, VIEWS_3D
 
     return (2 + len(exports) + (metrics_3d is True)
             + (len(PLAN_VIEWS) + len(VIEWS_3D) if figures else 0))
 
 
-def write_outputs(plan, outdir, figures: bool = True, progress=False,
+def write_outputs(plan, outdir, figures: bool = True, progress: bool | RunProgress = False,
                   exports: tuple[str, ...] | None = None, origin_lonlat=None,
                   surge_velocity: float = 0.5, tolerance_xy: float = 1.0,
                   metrics_3d=True, max_items: int = 700, ardusub_frames: str = "terrain",
@@ -33,8 +33,9 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
     `figures`) the PNG figures into `outdir`; returns the files written.
 
     Args:
-        progress: a progress bar over the `output_stages`, or a caller's tqdm bar to advance
-            by them (`planning.stages`: one display that ends when the last file is written).
+        progress: show the progress over the `output_stages`, or a caller's `RunProgress`
+            to show it on (its "outputs" phase: one display that ends when the last file is
+            written).
         exports: names of `registry.EXPORTS`: "cola2" (mission.xml), "qgc" (mission.plan, or
             mission_1.plan, ... past `max_items`; report.json gains exports.qgc), "geojson"
             (path.geojson: the route and the waypoints of the vehicle files written with it;
@@ -56,14 +57,14 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     written, extras, missions = [], {}, ()
-    bar, owned = stage_bar(progress, output_stages(exports, figures, metrics_3d), "outputs")
-    bar.set_postfix_str("path.csv")
+    display, owned = phase_display(progress, "outputs",
+                                   output_stages(exports, figures, metrics_3d), "path.csv")
     plan.path.to_csv(outdir / "path.csv")
     written.append(outdir / "path.csv")
     for fmt in EXPORTS.values():
         if fmt.name not in exports:
             continue
-        next_stage(bar, fmt.stage)
+        display.advance(1, fmt.stage)
         exported = fmt.write(plan, geo, outdir, options, missions)
         written += exported.files
         if exported.figures is not None:
@@ -73,9 +74,9 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
     if metrics_3d is True:
         from drake_auv.planning.metrics3d import evaluate_plan_3d
 
-        next_stage(bar, "3D metrics")
+        display.advance(1, "3D metrics")
         m3d = evaluate_plan_3d(plan)
-    next_stage(bar, "reports")
+    display.advance(1, "reports")
     rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
     markdown = report_markdown(plan, rep, m3d, export_warnings(rep), export_notes(rep))
     if current is not None:
@@ -86,11 +87,11 @@ def write_outputs(plan, outdir, figures: bool = True, progress=False,
     write_text(outdir / "report.md", markdown)
     write_json(outdir / "report.json", rep)
     written += [outdir / "report.md", outdir / "report.json"]
-    next_stage(bar)
+    display.advance(1)
     if figures:
         from drake_auv.planning.figures import write_figures
 
-        written += write_figures(plan, outdir, progress=bar, geo=geo)
+        written += write_figures(plan, outdir, progress=display, geo=geo)
     if owned:
-        bar.close()
+        display.close()
     return written

@@ -22,8 +22,8 @@ from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.route import RouteBuilder
 from drake_auv.planning.slicing import (Contour, fixed_depression, order_contours, slice_levels,
                                         slice_region)
-from drake_auv.planning.stages import next_stage, stage_bar
 from drake_auv.planning.surface import TerrainSurface
+from drake_auv.progress import RunProgress, phase_display
 from drake_auv.resources import check_memory
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.roi import crop_to_roi
@@ -142,7 +142,7 @@ def check_samples(bathy: Bathymetry, omega: float, sample_spacing: float) -> Non
 
 def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParameters(), *,
                   roi=None, no_go=None, baseline: bool = True, compute_metrics: bool = True,
-                  progress: bool = False) -> CoveragePlan:
+                  progress: bool | RunProgress = False) -> CoveragePlan:
     """Plans a 3D coverage path of `bathy` (optionally cropped to `roi`) with `params`.
 
     Args:
@@ -154,8 +154,9 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
             them, transits go around them (`planning.nogo`).
         baseline: also plan the lawnmower baseline (`CoveragePlan.lawnmower`, else None).
         compute_metrics: compute `PlanMetrics` for the path and the lawnmower (needs `baseline`).
-        progress: show a progress bar over the `PLAN_STAGES`, or a caller's tqdm bar to
-            advance by them (`planning.stages`).
+        progress: show the progress over the `PLAN_STAGES`, or a caller's `RunProgress` to
+            show it on (its "plan" phase, begun once the inputs are checked:
+            `progress.phase_display`).
 
     Where Omega above the seabed would be above z = -`params.min_depth`, the path runs at the
     minimum depth instead (`report_dict` says how much of it).
@@ -183,20 +184,19 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
     spacing = (lane_spacing(omega, params.aperture_deg, params.overlap)
                / (1.0 if survey is None else survey.coverage))
     # every high-slope region's slicing planes, refused (too many) before any route is built,
-    # and so before the bar starts: a refusal stays one line
+    # and so before the display starts: a refusal stays one line
     levels = {r: slice_levels(surface, labels.regions == r, labels.slope, spacing,
                               params.slice_spacing, params.slice_count)
               for r in range(1, labels.n_regions + 1)}
-    bar, owned = stage_bar(progress, len(PLAN_STAGES))
-    bar.set_postfix_str(PLAN_STAGES[0])
-    next_stage(bar, PLAN_STAGES[1])  # classified (with the slicing planes)
+    display, owned = phase_display(progress, "plan", len(PLAN_STAGES), PLAN_STAGES[0])
+    display.advance(1, PLAN_STAGES[1])  # classified (with the slicing planes)
     planar = labels.planar
     if params.sweep_angle_deg is not None:
         angle = np.radians(float(params.sweep_angle_deg))
     else:
         angle = best_sweep_angle(bathy, planar, spacing) if planar.any() else 0.0
     dec = decompose(bathy, planar, angle)
-    next_stage(bar, PLAN_STAGES[2])
+    display.advance(1, PLAN_STAGES[2])
     # Graph over planar cells (0..C-1) and high-slope regions (C..C+R-1).
     n_cells = len(dec.cells)
     adjacency = dec.adjacency() + [[] for _ in range(labels.n_regions)]
@@ -210,7 +210,7 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
         positions += list(np.asarray(bathy.origin) + rc[:, ::-1] * np.asarray(bathy.spacing))
     positions = np.array(positions).reshape(-1, 2)
     order = exhaustive_walk(adjacency, positions, 0)
-    next_stage(bar, PLAN_STAGES[3])
+    display.advance(1, PLAN_STAGES[3])
     route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
     contours_done: list[Contour] = []
     visit = []
@@ -237,14 +237,14 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
         for c in order_contours(per_level, start):
             route.add_oriented(c.path, c.sensor_dir, "slice")
             contours_done.append(c)
-    next_stage(bar, PLAN_STAGES[4])
+    display.advance(1, PLAN_STAGES[4])
     path = route.build()
     lawn = None
     if baseline:
         # lanes along the fewest turns whatever the plan's sweep angle, at its sample spacing
         lawn = plan_lawnmower(bathy, replace(params, sweep_angle_deg=None, sample_spacing=ds),
                               lane_spacing_m=spacing, surface=surface, nogo=nogo)
-    next_stage(bar, PLAN_STAGES[5])
+    display.advance(1, PLAN_STAGES[5])
     used = replace(params, sweep_angle_deg=float(np.degrees(angle)), sample_spacing=ds,
                    sensor_range=(2.0 * omega if params.sensor_range is None
                                  else float(params.sensor_range)), min_depth=float(min_depth))
@@ -255,7 +255,7 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
         from drake_auv.planning.metrics import evaluate_plan
 
         plan = replace(plan, metrics=evaluate_plan(plan))
-    next_stage(bar)
+    display.advance(1)
     if owned:
-        bar.close()
+        display.close()
     return plan

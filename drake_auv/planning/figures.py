@@ -235,21 +235,20 @@ VIEWS_3D = {
 def write_figures(plan, outdir, dpi: int = 110, progress=False,
                   geo=None) -> list[Path]:
     """Writes every figure of `PLAN_VIEWS` (in `geo`'s CRS, with latitude, longitude and
-    north, when given) and `VIEWS_3D` into `outdir`; returns the files. `progress`: a bar over
-    the figures, or a caller's tqdm bar to advance by one stage per figure."""
-    from drake_auv.planning.stages import next_stage, stage_bar
+    north, when given) and `VIEWS_3D` into `outdir`; returns the files. `progress`: show the
+    progress over the figures, or a caller's `RunProgress` to advance by one per figure."""
+    from drake_auv.progress import phase_display
 
     outdir = Path(outdir)
     written = []
     makers = {**{k: (lambda plan, f=f: f(plan, geo)) for k, f in PLAN_VIEWS.items()}, **VIEWS_3D}
-    bar, owned = stage_bar(progress, len(makers), "figures")
+    display, owned = phase_display(progress, "figures", len(makers))
     for name, make in makers.items():
-        bar.set_postfix_str(name)
-        fig = make(plan)
-        with replacing(outdir / name) as temporary:
-            fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
-        written.append(outdir / name)
-        next_stage(bar)
+        with display.step(name):
+            fig = make(plan)
+            with replacing(outdir / name) as temporary:
+                fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
+            written.append(outdir / name)
     if owned:
-        bar.close()
+        display.close()
     return written
