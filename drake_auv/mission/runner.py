@@ -78,6 +78,7 @@ class DiveLog:
 
     @property
     def duration_s(self) -> float:
+        """Simulated time from the first sample to the last, s."""
         return float(self.times[-1] - self.times[0])
 
 
