@@ -49,17 +49,17 @@ def run_arm(task: tuple) -> dict:
                          progress=False)
     summary = summarise(result)
     d = summary["distance_to_target"]
-    near = result.distance[_scored_samples(result)]
+    near = result.log.distance[_scored_samples(result)]
     survey = [p for p in summary["phases"] if p["name"] == "survey"]
     ocean = summary.get("ocean", {})
     return dict(seed=seed, arm=arm, speed_mps=speed, towards_deg=towards,
-                overrides=overrides, completed=bool(result.completed),
+                overrides=overrides, completed=bool(result.dive.completed),
                 contact=bool(summary["contact"]), min_clearance_m=summary["min_clearance_m"],
                 survey_clearance_m=min(p["clearance_min_m"] for p in survey),
                 min_m=d["min_m"], mean_m=d["mean_m"],
                 abs_error_m=float(np.abs(near - result.plan.omega).mean()),
                 multibeam=summary["coverage"]["multibeam"], camera=summary["coverage"]["camera"],
-                duration_s=float(result.duration_s),
+                duration_s=float(result.log.duration_s),
                 survey_s=float(sum(p["duration_s"] for p in survey)),
                 thrust_saturation_share=ocean.get("thrust_saturation_share"),
                 tracking_error_p95_m=ocean.get("tracking_error_p95_m"),

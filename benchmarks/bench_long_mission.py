@@ -148,7 +148,7 @@ def per_hour(result, probe: Probe, reference: float) -> list[dict]:
     """One row per simulated hour (the last one partial): steps, real-time factor, memory;
     the step's median also in vehicle-seconds (`reference`: the vehicle-only real-time
     factor)."""
-    steps = ReplanningStep(result.replanning)
+    steps = ReplanningStep(result.mapping.replanning)
     t_step, wall, query = steps.time, 1e3 * steps.wall_time, 1e3 * steps.query_time
     iterations = steps.iterations
     # What a STOMP iteration costs (the step less its map query, per iteration): flat over
@@ -157,7 +157,7 @@ def per_hour(result, probe: Probe, reference: float) -> list[dict]:
     samples = np.array(probe.rows)
     maps = np.array(probe.maps).reshape(-1, 6)
     rows = []
-    for h in range(int(np.ceil(result.duration_s / HOUR))):
+    for h in range(int(np.ceil(result.log.duration_s / HOUR))):
         hour = (t_step >= h * HOUR) & (t_step < (h + 1) * HOUR)
         mine = wall[hour]
         inside = samples[(samples[:, 0] >= h * HOUR) & (samples[:, 0] <= (h + 1) * HOUR)]
@@ -239,9 +239,9 @@ def main() -> None:
     rows = per_hour(result, probe, reference)
     print(f"reference (vehicle alone, 600 s lawnmower, median of 3): {before:.0f}x real time "
           f"before the dive, {after:.0f}x after; the dive's real-time factor is "
-          f"{result.duration_s / wall / reference:.3f} of their mean")
-    print(f"\n{args.mission}: {result.duration_s:.0f} s simulated in {wall:.0f} s wall "
-          f"({result.duration_s / wall:.1f}x), completed {result.completed}, multibeam "
+          f"{result.log.duration_s / wall / reference:.3f} of their mean")
+    print(f"\n{args.mission}: {result.log.duration_s:.0f} s simulated in {wall:.0f} s wall "
+          f"({result.log.duration_s / wall:.1f}x), completed {result.dive.completed}, multibeam "
           f"coverage {100 * summary['coverage']['multibeam']:.1f} %, true distance mean "
           f"{summary['distance_to_target']['mean_m']:.2f} m (sd "
           f"{summary['distance_to_target']['sd_m']:.2f}), contact {summary['contact']}")
@@ -269,7 +269,7 @@ def main() -> None:
         memory = traced(probe) if len(probe.snapshots) == 2 else None
         Path(probe.dump_path).unlink()
         if memory is None:
-            print(f"\n--trace-python: the dive ended at {result.duration_s:.0f} s, before "
+            print(f"\n--trace-python: the dive ended at {result.log.duration_s:.0f} s, before "
                   f"{trace[1]:.0f} s: nothing to compare")
         else:
             print(f"\nmemory from {memory['from_s']:.0f} to {memory['to_s']:.0f} s: RSS "
@@ -282,13 +282,13 @@ def main() -> None:
                 print(f"  {line['mb']:+.2f} MB {line['where']}")
     with tempfile.TemporaryDirectory() as folder:
         t0 = time.perf_counter()
-        n = write_points(result, Path(folder) / "points.ply")
+        n = write_points(result.mapping.scan_log, result.site, Path(folder) / "points.ply")
         size = (Path(folder) / "points.ply").stat().st_size
         print(f"\npoints.ply: {n} returns, {size / 2**20:.0f} MB, written in "
               f"{time.perf_counter() - t0:.1f} s; peak RSS after it {peak_mb():.0f} MB")
     if args.json:
         Path(args.json).write_text(json.dumps(dict(
-            machine=machine(), duration_s=result.duration_s, wall_s=wall,
+            machine=machine(), duration_s=result.log.duration_s, wall_s=wall,
             reference=dict(before=before, after=after, mean=reference), hours=rows,
             coverage=summary["coverage"], distance=summary["distance_to_target"],
             contact=summary["contact"], map=summary["map"], memory=memory), indent=1))

@@ -132,7 +132,7 @@ def shares(spec, vehicle_factor: float) -> None:
     """One timed run of `spec`: where its simulation's wall time goes, and its floor."""
     with CallTimer() as timer:
         result = run_mission(spec, progress=False)
-    wall, sim = result.wall_s, result.duration_s
+    wall, sim = result.run.wall_s, result.log.duration_s
     print(f"\nwhere the time goes (one run with `CallTimer`: {sim:.0f} s simulated in "
           f"{wall:.1f} s wall, {sim / wall / vehicle_factor:.3f} of the reference)")
     print("| part | wall (s) | share | calls | per call (us) |")
@@ -167,22 +167,23 @@ def one_run(spec) -> dict:
     cpu, wall = time.process_time(), time.perf_counter()
     result = run_mission(spec, progress=False, probe=probe)
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-    steps = ReplanningStep(result.replanning).wall_time * 1e3
-    return dict(sim=result.duration_s, wall=result.wall_s, total_wall=wall, cpu=cpu,
+    steps = ReplanningStep(result.mapping.replanning).wall_time * 1e3
+    return dict(sim=result.log.duration_s, wall=result.run.wall_s, total_wall=wall, cpu=cpu,
                 sim_cpu=marks[-1] - marks[0],
-                rtf=result.duration_s / result.wall_s, rtf_cpu=result.duration_s / cpu,
+                rtf=result.log.duration_s / result.run.wall_s, rtf_cpu=result.log.duration_s / cpu,
                 steps=len(steps),  # none when a short time cap ends the dive first: NaN
                 step_median=float(np.median(steps)) if len(steps) else float("nan"),
                 step_p95=float(np.percentile(steps, 95)) if len(steps) else float("nan"),
-                completed=result.completed, outcome=outcome(result))
+                completed=result.dive.completed, outcome=outcome(result))
 
 
 def outcome(result) -> str:
     """What the dive achieved, as the report measures it: what a `--set` that makes the
     mission cheaper must not cost."""
-    clearance = float(result.clearance.min())
-    return (f"multibeam coverage {coverage_share(result.multibeam_best, result.areas):.4f}, "
-            f"camera {coverage_share(result.camera_best, result.areas):.4f}, least clearance "
+    clearance = float(result.log.clearance.min())
+    coverage = result.coverage
+    return (f"multibeam coverage {coverage_share(coverage.multibeam_best, coverage.areas):.4f}, "
+            f"camera {coverage_share(coverage.camera_best, coverage.areas):.4f}, least clearance "
             f"{clearance:.2f} m, contact {'yes' if clearance <= VEHICLE_RADIUS else 'no'}")
 
 

@@ -108,9 +108,9 @@ def main() -> None:
         parser.error("--max-time must be > 0 s, --repeats >= 1 and every --merge >= 2")
     print(machine())
     result = run_mission(long_mission("monterey_wall", 0, 1, args.max_time), progress=False)
-    batches = list(result.scan_log.iter_batches())
+    batches = list(result.mapping.scan_log.iter_batches())
     sources = np.array([b.source for b in batches])
-    print(f"{result.duration_s:.0f} s simulated: {len(batches)} batches, "
+    print(f"{result.log.duration_s:.0f} s simulated: {len(batches)} batches, "
           f"{sum(len(b.ranges) for b in batches)} beams")
     trees = {}
     for _ in range(args.repeats):

@@ -39,7 +39,7 @@ def pool_real_time_factor() -> float:
     """Simulated over wall seconds of the pool mission's first `SIM_SECONDS` (the laps)."""
     result = run_mission(load_mission("pool", overrides=[f"limits.max_time_s={SIM_SECONDS}"]),
                          progress=False)
-    return result.duration_s / result.wall_s
+    return result.log.duration_s / result.run.wall_s
 
 
 def main() -> None:

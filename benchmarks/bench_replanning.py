@@ -78,9 +78,10 @@ def ablation_run(task: tuple) -> dict:
         f"site.prior_error_m={error}", *extra]), progress=False)
     summary = summarise(result)
     d = summary["distance_to_target"]
-    near = result.distance[_scored_samples(result)]
-    steps = 1e3 * ReplanningStep(result.replanning).wall_time
-    track = dict(times=result.times, xy=VehicleState(result.state).xy, distance=result.distance,
+    near = result.log.distance[_scored_samples(result)]
+    steps = 1e3 * ReplanningStep(result.mapping.replanning).wall_time
+    track = dict(times=result.log.times, xy=VehicleState(result.log.state).xy,
+                 distance=result.log.distance,
                  nominal=result.plan.nominal.points[:, :2], target=_outline(result))
     return dict(seed=seed, optimizer=optimizer, track=track, mean_m=d["mean_m"], sd_m=d["sd_m"],
                 min_m=d["min_m"], abs_error_m=float(np.abs(near - result.plan.omega).mean()),
@@ -89,7 +90,7 @@ def ablation_run(task: tuple) -> dict:
                 survey_clearance_m=min(phase["clearance_min_m"] for phase in summary["phases"]
                                        if phase["name"] == "survey"),
                 omega=float(result.plan.omega), multibeam=summary["coverage"]["multibeam"],
-                camera=summary["coverage"]["camera"], completed=bool(result.completed),
+                camera=summary["coverage"]["camera"], completed=bool(result.dive.completed),
                 step_median_ms=float(np.median(steps)),
                 step_p95_ms=float(np.percentile(steps, 95)))
 
@@ -235,7 +236,7 @@ def main() -> None:
                                       overrides=[f"site.prior_error_m={args.error}",
                                                  f"sonar_noise={args.noise}"]),
                          progress=False)
-    step = ReplanningStep(1e3 * result.replanning)
+    step = ReplanningStep(1e3 * result.mapping.replanning)
     steps, query = step.wall_time, step.query_time
     print(f"replanning step ({len(steps)} steps): median {np.median(steps):.1f} ms, "
           f"p95 {np.percentile(steps, 95):.1f} ms, max {steps.max():.1f} ms "
@@ -244,9 +245,9 @@ def main() -> None:
     print(f"  of which map query (occupied voxels and rebuild): median {np.median(query):.1f} "
           f"ms, p95 {np.percentile(query, 95):.1f} ms; section + STOMP: median "
           f"{np.median(steps - query):.1f} ms, p95 {np.percentile(steps - query, 95):.1f} ms")
-    print(f"breakwater mission real-time factor ({result.duration_s:.0f} s simulated): "
-          f"{result.duration_s / result.wall_s:.1f}x, "
-          f"{result.duration_s / result.wall_s / reference:.3f} of the reference")
+    print(f"breakwater mission real-time factor ({result.log.duration_s:.0f} s simulated): "
+          f"{result.log.duration_s / result.run.wall_s:.1f}x, "
+          f"{result.log.duration_s / result.run.wall_s / reference:.3f} of the reference")
 
 
 if __name__ == "__main__":

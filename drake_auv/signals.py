@@ -3,7 +3,7 @@ field name, never by a literal index.
 
 A view wraps a vector (a port's value, a discrete-state group) or an (n, fields) table (a
 `MissionResult`'s logs; a `VectorLog`'s `data().T`) whose columns it then names:
-`Reference(result.reference).z` is the reference depth over time. Writing a field writes the
+`Reference(result.log.reference).z` is the reference depth over time. Writing a field writes the
 wrapped array. Spans of consecutive fields are named too
 (`VehicleState(x).position`, an aliasing slice). The views behave as pydrake's `namedview`
 (`get_fields()`, attribute access, `view[:]` the wrapped array) but import no pydrake, so the

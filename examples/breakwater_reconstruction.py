@@ -38,14 +38,14 @@ def fly(seed: int, overrides: list[str], extra: list[str]):
     """(row, surface) of one dive: the reconstruction's summary plus the dive's distance."""
     result = run_mission(load_mission("breakwater", seed=seed, overrides=overrides + extra),
                          progress=False)
-    surface = mission_surface(result)
-    survey = np.array([result.plan.legs[leg].phase == "survey" for leg in result.leg_at])
-    row = dict(seed=seed, completed=result.completed,
-               distance_mean_m=float(result.distance[survey].mean()),
-               distance_min_m=float(result.distance.min()),
+    surface = mission_surface(result.mapping.scan_log, result.site)
+    survey = np.array([result.plan.legs[leg].phase == "survey" for leg in result.log.leg_at])
+    row = dict(seed=seed, completed=result.dive.completed,
+               distance_mean_m=float(result.log.distance[survey].mean()),
+               distance_min_m=float(result.log.distance.min()),
                navigation_error_max_m=float(np.linalg.norm(
-                   VehicleState(result.estimated).position
-                   - VehicleState(result.state).position, axis=1).max()),
+                   VehicleState(result.log.estimated).position
+                   - VehicleState(result.log.state).position, axis=1).max()),
                **({} if surface is None else surface.summary))
     return row, surface
 

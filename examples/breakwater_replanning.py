@@ -56,7 +56,7 @@ def overrides(args, replanning: bool) -> list[str]:
 def survey_xyz(result) -> np.ndarray:
     """(n, 3) true positions of the survey leg."""
     survey = [i for i, leg in enumerate(result.plan.legs) if leg.phase == "survey"]
-    return VehicleState(result.state[np.isin(result.leg_at, survey)]).position
+    return VehicleState(result.log.state[np.isin(result.log.leg_at, survey)]).position
 
 
 def figure(runs, filename) -> None:
@@ -71,7 +71,7 @@ def figure(runs, filename) -> None:
                                                     [0, 0, -depth])
         ax.add_collection(LineCollection(segments[:, :, :2], colors="0.35", linewidths=2.5,
                                          zorder=1, label=f"true structure at {depth:g} m"))
-        occ = result.online_map.map.occupied_points()
+        occ = result.mapping.online_map.map.occupied_points()
         occ = occ[np.all(np.abs(occ[:, :2]) < 25.0, axis=1) & (np.abs(occ[:, 2] + depth) < 3.0)]
         order = np.argsort(occ[:, 2])
         ax.scatter(occ[order, 0], occ[order, 1], s=4, marker="s", zorder=2,
@@ -86,8 +86,8 @@ def figure(runs, filename) -> None:
         idx = np.arange(0, len(xyz) - 1, max(len(xyz) // 25, 1))
         ax.quiver(xyz[idx, 0], xyz[idx, 1], xyz[idx + 1, 0] - xyz[idx, 0],
                   xyz[idx + 1, 1] - xyz[idx, 1], angles="xy", zorder=4, width=0.004)
-        replanner = result.handles.replanner
-        section = (replanner.section(replanner.GetMyContextFromRoot(result.context))
+        replanner = result.run.handles.replanner
+        section = (replanner.section(replanner.GetMyContextFromRoot(result.run.context))
                    if replanner is not None else None)
         if section is not None:
             ax.plot(section.trajectory[:, 0], section.trajectory[:, 1], ":", color="tab:red",

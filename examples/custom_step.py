@@ -165,11 +165,11 @@ def fly(out: Path, laps: float = 1.0) -> dict:
         "steps": [{"circle": {"centre": [0.0, 0.0], "radius_m": 2.0, "depth_m": 3.0,
                               "laps": laps, "speed": 0.4}}]}))
     result = run_mission(load_mission(path), progress=False)
-    circling = result.leg_at == 1
-    position = VehicleState(result.estimated[circling]).position
+    circling = result.log.leg_at == 1
+    position = VehicleState(result.log.estimated[circling]).position
     radial = np.abs(np.hypot(position[:, 0], position[:, 1]) - 2.0)
-    times = result.times[circling]
-    return dict(outcomes=result.outcomes, radial_error_m=float(radial.max()),
+    times = result.log.times[circling]
+    return dict(outcomes=result.dive.outcomes, radial_error_m=float(radial.max()),
                 circling_s=float(times[-1] - times[0]))
 
 

@@ -98,7 +98,7 @@ def main() -> None:
         rows[name] = dict(min_clearance_m=summary["min_clearance_m"],
                           contact=summary["contact"],
                           multibeam_coverage=summary["coverage"]["multibeam"],
-                          duration_s=result.duration_s, outcomes=result.outcomes,
+                          duration_s=result.log.duration_s, outcomes=result.dive.outcomes,
                           files=files or [],
                           distance_mean_m=summary["distance_to_target"]["mean_m"])
     (out / "comparison.json").write_text(json.dumps(rows, indent=2))
@@ -114,9 +114,9 @@ def main() -> None:
     print("\n".join(lines))
     fig, (top, clear) = plt.subplots(1, 2, figsize=(13, 5.5))
     for name, result in results.items():
-        xy = result.site.to_site(VehicleState(result.state).position)
+        xy = result.site.to_site(VehicleState(result.log.state).position)
         top.plot(xy[:, 0], xy[:, 1], lw=0.8, label=name)
-        clear.plot(result.times, result.clearance, lw=0.8, label=name)
+        clear.plot(result.log.times, result.log.clearance, lw=0.8, label=name)
     top.set(aspect="equal", xlabel="easting (m, UTM 10N)", ylabel="northing (m)",
             title="true tracks")
     clear.axhline(0.5 * args.omega, color="k", ls="--", lw=0.8, label="0.5 Omega")

@@ -41,16 +41,16 @@ def run(spec, site, scene=None):
     """Flies `spec` at `site`; returns the follow leg's time series."""
     result = run_mission(spec, site, scene=scene)
     leg = next(iter(result.plan.legs_of("follow")))
-    mask = result.leg_at == leg
-    x = result.state[mask].T
+    mask = result.log.leg_at == leg
+    x = result.log.state[mask].T
     lo, hi = site.target_mesh.bounds
     centre = 0.5 * (lo + hi)
     angle = np.unwrap(np.arctan2(x[1] - centre[1], x[0] - centre[0]))
-    t = result.times[mask]
-    return dict(result=result, t=t - t[0], x=x, estimated=result.profile[mask, 0],
-                centre=centre, clearance=result.clearance[mask],
+    t = result.log.times[mask]
+    return dict(result=result, t=t - t[0], x=x, estimated=result.log.profile[mask, 0],
+                centre=centre, clearance=result.log.clearance[mask],
                 turns=abs(angle[-1] - angle[0]) / (2 * np.pi),
-                navigation_error=np.linalg.norm(result.estimated[mask, :3] - x[:3].T, axis=1),
+                navigation_error=np.linalg.norm(result.log.estimated[mask, :3] - x[:3].T, axis=1),
                 depth=spec.steps[0].depth, offset=spec.steps[0].offset, world=site.world)
 
 
@@ -106,7 +106,7 @@ def main(argv=None):
     figure(result, out / "boulder_loop.png")
     late = result["t"] > 30.0
     summary = dict(depth_m=args.depth, offset_m=args.offset, duration_s=float(result["t"][-1]),
-                   loops=round(float(result["turns"]), 3), outcomes=result["result"].outcomes,
+                   loops=round(float(result["turns"]), 3), outcomes=result["result"].dive.outcomes,
                    min_clearance_m=float(result["clearance"].min()),
                    no_contact=bool(result["clearance"].min() > VEHICLE_RADIUS),
                    offset_error_after_30s_max_m=float(np.abs(result["clearance"][late]

@@ -40,14 +40,14 @@ def run(spec, site, scene=None):
     and the turn count."""
     result = run_mission(spec, site, scene=scene)
     leg = next(iter(result.plan.legs_of("follow")))
-    mask = result.leg_at == leg
-    controller = result.handles.controller
-    follower = controller.follower(controller.GetMyContextFromRoot(result.context))
-    t = result.times[mask]
-    return dict(result=result, t=t - t[0], x=result.state[mask].T,
-                mode=Profile(result.profile[mask]).mode,
-                estimated=Profile(result.profile[mask]).distance,
-                clearance=result.clearance[mask], turns=follower.turns,
+    mask = result.log.leg_at == leg
+    controller = result.run.handles.controller
+    follower = controller.follower(controller.GetMyContextFromRoot(result.run.context))
+    t = result.log.times[mask]
+    return dict(result=result, t=t - t[0], x=result.log.state[mask].T,
+                mode=Profile(result.log.profile[mask]).mode,
+                estimated=Profile(result.log.profile[mask]).distance,
+                clearance=result.log.clearance[mask], turns=follower.turns,
                 offset=result.plan.legs_of("follow")[leg].params.offset)
 
 
@@ -100,7 +100,7 @@ def main(argv=None):
     figure(result, out / "c_object_trajectory.png")
     x = result["x"]
     summary = dict(duration_s=float(result["t"][-1]), turns=int(result["turns"]),
-                   outcomes=result["result"].outcomes,
+                   outcomes=result["result"].dive.outcomes,
                    min_clearance_m=float(result["clearance"].min()),
                    no_contact=bool(result["clearance"].min() > VEHICLE_RADIUS),
                    max_offset_error_m=float(np.abs(result["clearance"][result["t"] > 20]

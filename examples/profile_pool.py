@@ -47,10 +47,10 @@ def follow_leg(result, mode: str) -> dict:
     """The samples of the follow leg in `mode`: t (s since it began), x (n, 12) true state,
     profile (n, 7) the controller's output, clearance (n,) true, and its `FollowingParams`."""
     leg, config = next((i, c) for i, c in result.plan.legs_of("follow").items() if c.mode == mode)
-    mask = result.leg_at == leg
-    t = result.times[mask]
-    return dict(t=t - t[0], x=result.state[mask], profile=result.profile[mask],
-                clearance=result.clearance[mask], params=config.params,
+    mask = result.log.leg_at == leg
+    t = result.log.times[mask]
+    return dict(t=t - t[0], x=result.log.state[mask], profile=result.log.profile[mask],
+                clearance=result.log.clearance[mask], params=config.params,
                 offset=config.params.offset)
 
 
@@ -185,7 +185,7 @@ def main(argv=None):
                                  final_cliff_distance_m=float(v["cliff"][-1]),
                                  offset_error_after_20s_max_m=float(np.nanmax(np.abs(
                                      v["clearance"][v["t"] > SETTLE] - v["offset"])))),
-                   mission_outcomes=clean.outcomes)
+                   mission_outcomes=clean.dive.outcomes)
     (out / "summary.json").write_text(json.dumps(summary, indent=2))
     print(json.dumps(summary, indent=2))
     return summary

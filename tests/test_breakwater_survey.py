@@ -35,16 +35,16 @@ def flown():
 
 def offset_error(result) -> float:
     """Mean |true distance to the target - Omega| over the survey samples within 2 Omega, m."""
-    survey = np.array([result.plan.legs[leg].phase == "survey" for leg in result.leg_at])
-    near = survey & (result.distance < 2.0 * result.plan.omega)
+    survey = np.array([result.plan.legs[leg].phase == "survey" for leg in result.log.leg_at])
+    near = survey & (result.log.distance < 2.0 * result.plan.omega)
     assert near.sum() > 200  # at least 20 s of survey near the block
-    return float(np.mean(np.abs(result.distance[near] - result.plan.omega)))
+    return float(np.mean(np.abs(result.log.distance[near] - result.plan.omega)))
 
 
 def test_the_survey_flies_in_the_diagram_until_the_cap(flown):
     for result, summary in flown.values():
         assert [p["name"] for p in summary["phases"]] == ["transit", "survey"]
-        assert result.outcomes == ["goal", "flying"] and len(result.replanning) >= 40
+        assert result.dive.outcomes == ["goal", "flying"] and len(result.mapping.replanning) >= 40
 
 
 def test_stomp_keeps_off_the_blocks_and_nearer_omega_than_the_unoptimised_sections(flown):

@@ -90,7 +90,7 @@ def test_a_mission_report_holds_the_curve_ending_at_its_coverage(tmp_path):
     result = run_mission(spec, progress=False)
     summary = summarise(result)
     curve = summary["coverage_vs_time"]
-    end = result.context.get_time()
+    end = result.run.context.get_time()
     assert len(curve["t_s"]) == int(np.ceil(end / 10.0)) + 1 and curve["t_s"][-1] == end
     for name in ("multibeam", "camera"):
         share = np.asarray(curve[name])

@@ -141,12 +141,13 @@ def test_explore_dive_gains_coverage_without_contact():
     assert exploration["viewpoints"] >= 3 and exploration["strategy"] == "gain"
     assert 0.0 < exploration["believed_coverage"] < 1.0 and exploration["stopped"] == "time"
     # the DVL's beams reach the map: the seabed under the vehicle is in the scan log
-    dvl = [b for b in result.scan_log.batches() if b.source == result.scan_log.sources.index("dvl")]
+    log = result.mapping.scan_log
+    dvl = [b for b in log.batches() if b.source == log.sources.index("dvl")]
     assert len(dvl) > 100 and all(len(b.ranges) == 4 for b in dvl)
     # explore's map (and its copies) clears along a beam without an echo only 12 m
     assert spec.steps[0].no_return_clear_m == NO_RETURN_CLEAR_M == 12.0
-    assert result.online_map.map.no_return_clear_m == NO_RETURN_CLEAR_M
-    assert copy.deepcopy(result.online_map).map.no_return_clear_m == NO_RETURN_CLEAR_M
+    assert result.mapping.online_map.map.no_return_clear_m == NO_RETURN_CLEAR_M
+    assert copy.deepcopy(result.mapping.online_map).map.no_return_clear_m == NO_RETURN_CLEAR_M
 
 
 def test_explore_leg_ends_when_the_planner_says_finished():

@@ -234,7 +234,7 @@ def test_a_current_the_thrusters_cannot_hold_is_a_tracking_fault():
     calm = run_mission(load_mission("breakwater_current"), progress=False)
     summary = summarise(calm)
     assert summary["responses"] == [] and not summary["mission"]["aborted"]
-    assert calm.completed
+    assert calm.dive.completed
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no survey samples: null statistics
@@ -249,6 +249,6 @@ def test_a_navigation_jump_in_a_dive_ends_it_with_an_abort():
     summary = summarise(result)
     assert summary["responses"][0] == dict(response="abort", cause="navigation_jump",
                                            start_s=10.0, end_s=None)
-    assert summary["mission"]["aborted"] and result.completed
+    assert summary["mission"]["aborted"] and result.dive.completed
     assert summary["faults"]["navigation_jump"]["error_m"] == 3.0
-    assert result.state[-1, 2] > -1.5  # at the surface
+    assert result.log.state[-1, 2] > -1.5  # at the surface

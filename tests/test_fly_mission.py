@@ -54,7 +54,7 @@ def flown(tmp_path_factory):
 def test_the_exported_file_flies_like_the_plan(flown, autopilot):
     _, results, summaries = flown
     internal, fly = summaries["internal"], summaries[autopilot]
-    assert results[autopilot].outcomes == ["goal"] and results[autopilot].completed
+    assert results[autopilot].dive.outcomes == ["goal"] and results[autopilot].dive.completed
     assert not fly["contact"] and fly["min_clearance_m"] > 5.0  # Omega 10 m
     assert fly["responses"] == []  # the autopilot's own steps are no fault
     # ArduSub holds the plan's yaw (the slices face the wall) as the internal path does;
@@ -65,7 +65,7 @@ def test_the_exported_file_flies_like_the_plan(flown, autopilot):
     assert fly["coverage"]["multibeam"] > 0.8
     # the pilot flew the file's items, not the internal path: the tracker's reference
     # differs from the plan's samples while the vehicle covers the same ground
-    duration = results[autopilot].duration_s / results["internal"].duration_s
+    duration = results[autopilot].log.duration_s / results["internal"].log.duration_s
     assert 0.6 < duration < 1.6, duration
 
 
@@ -73,10 +73,10 @@ def test_the_fly_diagram_holds_the_pilot_and_its_dvl(flown):
     """One mission Diagram: the pilot behind the reference switch, fed by the DVL; the
     internal plan's Diagram has neither."""
     _, results, _ = flown
-    names = {s.get_name() for s in results["ardusub"].diagram.GetSystems()}
+    names = {s.get_name() for s in results["ardusub"].run.diagram.GetSystems()}
     assert {"dvl", "autopilot", "reference_switch", "mission_supervisor"} <= names
-    assert results["internal"].handles.autopilot is None
-    dot = results["cola2"].diagram_dot
+    assert results["internal"].run.handles.autopilot is None
+    dot = results["cola2"].run.diagram_dot
     assert "autopilot" in dot and "seabed_elevation" in dot
 
 

@@ -54,11 +54,11 @@ def test_a_hover_mission_holds_the_point_for_its_duration(tmp_path):
                     tmp_path)
     result = run_mission(spec, progress=False)
     assert [leg.behaviour for leg in result.plan.legs] == ["path", "hover"]
-    assert result.outcomes == ["goal", "goal"] and result.completed
-    hovering = result.leg_at == 1
-    held = result.times[hovering]
+    assert result.dive.outcomes == ["goal", "goal"] and result.dive.completed
+    hovering = result.log.leg_at == 1
+    held = result.log.times[hovering]
     assert held[-1] - held[0] == pytest.approx(15.0, abs=0.6)
-    estimated = VehicleState(result.estimated[hovering])
+    estimated = VehicleState(result.log.estimated[hovering])
     error = np.linalg.norm(estimated.position - [-2.0, 1.0, -3.0], axis=1)
     assert error.max() < 0.5, error.max()  # arrived within 1.5 m, then holding
     assert np.abs(np.angle(np.exp(1j * (estimated.yaw - np.pi / 2)))).max() < 0.1

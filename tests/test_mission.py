@@ -33,33 +33,33 @@ def boulder_run():
 
 def test_one_dive_carries_vehicle_navigation_and_map_across_legs(boulder_run):
     result = boulder_run
-    names = [p.name for p in result.phases]
+    names = [p.name for p in result.dive.phases]
     assert names[:2] == ["transit", "follow"]
-    follow = next(p for p in result.phases if p.name == "follow")
-    assert result.outcomes[0] == "goal" and follow.start_s > 5.0
+    follow = next(p for p in result.dive.phases if p.name == "follow")
+    assert result.dive.outcomes[0] == "goal" and follow.start_s > 5.0
     # One dive: the vehicle never jumps, the navigation error keeps growing across the legs.
-    step = np.linalg.norm(np.diff(result.state[:, :3], axis=0), axis=1)
+    step = np.linalg.norm(np.diff(result.log.state[:, :3], axis=0), axis=1)
     assert step.max() < 0.2  # 0.1 s samples at <= 1.4 m/s
-    error = np.linalg.norm(result.estimated[:, :3] - result.state[:, :3], axis=1)
-    at_follow = np.searchsorted(result.times, follow.start_s)
+    error = np.linalg.norm(result.log.estimated[:, :3] - result.log.state[:, :3], axis=1)
+    at_follow = np.searchsorted(result.log.times, follow.start_s)
     assert error[at_follow] > 0.05 and error[-1] > error[at_follow]
     # The map is fed from t = 0 by both sonars, the profiler through the following leg.
-    sources = {b.source for b in result.scan_log.batches()}
+    sources = {b.source for b in result.mapping.scan_log.batches()}
     assert sources == {0, 1}
-    assert len(result.online_map.map.occupied_points()) > 100
+    assert len(result.mapping.online_map.map.occupied_points()) > 100
     # Profile following holds its offset once it found the boulder.
-    settled = (result.times > follow.start_s + 40.0) & (result.times < follow.end_s)
-    assert np.all(np.abs(result.distance[settled] - 3.0) < 1.5)
-    assert result.clearance.min() > 1.0
+    settled = (result.log.times > follow.start_s + 40.0) & (result.log.times < follow.end_s)
+    assert np.all(np.abs(result.log.distance[settled] - 3.0) < 1.5)
+    assert result.log.clearance.min() > 1.0
 
 
 def test_unselected_behaviours_do_no_work(boulder_run):
     # No survey leg flew: the replanner never planned; the controller only on its leg.
-    assert len(boulder_run.replanning) == 0
-    follow = next(p for p in boulder_run.phases if p.name == "follow")
-    during = (boulder_run.times >= follow.start_s) & (boulder_run.times < follow.end_s)
-    valid = boulder_run.profile[:, 5] == 1.0
-    assert valid[during].any() and not valid[boulder_run.times < follow.start_s - 1.0].any()
+    assert len(boulder_run.mapping.replanning) == 0
+    follow = next(p for p in boulder_run.dive.phases if p.name == "follow")
+    during = (boulder_run.log.times >= follow.start_s) & (boulder_run.log.times < follow.end_s)
+    valid = boulder_run.log.profile[:, 5] == 1.0
+    assert valid[during].any() and not valid[boulder_run.log.times < follow.start_s - 1.0].any()
 
 
 def test_two_contexts_of_one_diagram_have_their_own_maps():

@@ -84,8 +84,8 @@ def test_a_gridded_current_drives_the_dive(tmp_path):
     np.testing.assert_allclose(current[:, 2], 0.0)
     # the water moved the vehicle: the same dive in still water differs
     still = run_mission(_boulder(), progress=False)
-    n = min(len(still.times), len(result.times))
-    assert np.abs(still.state[:n, :3] - result.state[:n, :3]).max() > 0.05
+    n = min(len(still.log.times), len(result.log.times))
+    assert np.abs(still.log.state[:n, :3] - result.log.state[:n, :3]).max() > 0.05
 
 
 def test_a_file_that_does_not_cover_the_site_is_refused_before_the_dive(tmp_path):

@@ -21,16 +21,16 @@ def _follow_only(name: str, overrides=()):
 def _following(result):
     """(t since the follow leg began, x (12, n), clearance) of the follow leg's samples."""
     leg = next(i for i, leg in enumerate(result.plan.legs) if leg.phase == "follow")
-    mask = result.leg_at == leg
-    t = result.times[mask]
-    return t - t[0], result.state[mask].T, result.clearance[mask]
+    mask = result.log.leg_at == leg
+    t = result.log.times[mask]
+    return t - t[0], result.log.state[mask].T, result.log.clearance[mask]
 
 
 def test_pool_v_profile_to_the_cliff():
     spec = _follow_only("pool", ["limits.max_time_s=150"])
     spec = replace(spec, steps=spec.steps[1:])  # the vertical step alone
     result = run_mission(spec, progress=False)
-    assert result.completed and result.outcomes[-1] == "goal"  # the far wall climbed
+    assert result.dive.completed and result.dive.outcomes[-1] == "goal"  # the far wall climbed
     t, x, clearance = _following(result)
     assert np.all(np.abs(clearance[t > 10] - 2.0) < 0.3)
     deepest = np.argmin(x[2])
@@ -41,7 +41,7 @@ def test_pool_v_profile_to_the_cliff():
 
 def test_boulder_closed_loop_without_contact():
     result = run_mission(_follow_only("boulder", ["limits.max_time_s=260"]), progress=False)
-    assert result.completed and result.outcomes == ["goal", "goal"]
+    assert result.dive.completed and result.dive.outcomes == ["goal", "goal"]
     t, x, clearance = _following(result)
     lo, hi = result.site.target_mesh.bounds
     centre = 0.5 * (lo + hi)

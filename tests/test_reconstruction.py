@@ -4,7 +4,6 @@ scores against the truth; bad input gets one clear line; a mission writes its po
 import base64
 import json
 import re
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -19,6 +18,7 @@ from drake_auv.reconstruction.scoring import (completeness_of_mesh, completeness
                                               score, surface_samples)
 from drake_auv.reconstruction.surface import (check_parameters, estimate_normals,
                                               open3d_available, open3d_error, reconstruct)
+from drake_auv.rosio.replay import ReplaySite
 
 needs_open3d = pytest.mark.skipif(not open3d_available(), reason=str(open3d_error()))
 RADIUS = 2.0
@@ -248,7 +248,7 @@ def test_mission_writes_its_points(tmp_path):
                          progress=False)
     summary = write_outputs(result, tmp_path)
     cloud = read_ply(tmp_path / "points.ply")
-    batches = result.scan_log.batches()
+    batches = result.mapping.scan_log.batches()
     assert len(cloud) == sum(np.isfinite(b.ranges).sum() for b in batches) > 1000
     assert set(np.unique(cloud.sources)) == {0, 1}
     expected = result.site.to_site(np.concatenate([b.points() for b in batches]))
@@ -266,8 +266,7 @@ def test_products_when_open3d_does_not_load_give_its_error(tmp_path, sphere_scan
     from drake_auv.reconstruction.products import write_products
 
     sphere, log = sphere_scan
-    site = SimpleNamespace(target_mesh=sphere, to_site=lambda p: p, to_local=lambda p: p)
-    section = write_products(SimpleNamespace(scan_log=log, site=site), tmp_path)
+    section = write_products(log, ReplaySite(np.zeros(2), target_mesh=sphere), tmp_path)
     assert section == dict(built=False, reason="surface reconstruction: open3d is installed but "
                            "does not import: ImportError: libusb-1.0.so.0: cannot open shared "
                            "object file: No such file or directory")
@@ -283,11 +282,8 @@ def test_products_of_a_dive_with_enough_returns(tmp_path, sphere_scan):
 
     sphere, log = sphere_scan
     origin = np.array([4.5e5, 4.6e6])
-    site = SimpleNamespace(target_mesh=sphere, world=sphere,
-                           to_site=lambda p: p + [*origin, 0.0],
-                           to_local=lambda p: p - [*origin, 0.0])
-    result = SimpleNamespace(scan_log=log, site=site)
-    section = write_products(result, tmp_path)
+    site = ReplaySite(origin, world=sphere, target_mesh=sphere)
+    section = write_products(log, site, tmp_path)
     assert section["built"] and section["surface"]["accuracy_mean_m"] < 0.1
     assert section["surface"]["completeness"] > 0.95
     assert "| surface |" in products_markdown(section)
@@ -295,7 +291,7 @@ def test_products_of_a_dive_with_enough_returns(tmp_path, sphere_scan):
     assert np.allclose(mesh.bounds.mean(axis=0), CENTRE + [*origin, 0.0], atol=0.2)
     assert (tmp_path / "reconstruction.png").stat().st_size > 10_000
     scene = Scene()
-    draw_products(scene, result, tmp_path)
+    draw_products(scene, site, tmp_path)
     html = scene.write_html(tmp_path / "mission.html").read_text()
     commands = b"".join(base64.b64decode(b64) for b64 in re.findall(
         r'data:application/octet-binary;base64,([A-Za-z0-9+/=]+)"', html))

@@ -33,7 +33,7 @@ def _dive(folder: Path, mission: str, cap_s: float):
     result = run_mission(spec, site, progress=False,
                          mcap=dive_log(folder / "dive.mcap", spec, site))
     write_trajectory(result, folder / "trajectory.csv")
-    write_points(result, folder / "points.ply")
+    write_points(result.mapping.scan_log, result.site, folder / "points.ply")
     return result
 
 
@@ -155,7 +155,7 @@ def test_every_return_of_points_ply_is_in_the_point_clouds(boulder):
         placed.append(p_mb + (p_bs + points @ r_bs.T) @ r_mb.T)
     placed = result.site.to_site(np.concatenate(placed))
     ply = read_ply(folder / "points.ply").points
-    assert len(ply) == result.scan_log.returns > 1000
+    assert len(ply) == result.mapping.scan_log.returns > 1000
     distance, _ = cKDTree(placed).query(ply)
     assert distance.max() <= 1e-3
 
@@ -167,13 +167,13 @@ def test_replay_of_dive_mcap_rebuilds_the_same_octree_and_points(boulder, tmp_pa
     settings = map_settings(index)
     assert settings["multibeam_stride"] == result.spec.replanner.multibeam_stride
     replayed = replay(index, settings)
-    ours, theirs = replayed.online_map.map, result.online_map.map
+    ours, theirs = replayed.online_map.map, result.mapping.online_map.map
     assert ours.tree.getNumLeafNodes() == theirs.tree.getNumLeafNodes() > 1000
     occupied = ours.occupied_points()
     assert len(occupied) > 100
     np.testing.assert_array_equal(np.unique(occupied, axis=0),
                                   np.unique(theirs.occupied_points(), axis=0))
-    write_points(replayed, tmp_path / "points.ply")
+    write_points(replayed.scan_log, replayed.site, tmp_path / "points.ply")
     a, b = read_ply(folder / "points.ply"), read_ply(tmp_path / "points.ply")
     np.testing.assert_array_equal(a.points, b.points)
     np.testing.assert_array_equal(a.sources, b.sources)
@@ -186,8 +186,8 @@ def test_replay_of_a_pool_dive_gives_its_coverage(tmp_path):
     index = open_log(tmp_path / "dive.mcap")
     replayed = replay(index, map_settings(index), target=result.site.target_mesh)
     target = result.site.target_mesh
-    run, _ = score(target, None, dive_cloud(result).points)
-    again, _ = score(replayed.site.target_mesh, None, dive_cloud(replayed).points)
+    run, _ = score(target, None, dive_cloud(result.mapping.scan_log).points)
+    again, _ = score(replayed.site.target_mesh, None, dive_cloud(replayed.scan_log).points)
     assert run["point_cloud"]["completeness"] > 0.1
     assert abs(again["point_cloud"]["completeness"]
                - run["point_cloud"]["completeness"]) <= 1e-3
@@ -339,7 +339,7 @@ def test_replay_of_a_rosbag2_folder_with_a_laser_scan(tmp_path):
     index = open_log(folder, topics, {"odometry", "multibeam"})
     assert index.max_ranges["multibeam"] == 20.0
     replayed = replay(index, map_settings(index, voxel=0.25))
-    points = dive_cloud(replayed, voxel=1e-6).points
+    points = dive_cloud(replayed.scan_log, voxel=1e-6).points
     hits = sum(int(np.isfinite(r).sum()) for _, r in pings)
     assert len(points) == replayed.scan_log.returns == hits
     assert np.abs(points[:, 0] - WALL_X).max() < 1e-4

@@ -118,19 +118,17 @@ def test_box_queries_visit_only_their_tiles_and_read_exact_log_odds():
 
 
 def test_points_ply_is_streamed_in_the_format_of_write_ply(tmp_path):
-    from types import SimpleNamespace
-
     from drake_auv.reconstruction.products import dive_cloud, write_points
+    from drake_auv.rosio.replay import ReplaySite
 
     log, _ = _log(2 * CACHE_BATCHES + 3)
     shift = np.array([4.5e5, 4.6e6, 0.0])
-    result = SimpleNamespace(scan_log=log, site=SimpleNamespace(to_site=lambda p: p + shift))
-    assert write_points(result, tmp_path / "streamed.ply") == log.returns
+    assert write_points(log, ReplaySite(shift[:2]), tmp_path / "streamed.ply") == log.returns
     write_ply(from_scan_log(log).shifted(lambda p: p + shift), tmp_path / "whole.ply")
     assert (tmp_path / "streamed.ply").read_bytes() == (tmp_path / "whole.ply").read_bytes()
     assert len(read_ply(tmp_path / "streamed.ply")) == log.returns
     # the surface's cloud, thinned a chunk at a time, is the whole log thinned
-    np.testing.assert_array_equal(dive_cloud(result, 0.2).points,
+    np.testing.assert_array_equal(dive_cloud(log, 0.2).points,
                                   from_scan_log(log).thin(0.2).points)
 
 
@@ -170,16 +168,17 @@ def test_the_long_monterey_mission_flies_at_survey_scale(tmp_path, monkeypatch):
     monkeypatch.setenv("DRAKE_AUV_CACHE", str(tmp_path / "cache"))
     result = run_mission(load_mission("monterey_wall"), progress=False)
     summary = summarise(result)
-    assert result.completed and result.duration_s > 2 * 3600
+    assert result.dive.completed and result.log.duration_s > 2 * 3600
     assert not summary["contact"] and summary["coverage"]["multibeam"] > 0.9
     # The offset on the true seabed, not `distance_to_target`: the target is the ROI, and the
     # lanes that cover its edges fly outside it, where the nearest target point is the edge.
     # The plan is made on a prior shifted by 2 m, so the replanned survey must hold Omega to
     # within that error.
-    survey = np.array([result.plan.legs[leg].phase == "survey" for leg in result.leg_at])
-    assert abs(result.clearance[survey].mean() - result.plan.omega) < result.spec.site.prior_error_m
-    log = result.scan_log
+    survey = np.array([result.plan.legs[leg].phase == "survey" for leg in result.log.leg_at])
+    assert (abs(result.log.clearance[survey].mean() - result.plan.omega)
+            < result.spec.site.prior_error_m)
+    log = result.mapping.scan_log
     assert log.store.cached <= CACHE_BATCHES < log.count
     assert summary["map"]["batches"] == log.count and summary["map"]["octree_mb"] > 0
-    assert write_points(result, tmp_path / "points.ply") == log.returns
+    assert write_points(log, result.site, tmp_path / "points.ply") == log.returns
     assert len(read_ply(tmp_path / "points.ply")) == log.returns

@@ -124,7 +124,7 @@ def test_a_vehicle_placed_inside_the_world_is_in_contact(tmp_path, where, signed
     summary = summarise(result)
     assert summary["contact"] is True
     assert summary["min_clearance_m"] == pytest.approx(signed, abs=0.3)
-    assert np.all(result.clearance < 0.0)  # the whole (short) dive inside
+    assert np.all(result.log.clearance < 0.0)  # the whole (short) dive inside
 
 
 def test_a_vehicle_flown_up_through_the_seabed(tmp_path):
@@ -139,8 +139,8 @@ def test_a_vehicle_flown_up_through_the_seabed(tmp_path):
                          progress=False)
     summary = summarise(result)
     assert summary["contact"] is True and summary["min_clearance_m"] < -2.5
-    assert result.clearance[0] < -2.5 and result.clearance[-1] > VEHICLE_RADIUS
-    assert np.all(result.state[:, 2] < 0.0)
+    assert result.log.clearance[0] < -2.5 and result.log.clearance[-1] > VEHICLE_RADIUS
+    assert np.all(result.log.state[:, 2] < 0.0)
 
 
 def _qgc(geo: GeoFrame, points, frame: int = 3) -> dict:
@@ -281,12 +281,13 @@ def test_a_cola2_depth_step_is_flown_without_a_safety_response(tmp_path):
                                          "steps=[{fly: {file: mission.xml, speed: 0.8}}]"])
     result = run_mission(spec, progress=False)
     summary = summarise(result)
-    assert result.outcomes == ["goal"] and summary["responses"] == []
+    assert result.dive.outcomes == ["goal"] and summary["responses"] == []
     assert summary["contact"] is False
     # what the rule without the closing test would have answered: > 2 m for 5 s on end
-    far = np.linalg.norm(result.estimated[:, :3] - result.reference[:, :3], axis=1) > 2.0
+    far = np.linalg.norm(result.log.estimated[:, :3] - result.log.reference[:, :3], axis=1) > 2.0
     edges = np.flatnonzero(np.diff(np.r_[0, far.astype(int), 0]))
-    longest = max(result.times[b - 1] - result.times[a] for a, b in zip(edges[::2], edges[1::2]))
+    times = result.log.times
+    longest = max(times[b - 1] - times[a] for a, b in zip(edges[::2], edges[1::2]))
     assert longest >= 5.0, longest
 
 

@@ -144,7 +144,7 @@ def fly(mission: str, out, seed=None, overrides=(), html: bool = True,
                 log = dive_log(Path(out) / "dive.mcap", spec, site)
         result = run_mission(spec, site, scene=scene, progress=display, plan=plan,
                              realtime_rate=realtime, mcap=log)
-        setup_s = time.perf_counter() - start - result.wall_s
+        setup_s = time.perf_counter() - start - result.run.wall_s
 
         def finish(out):
             finish_recording(result, scene, out / "mission.html")

@@ -20,23 +20,23 @@ def ocean_summary(result) -> dict | None:
     None for a still sea."""
     if result.spec.ocean is None:
         return None
-    speed = np.linalg.norm(Water(result.water).velocity, axis=1)
-    error = np.linalg.norm(Reference(result.reference).position
-                           - VehicleState(result.estimated).position, axis=1)
+    speed = np.linalg.norm(Water(result.log.water).velocity, axis=1)
+    error = np.linalg.norm(Reference(result.log.reference).position
+                           - VehicleState(result.log.estimated).position, axis=1)
     by_phase = []
-    for phase in result.phases:
-        mask = np.isin(result.leg_at, phase.legs)
+    for phase in result.dive.phases:
+        mask = np.isin(result.log.leg_at, phase.legs)
         if mask.any():
             by_phase.append(dict(name=phase.name,
                                  tracking_error_p95_m=float(np.percentile(error[mask], 95))))
-    share = np.asarray(result.thrust_saturation, dtype=float)
+    share = np.asarray(result.ocean.thrust_saturation, dtype=float)
     return dict(
         current_mean_mps=float(speed.mean()), current_max_mps=float(speed.max()),
         thrust_saturation_share=dict(zip(THRUSTER_NAMES, map(float, share))),
         thrust_saturation_share_max=float(share.max()),
         tracking_error_p95_m=float(np.percentile(error, 95)),
         phases=by_phase,
-        navigation_current_drift_m=float(np.linalg.norm(result.current_drift)))
+        navigation_current_drift_m=float(np.linalg.norm(result.ocean.current_drift)))
 
 
 def ocean_markdown(section: dict | None) -> list[str]:

@@ -50,10 +50,10 @@ def leg_starts(result: MissionResult) -> list[tuple[float, str]]:
     """[(mission time s, label)] of each leg flown, in order, for the recording's clock."""
     from drake_auv.mission.live_view import leg_label
 
-    if len(result.times) == 0:
+    if len(result.log.times) == 0:
         return []
-    begun = np.r_[0, np.flatnonzero(np.diff(result.leg_at)) + 1]
-    return [(float(result.times[i]), leg_label(result.plan.legs, int(result.leg_at[i])))
+    begun = np.r_[0, np.flatnonzero(np.diff(result.log.leg_at)) + 1]
+    return [(float(result.log.times[i]), leg_label(result.plan.legs, int(result.log.leg_at[i])))
             for i in begun]
 
 
@@ -67,11 +67,11 @@ def finish_recording(result: MissionResult, scene, filename):
 
     world, target = result.site.world, result.site.target_faces
     best = np.full(len(world.faces), np.nan)
-    best[target] = result.multibeam_best
+    best[target] = result.coverage.multibeam_best
     draw_coverage(scene.meshcat, scene.path_of("coverage"), world, best, target, lift=0.05)
     scene.add_legend(coverage_legend(scene.path_of("coverage")))
-    draw_octree(scene.meshcat, scene.path_of("octree"), result.online_map.map)
+    draw_octree(scene.meshcat, scene.path_of("octree"), result.mapping.online_map.map)
     scene.add_legend(octree_legend(scene.path_of("octree")))
-    draw_products(scene, result, Path(filename).parent)
+    draw_products(scene, result.site, Path(filename).parent)
     scene.clock_legs = leg_starts(result)
     return scene.write_html(filename)

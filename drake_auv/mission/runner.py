@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from pydrake.systems.analysis import Simulator, SimulatorStatus
@@ -48,77 +48,143 @@ class Phase:
 
 
 @dataclass(frozen=True, kw_only=True)
-class MissionResult:
-    """A flown mission (local frame; `site.to_site` gives the site's coordinates), built by
-    keyword from the logs and the systems' Contexts after the run.
+class DiveLog:
+    """The dive's samples, one row per logged step (n), local frame.
 
     Attributes:
-        spec, site, plan: what was flown, where, and its off-line part.
-        times: (n,) s; state: (n, 12) true state; estimated: (n, 12) navigation's.
-        distance: (n,) true distance to the target, m; clearance: (n,) signed clearance to
-            anything, m (`geometry.clearance`: negative inside the world or above the sea
-            surface).
+        times: (n,) s.
+        state, estimated: (n, 12) the true state and navigation's (columns
+            `signals.VehicleState`).
+        reference: (n, 8) the tracker's reference (columns `signals.Reference`).
+        profile: (n, 7) the profile-following controller's `profile` output (columns
+            `signals.Profile`; NaN rows without a controller).
+        water: (n, 6) the water at the vehicle (columns `signals.Water`, world frame; zeros in
+            still water).
         leg_at: (n,) index of the leg flying at each sample.
-        phases: the legs grouped by phase, on one time axis; outcomes: per leg ("goal",
-            "timed out", "flying" when the time cap stopped it).
-        camera_best, multibeam_best: (T,) best viewing angle per target face, rad, NaN unseen.
+        distance: (n,) true distance to the target, m.
+        clearance: (n,) signed clearance to anything, m (`geometry.clearance`: negative
+            inside the world or above the sea surface).
+    """
+
+    times: np.ndarray
+    state: np.ndarray
+    estimated: np.ndarray
+    reference: np.ndarray
+    profile: np.ndarray
+    water: np.ndarray
+    leg_at: np.ndarray
+    distance: np.ndarray
+    clearance: np.ndarray
+
+    @property
+    def duration_s(self) -> float:
+        """Simulated time from the first sample to the last, s."""
+        return float(self.times[-1] - self.times[0])
+
+
+@dataclass(frozen=True, kw_only=True)
+class DiveOutcome:
+    """How the dive went, leg by leg.
+
+    Attributes:
+        phases: the legs grouped by phase, on one time axis.
+        outcomes: per leg ("goal", "timed out", "flying" when the time cap stopped it).
+        completed: whether the supervisor ended the dive (False: the time cap did).
+        responses: the supervisor's answers to faults ({response, cause, start_s, end_s}).
+    """
+
+    phases: list[Phase]
+    outcomes: list[str]
+    completed: bool
+    responses: list[dict]
+
+
+@dataclass(frozen=True, kw_only=True)
+class CoverageRecord:
+    """The target's coverage at the end of the dive, per target face (T).
+
+    Attributes:
+        camera_best, multibeam_best: (T,) best viewing angle, rad, NaN unseen.
+        areas: (T,) area, m^2.
+    """
+
+    camera_best: np.ndarray
+    multibeam_best: np.ndarray
+    areas: np.ndarray
+
+
+@dataclass(frozen=True, kw_only=True)
+class MappingRecord:
+    """What the on-line mapping built.
+
+    Attributes:
+        scan_log: the returns recorded by the mapper; online_map: its final octree.
         replanning: (k, 7) replanning steps (columns `signals.ReplanningStep`), planned ones
             only.
-        scan_log: the returns recorded by the mapper; online_map: its final octree.
-        profile: (n, 7) the profile-following controller's `profile` output (columns
-            `signals.Profile`; NaN rows without a controller), sampled with the state.
-        reference: (n, 8) the tracker's reference (columns `signals.Reference`); `state` and
-            `estimated` have the columns of `signals.VehicleState`.
-        completed: whether the supervisor ended the dive (False: the time cap did).
-        wall_s: wall time of the simulation, s.
-        diagram_dot: the Diagram's Graphviz text, each vector port labelled with its fields.
-        diagram, handles, context: the simulated Diagram, its `MissionHandles` and the root
-            Context at the end, for inspection.
-        responses: the supervisor's answers to faults ({response, cause, start_s, end_s}).
-        water: (n, 6) the water at the vehicle (columns `signals.Water`, world frame; zeros in
-            still water), sampled with the state.
+    """
+
+    scan_log: ScanLog
+    online_map: object
+    replanning: np.ndarray
+
+
+@dataclass(frozen=True, kw_only=True)
+class OceanRecord:
+    """The ocean's effects on the dive.
+
+    Attributes:
         thrust_saturation: (5,) share of the dive each thruster's command was at its limit.
         current_drift: (2,) m, the navigation drift the current caused while the DVL tracked
             the water (world x, y).
     """
 
+    thrust_saturation: np.ndarray
+    current_drift: np.ndarray
+
+
+@dataclass(frozen=True, kw_only=True)
+class RunRecord:
+    """The simulation itself, for timing and inspection.
+
+    Attributes:
+        wall_s: wall time of the simulation, s.
+        diagram_dot: the Diagram's Graphviz text, each vector port labelled with its fields.
+        diagram, handles, context: the simulated Diagram, its `MissionHandles` and the root
+            Context at the end.
+    """
+
+    wall_s: float
+    diagram_dot: str
+    diagram: object
+    handles: MissionHandles
+    context: object
+
+
+@dataclass(frozen=True, kw_only=True)
+class MissionResult:
+    """A flown mission (local frame; `site.to_site` gives the site's coordinates), built by
+    keyword from the logs and the systems' Contexts after the run, its parts grouped by
+    concern.
+
+    Attributes:
+        spec, site, plan: what was flown, where, and its off-line part.
+        log: the samples (`DiveLog`: times, states, reference, distance, clearance, ...).
+        dive: the legs' course (`DiveOutcome`: phases, outcomes, completed, responses).
+        coverage: the target's (`CoverageRecord`: best angles and areas per face).
+        mapping: the mapper's (`MappingRecord`: scan log, octree, replanning steps).
+        ocean: the current's effects (`OceanRecord`: thrust saturation, navigation drift).
+        run: the simulation's (`RunRecord`: wall time, Diagram, handles, final Context).
+    """
+
     spec: MissionSpec
     site: Site
     plan: MissionPlan
-    times: np.ndarray
-    state: np.ndarray
-    estimated: np.ndarray
-    distance: np.ndarray
-    clearance: np.ndarray
-    leg_at: np.ndarray
-    phases: list[Phase]
-    outcomes: list[str]
-    camera_best: np.ndarray
-    multibeam_best: np.ndarray
-    replanning: np.ndarray
-    scan_log: ScanLog
-    online_map: object
-    completed: bool
-    profile: np.ndarray
-    reference: np.ndarray
-    wall_s: float
-    diagram_dot: str
-    diagram: object = None
-    handles: MissionHandles | None = None
-    context: object = None
-    responses: list = field(default_factory=list)
-    water: np.ndarray | None = None
-    thrust_saturation: np.ndarray | None = None
-    current_drift: np.ndarray | None = None
-
-    @property
-    def areas(self) -> np.ndarray:
-        """(T,) area of each target face, m^2."""
-        return np.asarray(self.site.world.area_faces)[self.site.target_faces]
-
-    @property
-    def duration_s(self) -> float:
-        return float(self.times[-1] - self.times[0])
+    log: DiveLog
+    dive: DiveOutcome
+    coverage: CoverageRecord
+    mapping: MappingRecord
+    ocean: OceanRecord
+    run: RunRecord
 
 
 def _phases(leg_log, legs, end: float) -> tuple[list[Phase], np.ndarray, np.ndarray]:
@@ -215,7 +281,7 @@ def run_mission(spec: MissionSpec, site: Site | None = None, scene=None,
             spool.close()
     result = _collect(spec, site, plan, diagram, handles, context, completed, wall, logs,
                       display)
-    display.finish(note=f"{len(result.times)} samples")
+    display.finish(note=f"{len(result.log.times)} samples")
     if own:
         display.close()
     return result
@@ -261,15 +327,23 @@ def _collect(spec, site, plan, diagram, handles: MissionHandles, context, comple
         supervisor, camera, multibeam = (handles.supervisor, handles.camera_coverage,
                                          handles.multibeam_coverage)
         return MissionResult(
-            spec=spec, site=site, plan=plan, times=times, state=state, estimated=estimated,
-            distance=distance, clearance=clearance, leg_at=leg_at, phases=phases,
-            outcomes=supervisor.outcomes(supervisor.GetMyContextFromRoot(context)),
-            camera_best=camera.best_angles(camera.GetMyContextFromRoot(context)),
-            multibeam_best=multibeam.best_angles(multibeam.GetMyContextFromRoot(context)),
-            replanning=replanning, scan_log=handles.mapper.scan_log(mapper_context),
-            online_map=handles.mapper.map_output.Eval(mapper_context), completed=completed,
-            profile=profile, reference=logs["reference"].data().T[:len(times)].copy(),
-            wall_s=wall, diagram_dot=annotate_graphviz(diagram, diagram.GetGraphvizString()),
-            diagram=diagram, handles=handles, context=context,
-            responses=responses_from_log(logs["response"]), water=water,
-            thrust_saturation=saturation, current_drift=current_drift)
+            spec=spec, site=site, plan=plan,
+            log=DiveLog(times=times, state=state, estimated=estimated,
+                        reference=logs["reference"].data().T[:len(times)].copy(),
+                        profile=profile, water=water, leg_at=leg_at, distance=distance,
+                        clearance=clearance),
+            dive=DiveOutcome(
+                phases=phases,
+                outcomes=supervisor.outcomes(supervisor.GetMyContextFromRoot(context)),
+                completed=completed, responses=responses_from_log(logs["response"])),
+            coverage=CoverageRecord(
+                camera_best=camera.best_angles(camera.GetMyContextFromRoot(context)),
+                multibeam_best=multibeam.best_angles(multibeam.GetMyContextFromRoot(context)),
+                areas=np.asarray(site.world.area_faces)[site.target_faces]),
+            mapping=MappingRecord(scan_log=handles.mapper.scan_log(mapper_context),
+                                  online_map=handles.mapper.map_output.Eval(mapper_context),
+                                  replanning=replanning),
+            ocean=OceanRecord(thrust_saturation=saturation, current_drift=current_drift),
+            run=RunRecord(wall_s=wall,
+                          diagram_dot=annotate_graphviz(diagram, diagram.GetGraphvizString()),
+                          diagram=diagram, handles=handles, context=context))

@@ -1,18 +1,19 @@
 """The data products of a flown mission: its point cloud, surface and their scores.
 
-`write_products(result, outdir)` writes `points.ply` (every return of the dive as the vehicle
-believed it: navigation frame, site coordinates, with sensor origin, time and source per point)
-and, when Open3D is installed and the target's box (grown by `CROP_MARGIN`) holds enough
-returns, `reconstruction.ply` (site coordinates, vertices coloured by their distance to the
-true world) and `reconstruction.png`; it returns the report's `reconstruction` section. The
-surface is built from EVERY return of the dive, thinned to one per `THIN_VOXEL` cube, with
-the support trim on (no face farther than a few local spacings from a return), and scored
-over the whole mesh in the local frame: every vertex's distance to the true world
-(`site.world`: a vertex on the seabed is right, one on a surface no return supports is
-not), and the share of the target's area (`site.target_mesh`), all of it and the part the
-returns saw, within 0.5 m of the surface. Needs only the result's `scan_log` and `site`: no
-Drake. The returns are read from the log's file a chunk at a time (`write_points`,
-`dive_cloud`): memory holds the thinned cloud, whatever the dive's length.
+`write_products(log, site, outdir)` writes `points.ply` (every return of the dive's `ScanLog`
+as the vehicle believed it: navigation frame, site coordinates, with sensor origin, time and
+source per point) and, when Open3D is installed and the target's box (grown by `CROP_MARGIN`)
+holds enough returns, `reconstruction.ply` (site coordinates, vertices coloured by their
+distance to the true world) and `reconstruction.png`; it returns the report's
+`reconstruction` section. The surface is built from EVERY return of the dive, thinned to one
+per `THIN_VOXEL` cube, with the support trim on (no face farther than a few local spacings
+from a return), and scored over the whole mesh in the local frame: every vertex's distance
+to the true world (`site.world`: a vertex on the seabed is right, one on a surface no return
+supports is not), and the share of the target's area (`site.target_mesh`), all of it and the
+part the returns saw, within 0.5 m of the surface. Needs only the log and the site (a `Site`,
+or the part of one a `rosio.replay.ReplaySite` holds): no Drake. The returns are read from
+the log's file a chunk at a time (`write_points`, `dive_cloud`): memory holds the thinned
+cloud, whatever the dive's length.
 """
 
 from __future__ import annotations
@@ -52,10 +53,10 @@ class MissionSurface:
     summary: dict
 
 
-def dive_cloud(result, voxel: float = THIN_VOXEL) -> PointCloud:
-    """Every return of the dive, one per `voxel` m cube; local frame (navigation). Read from
-    the log a chunk of batches at a time, each chunk thinned before the next is read."""
-    log = result.scan_log
+def dive_cloud(log: ScanLog, voxel: float = THIN_VOXEL) -> PointCloud:
+    """Every return of the dive's `log`, one per `voxel` m cube; local frame (navigation).
+    Read from the log a chunk of batches at a time, each chunk thinned before the next is
+    read."""
     parts = [from_scan_log(chunk).thin(voxel) for chunk in log.chunks()]
     parts = [p for p in parts if len(p)]
     if not parts:
@@ -65,38 +66,38 @@ def dive_cloud(result, voxel: float = THIN_VOXEL) -> PointCloud:
     return cloud.thin(voxel) if len(parts) > 1 else cloud
 
 
-def target_returns(result, cloud: PointCloud) -> int:
-    """The returns of `cloud` in the target's box grown by `CROP_MARGIN`: whether to build."""
-    lo, hi = result.site.target_mesh.bounds
+def target_returns(site, cloud: PointCloud) -> int:
+    """The returns of `cloud` in the box of `site`'s target grown by `CROP_MARGIN`: whether to
+    build."""
+    lo, hi = site.target_mesh.bounds
     return len(cloud.crop(lo, hi, CROP_MARGIN))
 
 
-def write_points(result, filename) -> int:
-    """Writes every return of the dive (`result.scan_log`) to `filename` (PLY, site
-    coordinates, `pointcloud.write_ply`'s format), streamed from the log's file a chunk of
-    batches at a time, so memory does not grow with the dive; returns the number of points."""
-    log = result.scan_log
-    write_ply_chunks((from_scan_log(chunk).shifted(result.site.to_site)
+def write_points(log: ScanLog, site, filename) -> int:
+    """Writes every return of the dive's `log` to `filename` (PLY, `site`'s coordinates,
+    `pointcloud.write_ply`'s format), streamed from the log's file a chunk of batches at a
+    time, so memory does not grow with the dive; returns the number of points."""
+    write_ply_chunks((from_scan_log(chunk).shifted(site.to_site)
                       for chunk in log.chunks()), log.returns, filename, log.sources)
     return log.returns
 
 
-def mission_surface(result, depth: int = 9, trim: float = 0.05, k: int = 200,
+def mission_surface(log: ScanLog, site, depth: int = 9, trim: float = 0.05, k: int = 200,
                     support: float = SUPPORT, progress: bool = False,
                     stage=None) -> MissionSurface | None:
-    """Reconstructs the dive's returns and scores the whole surface; None when Open3D is
-    unusable or the target's box (grown by `CROP_MARGIN`) holds fewer than `MIN_POINTS`
-    returns. `stage(name)`, when given, is called as each of `SURFACE_STAGES` begins after
-    the first (the returns read)."""
+    """Reconstructs the returns of the dive's `log` and scores the whole surface against
+    `site`'s `target_mesh` and `world` (local frame); None when Open3D is unusable or the
+    target's box (grown by `CROP_MARGIN`) holds fewer than `MIN_POINTS` returns.
+    `stage(name)`, when given, is called as each of `SURFACE_STAGES` begins after the first
+    (the returns read)."""
     stage = stage if stage is not None else (lambda name: None)
-    cloud = dive_cloud(result)
-    if not open3d_available() or target_returns(result, cloud) < max(MIN_POINTS, k + 1):
+    cloud = dive_cloud(log)
+    if not open3d_available() or target_returns(site, cloud) < max(MIN_POINTS, k + 1):
         return None
     surface = reconstruct(cloud, depth=depth, trim=trim, k=k, support=support,
                           progress=progress, stage=stage)
     stage(SURFACE_STAGES[-1])
-    summary, errors = score(result.site.target_mesh, surface.mesh, cloud.points,
-                            world=result.site.world)
+    summary, errors = score(site.target_mesh, surface.mesh, cloud.points, world=site.world)
     summary.update(depth=depth, trim=trim, k=k, support=support, outliers=OUTLIERS,
                    thin_voxel_m=THIN_VOXEL,
                    support_median_m=float(np.median(surface.support_m)),
@@ -112,44 +113,44 @@ def error_colours(errors: np.ndarray, vmax: float) -> np.ndarray:
     return colormaps["inferno"](np.clip(np.asarray(errors) / vmax, 0.0, 1.0))
 
 
-def write_products(result, outdir, dpi: int = 110, surface: bool = True,
+def write_products(log: ScanLog, site, outdir, dpi: int = 110, surface: bool = True,
                    progress: RunProgress | None = None) -> dict:
-    """Writes points.ply and, when a surface was built, reconstruction.ply and
-    reconstruction.png into `outdir`; returns the report's `reconstruction` section (with
-    `built` False and the `reason` when none was). `surface` False: points.ply alone.
+    """Writes points.ply (the returns of the dive's `log`) and, when a surface was built,
+    reconstruction.ply and reconstruction.png (`site`'s coordinates) into `outdir`; returns
+    the report's `reconstruction` section (with `built` False and the `reason` when none
+    was). `surface` False: points.ply alone.
     `progress`: the run's display, one step for the points and (with `surface`)
     `len(SURFACE_STAGES) + 1` for the reconstruction."""
     progress = progress if progress is not None else RunProgress.off()
     out = Path(outdir)
     with progress.step("points.ply"):
-        write_points(result, out / "points.ply")
+        write_points(log, site, out / "points.ply")
     if not surface:
         return dict(built=False, reason="switched off (outputs.reconstruction: false, "
                                         "--no-reconstruction)")
     begun = progress.done
     progress.update(begun, note=f"reconstruction: {SURFACE_STAGES[0]}")
-    section = _write_surface(result, out, dpi, lambda name: progress.advance(
+    section = _write_surface(log, site, out, dpi, lambda name: progress.advance(
         note=f"reconstruction: {name}"))
     progress.update(begun + len(SURFACE_STAGES) + 1)  # the files too (or nothing built)
     return section
 
 
-def _write_surface(result, out: Path, dpi: int, stage) -> dict:
+def _write_surface(log: ScanLog, site, out: Path, dpi: int, stage) -> dict:
     """The reconstruction part of `write_products` (`stage`: `mission_surface`'s)."""
     from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
 
-    surface = mission_surface(result, stage=stage)
+    surface = mission_surface(log, site, stage=stage)
     stage("its files (.ply, .png)")
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
-        if open3d_error() is not None and target_returns(result, dive_cloud(result)) \
-                >= MIN_POINTS:
+        if open3d_error() is not None and target_returns(site, dive_cloud(log)) >= MIN_POINTS:
             return dict(built=False, reason=open3d_error())
         return dict(built=False, reason=f"fewer than {MIN_POINTS} returns in the target's box "
                                         f"(+{CROP_MARGIN:g} m)")
     mesh = surface.reconstruction.mesh
     colours = (255 * error_colours(surface.errors, colour_scale(surface.errors))).astype(np.uint8)
     with replacing(out / "reconstruction.ply") as temporary:
-        trimesh.Trimesh(result.site.to_site(mesh.vertices), mesh.faces, vertex_colors=colours,
+        trimesh.Trimesh(site.to_site(mesh.vertices), mesh.faces, vertex_colors=colours,
                         process=False).export(temporary)
     s = surface.summary["surface"]
     fig = fig_reconstruction(

@@ -112,14 +112,14 @@ def write_replay_outputs(index: LogIndex, replayed: Replayed, settings: dict, ou
     out = Path(outdir)
     summary = dict(log=log_summary(index), map=map_summary(replayed, settings))
     if replayed.site.target_mesh is not None:
-        summary["reconstruction"] = write_products(replayed, out, dpi)
+        summary["reconstruction"] = write_products(replayed.scan_log, replayed.site, out, dpi)
         if summary["reconstruction"].get("built"):
             summary["coverage"] = dict(
                 point_cloud=summary["reconstruction"]["point_cloud"]["completeness"],
                 surface=summary["reconstruction"]["surface"]["completeness"],
                 tolerance_m=summary["reconstruction"]["tolerance_m"])
     else:
-        write_points(replayed, out / "points.ply")
+        write_points(replayed.scan_log, replayed.site, out / "points.ply")
         summary["reconstruction"] = unscored_surface(replayed, out)
     with replacing(out / "map.bt") as temporary:
         replayed.online_map.map.write(temporary)
@@ -133,7 +133,7 @@ def unscored_surface(replayed: Replayed, out: Path) -> dict:
     from drake_auv.reconstruction.products import MIN_POINTS, THIN_VOXEL, dive_cloud
     from drake_auv.reconstruction.surface import open3d_error, reconstruct
 
-    cloud = dive_cloud(replayed)
+    cloud = dive_cloud(replayed.scan_log)
     if len(cloud) < MIN_POINTS:
         return dict(built=False, reason=f"fewer than {MIN_POINTS} returns")
     if open3d_error() is not None:

@@ -15,9 +15,10 @@ from drake_auv.reconstruction.products import error_colours
 from drake_auv.visualization.legend import LegendEntry, swatch
 
 
-def draw_products(scene, result, outdir, max_faces: int = 30_000) -> None:
+def draw_products(scene, site, outdir, max_faces: int = 30_000) -> None:
     """Adds the `reconstruction` layer (the surface of `outdir`/reconstruction.ply, coloured by
-    error, at most `max_faces` faces) to a mission's Meshcat scene, when there is one."""
+    error, at most `max_faces` faces; `site.to_local` brings it to the scene's frame) to a
+    mission's Meshcat scene, when there is one."""
     from drake_auv.reconstruction.figures import decimated
 
     filename = Path(outdir) / "reconstruction.ply"
@@ -25,7 +26,7 @@ def draw_products(scene, result, outdir, max_faces: int = 30_000) -> None:
         return
     mesh = trimesh.load(filename, process=False)
     rgb = np.asarray(mesh.visual.vertex_colors, dtype=float)[:, :3] / 255.0
-    local = trimesh.Trimesh(result.site.to_local(mesh.vertices), mesh.faces, process=False)
+    local = trimesh.Trimesh(site.to_local(mesh.vertices), mesh.faces, process=False)
     small, colours = decimated(local, rgb, max_faces)
     scene.meshcat.SetTriangleColorMesh(scene.path_of("reconstruction"),
                                        np.asfortranarray(small.vertices.T),

@@ -20,7 +20,7 @@ def fig_coverage(result: MissionResult) -> Figure:
     from matplotlib import colormaps
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    best = result.multibeam_best
+    best = result.coverage.multibeam_best
     triangles = np.asarray(result.site.world.triangles)[result.site.target_faces]
     colours = colormaps["viridis_r"](np.clip(np.degrees(np.nan_to_num(best, nan=0.0)) / 90.0,
                                              0.0, 1.0))
@@ -34,7 +34,7 @@ def fig_coverage(result: MissionResult) -> Figure:
                xlabel="x (m)", ylabel="y (m)", zlabel="z (m)")
         ax.set_box_aspect(np.maximum(hi - lo, 1e-3))
         ax.view_init(elev=elev, azim=azim)
-    share = coverage_share(best, result.areas)
+    share = coverage_share(best, result.coverage.areas)
     fig.suptitle(f"Multibeam coverage of the target: {100 * share:.1f} % "
                  "(colour: best viewing angle, 0 (yellow) to 90 deg (purple); red: unseen)")
     return fig
@@ -45,7 +45,7 @@ def fig_coverage_vs_time(result: MissionResult, curve: dict) -> Figure:
     report's `coverage_vs_time`), over the phases of the dive."""
     fig = Figure(figsize=(8, 4))
     ax = fig.add_subplot(1, 1, 1)
-    for phase in result.phases:
+    for phase in result.dive.phases:
         ax.axvspan(phase.start_s, phase.end_s, color=PHASE_COLOURS.get(phase.name, "0.8"),
                    alpha=0.08, lw=0)
     t = np.asarray(curve["t_s"])
@@ -63,22 +63,22 @@ def fig_distance(result: MissionResult) -> Figure:
     """True distance to the target and clearance against time, by phase; tracks from above."""
     fig = Figure(figsize=(13, 5))
     ax, top = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
-    names = np.array([result.plan.legs[leg].phase for leg in result.leg_at])
-    state = VehicleState(result.state)
+    names = np.array([result.plan.legs[leg].phase for leg in result.log.leg_at])
+    state = VehicleState(result.log.state)
     for name in dict.fromkeys(names):
         mask = names == name
         colour = PHASE_COLOURS.get(name, "k")
-        t = np.where(mask, result.times, np.nan)
-        ax.plot(t, np.where(mask, result.distance, np.nan), color=colour, lw=0.9,
+        t = np.where(mask, result.log.times, np.nan)
+        ax.plot(t, np.where(mask, result.log.distance, np.nan), color=colour, lw=0.9,
                 label=f"{name}: distance to the target")
-        ax.plot(t, np.where(mask, result.clearance, np.nan), color=colour, lw=0.6, ls=":")
+        ax.plot(t, np.where(mask, result.log.clearance, np.nan), color=colour, lw=0.6, ls=":")
         top.plot(np.where(mask, state.x, np.nan), np.where(mask, state.y, np.nan),
                  color=colour, lw=0.8, label=name)
     band = near_distance(result) / 2.0
     if np.isfinite(band):  # a mission that only flies an exported file knows no Omega
         ax.axhline(band, color="k", ls="--", lw=0.8, label=f"Omega = {band:g} m")
     else:
-        band = float(np.nanmax(result.distance)) / 3.0
+        band = float(np.nanmax(result.log.distance)) / 3.0
     ax.axhline(VEHICLE_RADIUS, color="tab:red", lw=0.8, label="vehicle radius (contact)")
     ax.set(xlabel="mission time (s)", ylabel="m", ylim=(0, 3 * band),
            title="True distance (solid) and clearance to anything (dotted)")

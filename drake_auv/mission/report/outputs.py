@@ -8,8 +8,6 @@ import resource
 import time
 from pathlib import Path
 
-import numpy as np
-
 from drake_auv.mission.report.figures import fig_coverage, fig_coverage_vs_time, fig_distance
 from drake_auv.mission.report.markdown import report_markdown
 from drake_auv.mission.report.summary import rounded, summarise
@@ -27,17 +25,16 @@ def write_trajectory(result: MissionResult, filename) -> None:
     position (`est_x est_y est_z`), in the site's own horizontal coordinates, and the water's
     velocity at the true position (`current_x current_y current_z`, world frame: x east,
     y north, z up, m/s; zeros in still water)."""
-    state, estimated = VehicleState(result.state), VehicleState(result.estimated)
+    state, estimated = VehicleState(result.log.state), VehicleState(result.log.estimated)
     true_xyz = result.site.to_site(state.position)
     est_xyz = result.site.to_site(estimated.position)
     pose = VehicleState.get_fields()[:6]  # position and attitude
-    current = (np.zeros((len(result.times), 3)) if result.water is None
-               else Water(result.water).velocity)
+    current = Water(result.log.water).velocity
     with open_replacing(filename, "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["t", *pose, *(f"est_{name}" for name in pose[:3]),
                          "current_x", "current_y", "current_z"])
-        for t, p, a, e, c in zip(result.times, true_xyz, state.attitude, est_xyz, current):
+        for t, p, a, e, c in zip(result.log.times, true_xyz, state.attitude, est_xyz, current):
             writer.writerow([f"{t:.2f}", *(f"{v:.3f}" for v in p), *(f"{v:.5f}" for v in a),
                              *(f"{v:.3f}" for v in e), *(f"{v:.4f}" for v in c)])
 
@@ -72,7 +69,8 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
         summary = summarise(result)
     products = time.perf_counter()
     summary["reconstruction"] = rounded(write_products(
-        result, out, dpi, surface=result.spec.outputs.reconstruction, progress=progress))
+        result.mapping.scan_log, result.site, out, dpi,
+        surface=result.spec.outputs.reconstruction, progress=progress))
     reconstruction_s = time.perf_counter() - products
     makers = {"coverage.png": lambda: fig_coverage(result),
               "distance.png": lambda: fig_distance(result),
@@ -85,7 +83,7 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
     with progress.step("trajectory.csv"):
         write_trajectory(result, out / "trajectory.csv")
     with progress.step("diagram.dot"):
-        write_text(out / "diagram.dot", result.diagram_dot)
+        write_text(out / "diagram.dot", result.run.diagram_dot)
     if finish is not None:
         with progress.step("mission.html"):
             finish(out)
@@ -93,7 +91,7 @@ def write_outputs(result: MissionResult, outdir, dpi: int = 110, setup_s: float 
         outputs_s = time.perf_counter() - start
         summary["timing"].update(rounded(dict(
             setup_s=setup_s, outputs_s=outputs_s, reconstruction_s=reconstruction_s,
-            total_s=(setup_s or 0.0) + result.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
+            total_s=(setup_s or 0.0) + result.run.wall_s + outputs_s, peak_rss_mb=peak_rss_mb())))
         write_json(out / "report.json", summary)
         write_text(out / "report.md",
                    report_markdown(summary, files) + "\n"

@@ -47,9 +47,9 @@ def near_distance(result: MissionResult) -> float:
 def _scored_samples(result: MissionResult) -> np.ndarray:
     """Mask of the samples the distance statistics use: survey legs (follow legs without a
     survey), within 2 Omega of the target."""
-    names = np.array([result.plan.legs[leg].phase for leg in result.leg_at])
+    names = np.array([result.plan.legs[leg].phase for leg in result.log.leg_at])
     scored = names == ("survey" if (names == "survey").any() else "follow")
-    near = scored & (result.distance < near_distance(result))
+    near = scored & (result.log.distance < near_distance(result))
     return near if near.any() else scored
 
 
@@ -58,10 +58,11 @@ def map_distance(result: MissionResult, samples: np.ndarray) -> np.ndarray:
     target (within 1.5 voxels of its true surface), m; inf without any."""
     from scipy.spatial import cKDTree
 
-    voxels = result.online_map.map.occupied_points()
+    voxels = result.mapping.online_map.map.occupied_points()
     if len(voxels) == 0 or len(samples) == 0:
         return np.full(len(samples), np.inf)
-    on_target = mesh_distance(result.site.target_mesh, voxels) <= 1.5 * result.online_map.map.resolution
+    on_target = (mesh_distance(result.site.target_mesh, voxels)
+                 <= 1.5 * result.mapping.online_map.map.resolution)
     if not on_target.any():
         return np.full(len(samples), np.inf)
     return cKDTree(voxels[on_target]).query(samples)[0]
@@ -69,12 +70,12 @@ def map_distance(result: MissionResult, samples: np.ndarray) -> np.ndarray:
 
 def phase_summary(result: MissionResult, mask: np.ndarray) -> dict:
     """Statistics of the samples `mask` of the dive."""
-    t, xyz = result.times[mask], VehicleState(result.state[mask]).position
-    nav_error = np.linalg.norm(VehicleState(result.estimated[mask]).position - xyz, axis=1)
+    t, xyz = result.log.times[mask], VehicleState(result.log.state[mask]).position
+    nav_error = np.linalg.norm(VehicleState(result.log.estimated[mask]).position - xyz, axis=1)
     return dict(length_m=float(np.linalg.norm(np.diff(xyz, axis=0), axis=1).sum()),
                 duration_s=float(t[-1] - t[0]) if len(t) else 0.0,
-                distance_min_m=float(result.distance[mask].min()),
-                clearance_min_m=float(result.clearance[mask].min()),
+                distance_min_m=float(result.log.distance[mask].min()),
+                clearance_min_m=float(result.log.clearance[mask].min()),
                 navigation_error_max_m=float(nav_error.max()))
 
 
@@ -135,14 +136,14 @@ def _first_seen_sorted(first_seen, areas) -> tuple[np.ndarray, np.ndarray]:
 def coverage_vs_time(result: MissionResult, period_s: float = COVERAGE_PERIOD_S) -> dict:
     """Multibeam and camera coverage of the true target against mission time, from the
     recorders' first-seen state at the end of the dive (`report.json`'s `coverage_vs_time`)."""
-    end = float(result.context.get_time())
+    end, areas = float(result.run.context.get_time()), result.coverage.areas
     out = dict(period_s=period_s, time_to_s={})
     for name in ("multibeam", "camera"):
-        recorder = getattr(result.handles, f"{name}_coverage")
-        first = recorder.first_seen(recorder.GetMyContextFromRoot(result.context))
-        t, out[name] = coverage_curve(first, result.areas, end, period_s)
+        recorder = getattr(result.run.handles, f"{name}_coverage")
+        first = recorder.first_seen(recorder.GetMyContextFromRoot(result.run.context))
+        t, out[name] = coverage_curve(first, areas, end, period_s)
         out["t_s"] = t
-        out["time_to_s"][name] = {f"{100 * level:g}": time_to_coverage(first, result.areas, level)
+        out["time_to_s"][name] = {f"{100 * level:g}": time_to_coverage(first, areas, level)
                                   for level in COVERAGE_LEVELS}
     return {k: v.tolist() if isinstance(v, np.ndarray) else v for k, v in out.items()}
 
@@ -150,64 +151,65 @@ def coverage_vs_time(result: MissionResult, period_s: float = COVERAGE_PERIOD_S)
 def summarise(result: MissionResult) -> dict:
     """Everything the report shows; `timing` holds the wall-clock figures (they vary with the
     machine), the rest depends only on the mission file and its seed."""
-    areas = result.areas
+    areas = result.coverage.areas
     scored = _scored_samples(result)
-    d = result.distance[scored]
-    map_d = map_distance(result, VehicleState(result.state[scored]).position)
+    d = result.log.distance[scored]
+    map_d = map_distance(result, VehicleState(result.log.state[scored]).position)
     map_d = map_d[np.isfinite(map_d)]
     phases = []
-    for phase in result.phases:
-        mask = np.isin(result.leg_at, phase.legs)
+    for phase in result.dive.phases:
+        mask = np.isin(result.log.leg_at, phase.legs)
         entry = dict(name=phase.name, start_s=phase.start_s, end_s=phase.end_s,
-                     legs=phase.legs, outcomes=[result.outcomes[k] for k in phase.legs])
+                     legs=phase.legs, outcomes=[result.dive.outcomes[k] for k in phase.legs])
         if mask.any():
             entry.update(phase_summary(result, mask))
         phases.append(entry)
-    cam_mean, cam_sd = angle_stats(result.camera_best, areas)
-    mb_mean, mb_sd = angle_stats(result.multibeam_best, areas)
-    min_clearance = float(result.clearance.min())
+    cam_mean, cam_sd = angle_stats(result.coverage.camera_best, areas)
+    mb_mean, mb_sd = angle_stats(result.coverage.multibeam_best, areas)
+    min_clearance = float(result.log.clearance.min())
     summary = dict(
         mission=dict(name=result.spec.name, seed=result.spec.seed,
-                     site=result.site.name, completed=result.completed,
-                     aborted="aborted" in result.outcomes,
+                     site=result.site.name, completed=result.dive.completed,
+                     aborted="aborted" in result.dive.outcomes,
                      target_area_m2=float(areas.sum())),
-        coverage=dict(multibeam=coverage_share(result.multibeam_best, areas),
-                      camera=coverage_share(result.camera_best, areas),
+        coverage=dict(multibeam=coverage_share(result.coverage.multibeam_best, areas),
+                      camera=coverage_share(result.coverage.camera_best, areas),
                       multibeam_angle_mean_deg=mb_mean, multibeam_angle_sd_deg=mb_sd,
                       camera_angle_mean_deg=cam_mean, camera_angle_sd_deg=cam_sd),
         min_clearance_m=min_clearance,
         contact=bool(min_clearance <= VEHICLE_RADIUS),
         distance_to_target=dict(
             mean_m=float(d.mean()) if len(d) else None, sd_m=float(d.std()) if len(d) else None,
-            min_m=float(result.distance.min()),
+            min_m=float(result.log.distance.min()),
             map_mean_m=float(map_d.mean()) if len(map_d) else None,
             map_sd_m=float(map_d.std()) if len(map_d) else None,
             near_m=near_distance(result) if np.isfinite(near_distance(result)) else None,
             samples=int(scored.sum())),
         navigation_error_max_m=float(np.linalg.norm(
-            VehicleState(result.estimated).position - VehicleState(result.state).position,
+            VehicleState(result.log.estimated).position - VehicleState(result.log.state).position,
             axis=1).max()),
         phases=phases,
         faults={name: dataclasses.asdict(f) for name, f in result.spec.faults.active.items()},
-        responses=result.responses,
+        responses=result.dive.responses,
         plan=plan_summary(result),
         config=mission_to_dict(result.spec),
         coverage_vs_time=coverage_vs_time(result),
     )
-    timing = dict(wall_s=result.wall_s, sim_s=result.duration_s, simulation_s=result.wall_s,
-                  real_time_factor=result.duration_s / max(result.wall_s, 1e-9))
-    if len(result.replanning):
-        wall = ReplanningStep(result.replanning).wall_time
+    wall_s, sim_s = result.run.wall_s, result.log.duration_s
+    timing = dict(wall_s=wall_s, sim_s=sim_s, simulation_s=wall_s,
+                  real_time_factor=sim_s / max(wall_s, 1e-9))
+    if len(result.mapping.replanning):
+        wall = ReplanningStep(result.mapping.replanning).wall_time
         timing.update(replan_steps=len(wall), replan_median_ms=float(np.median(wall) * 1e3),
                       replan_p95_ms=float(np.percentile(wall, 95) * 1e3))
     summary["timing"] = timing
-    summary["map"] = map_memory(result.online_map, result.scan_log)
+    summary["map"] = map_memory(result.mapping.online_map, result.mapping.scan_log)
     ocean = ocean_summary(result)
     if ocean is not None:
         summary["ocean"] = ocean
-    if result.handles is not None and result.handles.explorer is not None:
-        summary["exploration"] = exploration_summary(result.handles, result.context,
-                                                     result.outcomes)
+    if result.run.handles.explorer is not None:
+        summary["exploration"] = exploration_summary(result.run.handles, result.run.context,
+                                                     result.dive.outcomes)
     return rounded(summary)
 
 
