@@ -59,14 +59,12 @@ def os_error_line(err: OSError) -> str:
 
 
 def _one_line_warning(command: str):
-    """A warning as one line of its own, the progress bars on its stream cleared around it."""
+    """A warning as one line of its own, the progress display on its stream cleared around it."""
     def show(message, category, filename, lineno, file=None, line=None):
-        from tqdm import tqdm
+        from drake_auv.progress import print_line
 
         text = " ".join(str(message).split())
-        stream = sys.stderr if file is None else file
-        with tqdm.external_write_mode(file=stream):
-            print(f"drake-auv {command}: warning: {text}", file=stream)
+        print_line(f"drake-auv {command}: warning: {text}", file)
     return show
 
 

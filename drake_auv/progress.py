@@ -24,6 +24,18 @@ RUN_PHASES = ("setup", "dive", "results", "outputs")
 # `drake-auv plan`'s: the planner's stages, then every output file
 PLAN_PHASES = ("plan", "outputs")
 HELD = 0.999  # the most a phase shows before it ends (drawn as 99 %)
+_SHOWN = {}  # stream -> the display running on it
+
+
+def print_line(line: str, file=None) -> None:
+    """Prints `line` on `file` (default standard error) without breaking the display running
+    on that stream, if any (a warning during a run)."""
+    file = sys.stderr if file is None else file
+    shown = _SHOWN.get(file)
+    if shown is None:
+        print(line, file=file, flush=True)
+    else:
+        shown.write(line, file)
 
 
 def phase_display(progress, phase: str, total: float, note: str = "") -> tuple["RunProgress", bool]:
@@ -84,6 +96,8 @@ class RunProgress:
             raise ValueError(f"a phase's total must be > 0, got {total}")
         self.phase, self._total, self.done, self.share = phase, float(total), 0.0, 0.0
         self.note, self._logged = note, -1
+        if self.enabled:
+            _SHOWN[self.stream] = self
         self._draw(force=True)
 
     def due(self) -> bool:
@@ -117,14 +131,14 @@ class RunProgress:
         if self.tty:
             self._draw(force=False)
 
-    def write(self, line: str) -> None:
-        """Prints `line` on standard output without breaking the display: the terminal's
-        progress line is cleared first and drawn again at the next update."""
+    def write(self, line: str, file=None) -> None:
+        """Prints `line` on `file` (default standard output) without breaking the display:
+        the terminal's progress line is cleared first and drawn again at the next update."""
         if self.tty and self._width:
             self.stream.write("\r" + " " * self._width + "\r")
             self.stream.flush()
             self._width = 0
-        print(line, flush=True)
+        print(line, file=file, flush=True)
         self._drawn_at = -float("inf")
 
     def finish(self, note: str | None = None) -> None:
@@ -145,6 +159,8 @@ class RunProgress:
         if self.enabled and self.tty:
             self.stream.write("\n")
             self.stream.flush()
+        if _SHOWN.get(self.stream) is self:
+            del _SHOWN[self.stream]
         self.phase = None
 
     def __enter__(self) -> RunProgress:

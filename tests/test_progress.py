@@ -176,3 +176,20 @@ def test_a_phase_display_joins_its_callers_or_owns_one():
     assert display is caller and not owned and caller.phase == "outputs" and caller.note == "a.png"
     own, owned = phase_display(False, "figures", 7)
     assert owned and own.phases == ("figures",) and own.phase == "figures" and not own.enabled
+
+
+def test_a_warning_clears_the_terminal_line_and_the_display_comes_back():
+    from drake_auv.progress import print_line
+
+    stream = io.StringIO()
+    display = RunProgress(("dive",), stream=stream, tty=True)
+    display.start("dive", 10.0)
+    print_line("drake-auv run: warning: something", stream)
+    display.update(6.0)
+    display.close()
+    text = stream.getvalue()
+    before, after = text.split("drake-auv run: warning: something\n")
+    assert before == "\r[1/1] dive   0 %" + "\r" + " " * len("[1/1] dive   0 %") + "\r"
+    assert after.startswith("\r[1/1] dive  60 %")
+    print_line("after the run", stream)  # no display: the line alone
+    assert stream.getvalue().endswith("\nafter the run\n")

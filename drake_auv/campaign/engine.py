@@ -19,10 +19,10 @@ import asyncio
 import logging
 import os
 
-from tqdm import tqdm
 
 from drake_auv.campaign.results import ResultsFile
 from drake_auv.campaign.task import one_line, run_task
+from drake_auv.progress import RunProgress
 
 CONNECT_TIMEOUT_S = 10.0
 
@@ -123,7 +123,7 @@ def run_campaign(runs, results: ResultsFile, client, progress: bool = True,
     """Runs the `runs` (`CampaignRun`) whose key is not in `results`, on `client`; returns
     counts {total, skipped, ok, failed, contact}. `retries`: resubmissions of a task that
     raised (the task itself turns a mission's errors into failed rows); `task`: the function
-    a worker calls on a run's mission (default `run_task`); `desc`: the progress bar's label.
+    a worker calls on a run's mission (default `run_task`); `desc`: the progress display's phase name.
     A row that cannot be written raises CampaignError (one line) once the other tasks are
     cancelled."""
     from distributed import as_completed
@@ -135,7 +135,9 @@ def run_campaign(runs, results: ResultsFile, client, progress: bool = True,
         return counts
     futures = {client.submit(task, run.mission, pure=False, retries=retries): run
                for run in todo}
-    bar = tqdm(total=len(todo), unit="run", desc=desc, disable=not progress)
+    display = RunProgress((desc,), enabled=progress)
+    display.start(desc, len(todo), f"{len(todo)} runs")
+    finished = False
     try:
         for future in as_completed(futures):
             run = futures.pop(future)
@@ -156,10 +158,11 @@ def run_campaign(runs, results: ResultsFile, client, progress: bool = True,
                     "results.csv (rerun the same command to run the rest)") from None
             counts[row["status"]] += 1
             counts["contact"] += bool(row.get("contact"))
-            bar.update(1)
-            bar.set_postfix(failed=counts["failed"], contact=counts["contact"])
+            display.advance(1, f"{counts['ok'] + counts['failed']}/{len(todo)} runs, "
+                               f"{counts['failed']} failed, {counts['contact']} in contact")
             future.release()
+        finished = True
     finally:
-        bar.close()
+        display.close(completed=finished)
         client.cancel(list(futures))
     return counts

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import EventStatus
-from tqdm import tqdm
 
 from drake_auv.output_files import replacing
+from drake_auv.progress import RunProgress
 from drake_auv.signals import Reference, VehicleState
 from drake_auv.vehicle.control import cross_track_distance
 from drake_auv.vehicle.diagram import build_tracking_diagram
@@ -82,10 +82,10 @@ def fly_path(path, out_dir, speed: float = 0.5, scene=None, navigation=None,
         print(f"live view: {scene.meshcat.web_url()}")
     end = handles.end_time + extra_time
     start = time.perf_counter()
-    with tqdm(total=round(end), unit="sim s", disable=not progress, desc="simulate") as bar:
-        simulator.set_monitor(_arrival_monitor(diagram, path, handles.end_time, bar))
+    with RunProgress(("simulate",), enabled=progress) as display:
+        display.start("simulate", end)
+        simulator.set_monitor(_arrival_monitor(diagram, path, handles.end_time, display))
         simulator.AdvanceTo(end)
-        bar.update(bar.total - bar.n)
     wall = time.perf_counter() - start
     context = simulator.get_context()
     state_log = handles.state_log.FindLog(context)
@@ -120,8 +120,9 @@ def check_below_surface(path, source: str = "path", first_row: int | None = None
 SETTLED = (0.02, 0.01, 0.01)  # m from the path's end, m/s, rad of heading: the flight is over
 
 
-def _arrival_monitor(diagram, path, end_time: float, bar):
-    """A Simulator monitor of the tracking `diagram` that advances `bar` and ends the flight
+def _arrival_monitor(diagram, path, end_time: float, display):
+    """A Simulator monitor of the tracking `diagram` that shows its simulated time on `display`
+    (a `RunProgress`) and ends the flight
     once the reference has reached the end of `path` (at `end_time` s) and the true state (the
     diagram's `state` output) has settled there
     (`SETTLED`); `extra_time` after `end_time` caps it when it does not settle."""
@@ -130,8 +131,8 @@ def _arrival_monitor(diagram, path, end_time: float, bar):
 
     def monitor(root_context):
         t = root_context.get_time()
-        if int(t) > bar.n:
-            bar.update(int(t) - bar.n)
+        if display.due():
+            display.update(t, f"t = {t:.0f} s")
         if t < end_time:
             return EventStatus.DidNothing()
         x = VehicleState(state_port.Eval(root_context))
