@@ -41,10 +41,11 @@ def print_line(line: str, file=None) -> None:
 def phase_display(progress, phase: str, total: float, note: str = "") -> tuple["RunProgress", bool]:
     """(display, owned) for work of `total` units called `phase`, begun with `note`: a caller's
     `RunProgress` that lists `phase` starts it (one display over the caller's phases), one that
-    does not counts these units in its current phase; anything else gets a display of this one
-    phase, shown when `progress` is true, which the caller owns and closes."""
+    does not, or runs it already, counts these units in its current phase; anything else gets
+    a display of this one phase, shown when `progress` is true, which the caller owns and
+    closes."""
     if isinstance(progress, RunProgress):
-        if phase in progress.phases:
+        if phase in progress.phases and phase != progress.phase:
             progress.start(phase, total, note)
         elif note:
             progress.update(progress.done, note)

@@ -18,6 +18,7 @@ cloud, whatever the dive's length.
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,7 +27,7 @@ import trimesh
 
 from drake_auv.mapping.scan_log import ScanLog
 from drake_auv.output_files import replacing
-from drake_auv.progress import RunProgress
+from drake_auv.progress import RunProgress, phase_display
 from drake_auv.reconstruction.pointcloud import PointCloud, from_scan_log, write_ply_chunks
 from drake_auv.reconstruction.scoring import score
 from drake_auv.reconstruction.surface import (OUTLIERS, STAGES, SUPPORT, Reconstruction,
@@ -83,21 +84,25 @@ def write_points(log: ScanLog, site, filename) -> int:
 
 
 def mission_surface(log: ScanLog, site, depth: int = 9, trim: float = 0.05, k: int = 200,
-                    support: float = SUPPORT, progress: bool = False,
-                    stage=None) -> MissionSurface | None:
+                    support: float = SUPPORT,
+                    progress: bool | RunProgress = False) -> MissionSurface | None:
     """Reconstructs the returns of the dive's `log` and scores the whole surface against
     `site`'s `target_mesh` and `world` (local frame); None when Open3D is unusable or the
     target's box (grown by `CROP_MARGIN`) holds fewer than `MIN_POINTS` returns.
-    `stage(name)`, when given, is called as each of `SURFACE_STAGES` begins after the first
-    (the returns read)."""
-    stage = stage if stage is not None else (lambda name: None)
-    cloud = dive_cloud(log)
-    if not open3d_available() or target_returns(site, cloud) < max(MIN_POINTS, k + 1):
-        return None
-    surface = reconstruct(cloud, depth=depth, trim=trim, k=k, support=support,
-                          progress=progress, stage=stage)
-    stage(SURFACE_STAGES[-1])
-    summary, errors = score(site.target_mesh, surface.mesh, cloud.points, world=site.world)
+    `progress`: show the progress over the `SURFACE_STAGES`, or a caller's `RunProgress` to
+    advance by one per stage (none when nothing is built)."""
+    display, owned = phase_display(progress, "reconstruct", len(SURFACE_STAGES),
+                                   f"reconstruction: {SURFACE_STAGES[0]}")
+    with display if owned else nullcontext():  # an owned display ends with the work
+        cloud = dive_cloud(log)
+        if not open3d_available() or target_returns(site, cloud) < max(MIN_POINTS, k + 1):
+            return None
+        display.advance(1)
+        surface = reconstruct(cloud, depth=depth, trim=trim, k=k, support=support,
+                              progress=display)
+        display.update(display.done, f"reconstruction: {SURFACE_STAGES[-1]}")
+        summary, errors = score(site.target_mesh, surface.mesh, cloud.points, world=site.world)
+        display.advance(1)
     summary.update(depth=depth, trim=trim, k=k, support=support, outliers=OUTLIERS,
                    thin_voxel_m=THIN_VOXEL,
                    support_median_m=float(np.median(surface.support_m)),
@@ -129,19 +134,17 @@ def write_products(log: ScanLog, site, outdir, dpi: int = 110, surface: bool = T
         return dict(built=False, reason="switched off (outputs.reconstruction: false, "
                                         "--no-reconstruction)")
     begun = progress.done
-    progress.update(begun, note=f"reconstruction: {SURFACE_STAGES[0]}")
-    section = _write_surface(log, site, out, dpi, lambda name: progress.advance(
-        note=f"reconstruction: {name}"))
+    section = _write_surface(log, site, out, dpi, progress)
     progress.update(begun + len(SURFACE_STAGES) + 1)  # the files too (or nothing built)
     return section
 
 
-def _write_surface(log: ScanLog, site, out: Path, dpi: int, stage) -> dict:
-    """The reconstruction part of `write_products` (`stage`: `mission_surface`'s)."""
+def _write_surface(log: ScanLog, site, out: Path, dpi: int, progress: RunProgress) -> dict:
+    """The reconstruction part of `write_products`, shown on the run's `progress`."""
     from drake_auv.reconstruction.figures import colour_scale, fig_reconstruction
 
-    surface = mission_surface(log, site, stage=stage)
-    stage("its files (.ply, .png)")
+    surface = mission_surface(log, site, progress=progress)
+    progress.update(progress.done, "reconstruction: its files (.ply, .png)")
     if surface is None:  # too few returns (whatever Open3D's state), else Open3D's reason
         if open3d_error() is not None and target_returns(site, dive_cloud(log)) >= MIN_POINTS:
             return dict(built=False, reason=open3d_error())

@@ -21,13 +21,14 @@ from __future__ import annotations
 
 import ctypes
 import functools
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
-from tqdm import tqdm
 
+from drake_auv.progress import RunProgress, phase_display
 from drake_auv.reconstruction.pointcloud import PointCloud, optional_module
 
 DEPTH_RANGE = (5, 12)  # Poisson octree depth: 2^depth cells across the cloud's cube
@@ -253,30 +254,24 @@ def check_spread(points: np.ndarray) -> None:
 
 
 def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 200,
-                support: float = SUPPORT, progress: bool = True,
-                outliers: float = OUTLIERS, stage=None) -> Reconstruction:
+                support: float = SUPPORT, progress: bool | RunProgress = True,
+                outliers: float = OUTLIERS) -> Reconstruction:
     """The trimmed screened-Poisson surface of `cloud` (outliers dropped first, see
     `outlier_mask`, none when `outliers` is 0; normals from k neighbours, oriented by the
     recorded sensor origins when the cloud has them; faces farther than `support` local
-    spacings from every point removed, none when 0), with a progress bar over the stages;
-    `stage(name)`, when given, is called as each of the `STAGES` begins (a run's display)."""
-    stage = stage if stage is not None else (lambda name: None)
+    spacings from every point removed, none when 0). `progress`: show the progress over the
+    `STAGES`, or a caller's `RunProgress` to advance by one per stage."""
     check_parameters(len(cloud), depth, k, trim, support, outliers)
     cloud = cloud.subset(np.flatnonzero(outlier_mask(cloud.points, outliers)))
     check_parameters(len(cloud), depth, k, trim, support, outliers)
     check_spread(cloud.points)
-    with tqdm(total=len(STAGES), desc="reconstruct", unit="stage", disable=not progress,
-              leave=False) as bar:
-        stage(STAGES[0])
-        bar.set_postfix_str(f"normals (k = {k}) of {len(cloud)} points")
+    display, owned = phase_display(progress, "reconstruct", len(STAGES),
+                                   f"normals (k = {k}) of {len(cloud)} points")
+    with display if owned else nullcontext():  # an owned display ends with the work
         normals = estimate_normals(cloud.points, cloud.origins if cloud.has_origins else None, k)
-        bar.update()
-        stage(STAGES[1])
-        bar.set_postfix_str(f"screened Poisson, depth {depth}")
+        display.advance(1, f"screened Poisson, depth {depth}")
         mesh, densities = poisson(cloud.points, normals, depth, trim)
-        bar.update()
-        stage(STAGES[2])
-        bar.set_postfix_str(f"support trim ({support:g} local spacings)")
+        display.advance(1, f"support trim ({support:g} local spacings)")
         extent = float(np.ptp(cloud.points, axis=0).max())
         cell = POISSON_SCALE * extent / 2 ** int(depth)
         if support > 0.0:
@@ -287,6 +282,6 @@ def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 
         if len(mesh.faces) == 0:
             raise ValueError(f"no face of the surface lies within {support:g} local spacings "
                              "of the points; raise support")
-        bar.update()
+        display.advance(1)
     return Reconstruction(mesh, densities, normals, support_m, int(depth), int(k),
                           float(trim), float(support))
