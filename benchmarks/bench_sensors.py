@@ -33,7 +33,6 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import TrajectorySource
-from tqdm import tqdm
 
 from _reference import SIM_SECONDS, lawnmower, machine, print_reference, reference_factor
 from drake_auv.vehicle.diagram import add_girona500
@@ -42,6 +41,7 @@ from drake_auv.sonar import SonarModel, SonarMount, fan_angles, scan
 from drake_auv.sonar.beams import beam_geometry, pose
 from drake_auv.coverage.recorder import CoverageRecorder
 from drake_auv.mission.spec import REALISTIC_NOISE
+from drake_auv.progress import track
 from drake_auv.sonar.multibeam import MultibeamSonar
 from drake_auv.sonar.noise import SonarNoise
 from drake_auv.sonar.profiler import PencilBeamProfiler
@@ -217,7 +217,7 @@ def main() -> None:
                "floor: + two sonar systems' updates alone": ("floor",),
                "floor: + their updates and ray casts alone": ("floor + rays",)}
     times = {name: [] for name in configs}
-    for _ in tqdm(range(RUNS), desc="600 s missions"):
+    for _ in track(range(RUNS), "600 s missions"):
         for name, sensors in configs.items():
             times[name].append(mission_seconds(caster, sensors))
     base_wall = statistics.median(t[0] for t in times["vehicle only"])

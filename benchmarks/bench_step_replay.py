@@ -36,13 +36,13 @@ import time
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from _reference import machine, print_reference, reference_factor  # noqa: E402
 from bench_long_mission import long_mission  # noqa: E402
 import drake_auv.replanning.replanner as replanner_module  # noqa: E402
 from drake_auv.mission.runner import run_mission  # noqa: E402
+from drake_auv.progress import track  # noqa: E402
 from drake_auv.replanning import section as section_module  # noqa: E402
 
 BUDGETS = {  # STOMP's budget of the replay's other rows: overrides of `StompParameters`
@@ -244,7 +244,7 @@ def main(argv=None) -> int:
             print(f"| {a:.0f}-{b:.0f} | 0 | | | | | | | |")
             continue
         rows = []
-        for step in tqdm(steps, desc=f"replay {a:.0f}-{b:.0f} s", leave=False):
+        for step in track(steps, f"replay {a:.0f}-{b:.0f} s"):
             plan, wall, stomp_s = replay(step, repeats=args.repeats)
             identical += np.array_equal(plan.trajectory, step["trajectory"])
             rows.append((wall, stomp_s, plan.iterations))
@@ -269,7 +269,7 @@ def main(argv=None) -> int:
         # Budgets in turn on each step (the least of the repeats), so a change of the
         # machine's load falls on all of them alike.
         rows = {label: [] for label in budgets}
-        for step in tqdm(steps, desc=f"budgets {a:.0f}-{b:.0f} s", leave=False):
+        for step in track(steps, f"budgets {a:.0f}-{b:.0f} s"):
             for label, overrides in budgets.items():
                 plan, wall, _ = replay(step, with_budget(step["params"], overrides),
                                        args.repeats)

@@ -55,6 +55,17 @@ def phase_display(progress, phase: str, total: float, note: str = "") -> tuple["
     return display, True
 
 
+def track(items, phase: str, total: int | None = None, enabled: bool = True):
+    """Yields `items`, counted on a display of one `phase` (a loop's progress: seeds, runs,
+    steps); `total`: how many when `items` has no length."""
+    total = len(items) if total is None else total
+    with RunProgress((phase,), enabled=enabled) as display:
+        display.start(phase, max(total, 1), f"{total} in all")
+        for item in items:
+            yield item
+            display.advance(1)
+
+
 class RunProgress:
     """The display of a run's `phases` (names, in the order they run) on `stream` (default
     standard error); `enabled` False prints nothing; `tty` None: whether `stream` is a

@@ -20,12 +20,12 @@ import json
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.runner import run_mission
 from drake_auv.reconstruction.figures import fig_reconstruction
 from drake_auv.reconstruction.products import mission_surface
+from drake_auv.progress import track
 from drake_auv.signals import VehicleState
 
 RUNS = {"replanned": [], "nominal only": ["steps.1.survey.replanning=false"]}
@@ -70,7 +70,7 @@ def main(argv=None) -> None:
     out.mkdir(parents=True, exist_ok=True)
     rows = {name: [] for name in RUNS}
     panels = []
-    for seed in tqdm(range(args.seeds), desc="seeds"):
+    for seed in track(range(args.seeds), "seeds"):
         for name, overrides in RUNS.items():
             row, surface = fly(seed, overrides, args.extra)
             rows[name].append(row)

@@ -21,7 +21,6 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 import trimesh
-from tqdm import tqdm
 
 from drake_auv.mission.config import load_mission
 from drake_auv.mission.plan import plan_mission
@@ -29,6 +28,7 @@ from drake_auv.mission.recording import finish_recording, prepare_scene
 from drake_auv.mission.report.summary import summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
 from drake_auv.mission.site import load_site
+from drake_auv.progress import track
 from drake_auv.signals import VehicleState
 from drake_auv.visualization.octree import depth_colours
 
@@ -128,7 +128,7 @@ def main(argv=None):
         raise ValueError(f"--error must be in [0, 5] m, got {args.error}")
     args.out.mkdir(parents=True, exist_ok=True)
     rows, figure_runs = [], []
-    for seed in tqdm(range(args.seeds), desc="seeds"):
+    for seed in track(range(args.seeds), "seeds"):
         for mode, replanning in MODES:
             spec = load_mission("breakwater", seed=seed, overrides=overrides(args, replanning))
             site = load_site(spec.site, spec.seed)

@@ -23,13 +23,13 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 from drake_auv.campaign.grid import parse_seeds
 from drake_auv.commands.outputs import output_folder
 from drake_auv.mission.config import load_mission, mission_to_dict
 from drake_auv.mission.report.summary import rounded, summarise
 from drake_auv.mission.runner import VEHICLE_RADIUS, run_mission
+from drake_auv.progress import track
 
 PLAN_MISSION = {"boulder_explore": "boulder", "breakwater_explore": "breakwater"}
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
@@ -68,9 +68,9 @@ def run_all(tasks: list[tuple], jobs: int) -> list[dict]:
     """`run_or_load` of every task, `jobs` dives at once (each in its own process and Diagram),
     in the order of `tasks`."""
     if jobs == 1:
-        return [run_or_load(t) for t in tqdm(tasks, desc="dives")]
+        return [run_or_load(t) for t in track(tasks, "dives")]
     with multiprocessing.get_context("spawn").Pool(jobs) as pool:
-        return list(tqdm(pool.imap(run_or_load, tasks), total=len(tasks), desc="dives"))
+        return list(track(pool.imap(run_or_load, tasks), "dives", len(tasks)))
 
 
 def dive_row(summary: dict) -> dict:

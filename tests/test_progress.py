@@ -193,3 +193,15 @@ def test_a_warning_clears_the_terminal_line_and_the_display_comes_back():
     assert after.startswith("\r[1/1] dive  60 %")
     print_line("after the run", stream)  # no display: the line alone
     assert stream.getvalue().endswith("\nafter the run\n")
+
+
+def test_a_tracked_loop_counts_its_items_and_ends_at_100_only_when_done(capsys):
+    from drake_auv.progress import track
+
+    assert list(track(range(4), "seeds")) == [0, 1, 2, 3]
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "[1/1] seeds   0 % 4 in all" and lines[-1].startswith("[1/1] seeds 100 %")
+    for item in track(range(4), "seeds"):
+        if item == 2:
+            break
+    assert "100 %" not in capsys.readouterr().err
