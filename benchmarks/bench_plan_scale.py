@@ -41,7 +41,7 @@ from drake_auv.terrain.readers import write_geotiff  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 TILE = ROOT / "drake_auv/data/monterey/MontereyBay.R_-121.815_-121.805_36.790_36.800.epsg3857.tif"
-CHILD = ("import resource, sys; from drake_auv.cli import main; code = main(sys.argv[1:]); "
+CHILD = ("import resource, sys; from drake_auv.cli import main; code = main(); "
          "r = resource.getrusage(resource.RUSAGE_SELF); "
          "print('RUSAGE', r.ru_utime + r.ru_stime, r.ru_maxrss, file=sys.stderr); sys.exit(code)")
 

@@ -36,8 +36,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs one subcommand. Bad input (ValueError) and every OSError end it with one line on
-    stderr and exit 2; warnings (e.g. a repaired ROI) are one line each."""
+    stderr and exit 2; warnings (e.g. a repaired ROI) are one line each. Run as the program
+    (`argv` None: the command line), the process keeps the memory it frees
+    (`resources.keep_freed_memory`)."""
     args = build_parser().parse_args(argv)
+    if argv is None:
+        from drake_auv.resources import keep_freed_memory
+
+        keep_freed_memory()
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning(args.command)
         try:

@@ -93,3 +93,13 @@ def test_chain_trajectory_times_the_pieces_like_their_concatenation():
     assert np.allclose(shifted.EvalDerivative(7.0 + 2.0, 1), whole.EvalDerivative(2.0, 1))
     single = PlannedPath.chain_trajectory([PlannedPath(np.zeros((1, 3)), 0.0, (0, 0, -1))], speed=0.5)
     assert single.end_time() == 1.0  # one sample: held 1 s
+
+
+def test_label_codes_are_numpys_unique_inverse():
+    labels = np.array(["transit", "planar", "slice", "planar", "transit", "zz", "planar"],
+                      dtype=object)
+    path = PlannedPath(np.zeros((7, 3)), np.zeros(7), np.tile([0, 0, -1.0], (7, 1)), labels)
+    names, codes = path.label_codes()
+    want_names, want_codes = np.unique(labels.astype(str), return_inverse=True)
+    assert names == want_names.tolist()
+    np.testing.assert_array_equal(codes, want_codes)

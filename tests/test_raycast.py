@@ -5,6 +5,7 @@ import pytest
 import trimesh
 
 from drake_auv.geometry import RayCaster
+from drake_auv.geometry.raycast import face_normals
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 
@@ -148,3 +149,24 @@ def test_robust_scene_is_watertight_where_the_fast_traversal_leaks():
     ranges, faces = robust.cast_unit(np.zeros(3), aims, 5.0)
     assert np.all(faces >= 0) and np.all(np.abs(ranges - 2.0) < 0.05)
     assert np.sum(fast.cast_unit(np.zeros(3), aims, 5.0)[1] < 0) > 10
+
+
+def test_face_normals_are_trimeshs_to_the_bit_and_zero_for_a_degenerate_face():
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=2.0)
+    np.testing.assert_array_equal(RayCaster(sphere).face_normals, sphere.face_normals)
+    v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    sliver = trimesh.Trimesh(v, [[0, 1, 2], [0, 1, 3]], process=False)
+    np.testing.assert_array_equal(face_normals(v, sliver.faces), [[0, 0, 0], [0, 0, 1]])
+
+
+def test_a_large_batch_is_cast_in_chunks_with_the_same_hits():
+    caster = RayCaster(trimesh.creation.icosphere(subdivisions=3, radius=2.0))
+    rng = np.random.default_rng(7)
+    origins = rng.uniform(-3.0, 3.0, (5000, 3))
+    directions = rng.normal(size=(5000, 3))
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    whole = caster.cast_unit(origins, directions, 4.0, chunk=10 ** 6)
+    chunked = caster.cast_unit(origins, directions, 4.0, chunk=64)
+    np.testing.assert_array_equal(chunked[1], whole[1])
+    np.testing.assert_array_equal(chunked[0], whole[0])
+    assert (whole[1] >= 0).any() and (whole[1] < 0).any()

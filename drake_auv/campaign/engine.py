@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import os
 
 
 from drake_auv.campaign.results import ResultsFile
 from drake_auv.campaign.task import one_line, run_task
 from drake_auv.progress import RunProgress
+from drake_auv.resources import usable_cores
 
 CONNECT_TIMEOUT_S = 10.0
 
@@ -40,14 +40,6 @@ def require_dask() -> None:
         raise CampaignError(f"campaigns run on Dask, which does not load ({one_line(err)}); "
                             "allowed: an install with the campaign extra, "
                             "pip install 'drake_auv[campaign]'") from None
-
-
-def usable_cores() -> int:
-    """The cores this process may run on (its CPU affinity, else the machine's count)."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
 
 
 def check_workers(workers: int | None) -> int:

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from drake_auv.geometry.raycast import RayCaster, RayHits
+from drake_auv.resources import map_chunks
 
 
 def _poses(origins, axes, aperture: float, max_range: float):
@@ -146,36 +147,36 @@ class FaceVisibility:
                 chunk: int = 16384) -> np.ndarray:
         """Whether any of the cameras at `origins` looking along `axes` sees each target face
         of `slots` (all if None): the test of `cameras` pair by pair, the pairs found from the
-        faces' side (a KD-tree of the poses, built here), so a subset of faces costs in
-        proportion to its size. (len(slots),) bool."""
+        faces' side (a KD-tree of the poses, built here, against one of each chunk of faces),
+        so a subset of faces costs in proportion to its size; the chunks run on the usable
+        cores (`resources.map_chunks`). (len(slots),) bool."""
         origins, axes = _poses(origins, axes, aperture, max_range)
         slots = (np.arange(len(self.target_index)) if slots is None
                  else np.asarray(slots, dtype=np.int64))
-        seen = np.zeros(len(slots), dtype=bool)
         if len(origins) == 0 or len(slots) == 0:
-            return seen
+            return np.zeros(len(slots), dtype=bool)
         tree = cKDTree(origins, balanced_tree=False, compact_nodes=False)
         cos_half = np.cos(0.5 * aperture)
-        for c0 in range(0, len(slots), chunk):
-            s = slots[c0:c0 + chunk]
-            lists = tree.query_ball_point(self.centroids[s], max_range, return_sorted=False)
-            counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
-            if counts.sum() == 0:
-                continue
-            pose = np.concatenate([np.asarray(x, dtype=np.int64) for x in lists])
-            face = np.repeat(np.arange(len(s)), counts)
+
+        def seen_in(chunk_slots: slice) -> np.ndarray:
+            s = slots[chunk_slots]
+            seen = np.zeros(len(s), dtype=bool)
+            pairs = cKDTree(self.centroids[s]).sparse_distance_matrix(tree, max_range,
+                                                                      output_type="ndarray")
+            face, pose = pairs["i"].astype(np.int64), pairs["j"].astype(np.int64)
             v = self.centroids[s[face]] - origins[pose]
             dist = np.linalg.norm(v, axis=1)
             u = v / np.maximum(dist, 1e-12)[:, None]
             keep = ((np.einsum("ij,ij->i", u, axes[pose]) >= cos_half) & (dist <= max_range)
                     & (np.einsum("ij,ij->i", u, self.normals[s[face]]) < 0))
             face, pose, u, dist = face[keep], pose[keep], u[keep], dist[keep]
-            if len(face) == 0:
-                continue
-            ranges, hit = self.caster.cast_unit(origins[pose], u, max_range)
-            ok = (hit == self.target_index[s[face]]) | ~(ranges < dist - (1e-3 + 1e-4 * dist))
-            seen[c0 + face[ok]] = True
-        return seen
+            if len(face):
+                ranges, hit = self.caster.cast_unit(origins[pose], u, max_range)
+                ok = (hit == self.target_index[s[face]]) | ~(ranges < dist - (1e-3 + 1e-4 * dist))
+                seen[face[ok]] = True
+            return seen
+
+        return np.concatenate(map_chunks(seen_in, len(slots), chunk))
 
     def beams(self, hits: RayHits, directions):
         """Target faces hit by sonar beams: (slots, angles between beam and inward normal)."""

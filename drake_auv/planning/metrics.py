@@ -23,6 +23,7 @@ import numpy as np
 
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.surface import TerrainSurface
+from drake_auv.resources import map_chunks
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,8 @@ def viewing_angles(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.n
 
 def coverage_mask(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.ndarray,
                   aperture_deg: float, sensor_range: float, chunk: int = 4096) -> np.ndarray:
-    """(ny, nx) bool: grid cells seen by at least one sample (cone and range test)."""
+    """(ny, nx) bool: grid cells seen by at least one sample (cone and range test), `chunk`
+    samples at a time on the usable cores (`resources.map_chunks`)."""
     bathy = surface.bathy
     ny, nx = bathy.shape
     dx, dy = bathy.spacing
@@ -86,9 +88,10 @@ def coverage_mask(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.nd
     oi, oj = oi[keep], oj[keep]
     seen = np.zeros(ny * nx, dtype=bool)
     z = surface.z
-    for k in range(0, len(points), chunk):
-        p = points[k:k + chunk]
-        d = sensor_dir[k:k + chunk]
+
+    def mark(k: slice) -> None:  # the chunks only ever store True: their order is free
+        p = points[k]
+        d = sensor_dir[k]
         c = p[:, :2] + centre_offset * d[:, :2]
         ci = np.rint((c[:, 1] - bathy.origin[1]) / dy).astype(int)
         cj = np.rint((c[:, 0] - bathy.origin[0]) / dx).astype(int)
@@ -103,6 +106,8 @@ def coverage_mask(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.nd
         along = vx * d[:, 0:1] + vy * d[:, 1:2] + vz * d[:, 2:3]
         inside = ok & (dist2 <= sensor_range ** 2) & (along > 0) & (along * along >= cos_half ** 2 * dist2)
         seen[(ii * nx + jj)[inside]] = True
+
+    map_chunks(mark, len(points), chunk)
     return seen.reshape(ny, nx)
 
 

@@ -133,20 +133,20 @@ def evaluate_plan_3d(plan, max_faces: int = SAMPLED_FACES,
     strata = high_face.astype(np.int8)
     sampled = sampled_faces(strata, max_faces, exact_faces)
     path, lawn = plan.path, plan.lawnmower
-    names, code = np.unique(path.labels.astype(str), return_inverse=True)
+    names, code = path.label_codes()
     poses = {lab: (path.points[code == k], path.sensor_dir[code == k], None)
              for k, lab in enumerate(names) if lab != "transit"}
     imaging = list(poses)
     groups = {"high_slope": (["slice"], high_face)}
     if p.slice_sensor == "normal":
-        m = path.labels.astype(str) == "slice"
+        m = path.labels == "slice"
         poses["fixed_tilt"] = (path.points[m], fixed_tilt_axes(plan, path.points[m],
                                                                path.sensor_dir[m]), high_face)
         groups["high_slope_fixed_tilt"] = (["fixed_tilt"], high_face)
     groups["planar"] = (["planar"], ~high_face)
     groups["total"] = (imaging, None)
     if lawn is not None:
-        m = lawn.labels.astype(str) != "transit"
+        m = lawn.labels != "transit"
         poses["lawnmower"] = (lawn.points[m], lawn.sensor_dir[m], None)
         groups["lawnmower"] = (["lawnmower"], None)
         groups["lawnmower_high_slope"] = (["lawnmower"], high_face)

@@ -121,6 +121,16 @@ class PlannedPath:
         return {str(lab): float(seg[self.labels[1:] == lab].sum())
                 for lab in dict.fromkeys(self.labels.tolist())}
 
+    def label_codes(self) -> tuple[list[str], np.ndarray]:
+        """(names, codes): the distinct labels in sorted order and (N,) each sample's index
+        into them (what `np.unique(labels, return_inverse=True)` gives, without sorting the
+        samples' strings)."""
+        names = sorted(set(self.labels.tolist()))
+        codes = np.zeros(len(self.labels), dtype=np.intp)
+        for k, name in enumerate(names[1:], start=1):
+            codes[self.labels == name] = k
+        return names, codes
+
     def select(self, mask) -> "PlannedPath":
         """The samples where `mask` (booleans, or indices) selects, in order."""
         mask = np.asarray(mask)
@@ -217,7 +227,7 @@ class PlannedPath:
         (numbers with 6 decimals; the bytes `csv.writer` writes, formatted `chunk` rows at a
         time in one string operation rather than a call per row)."""
         values = np.column_stack([self.points, self.heading, self.sensor_dir]).astype(object)
-        names, code = np.unique(self.labels.astype(str), return_inverse=True)
+        names, code = self.label_codes()
         quoted = []
         for name in names:  # each label as csv.writer quotes it
             buf = io.StringIO()

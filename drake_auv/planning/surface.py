@@ -12,6 +12,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from drake_auv.resources import map_chunks, usable_cores
 from drake_auv.terrain.bathymetry import Bathymetry
 
 
@@ -103,7 +104,8 @@ class TerrainSurface:
         xs, ys, zz = self._dense_grid(fx, fy)
         xx, yy = np.meshgrid(xs, ys)
         self._tree_points = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
-        self._tree = cKDTree(self._tree_points, balanced_tree=False)
+        self._tree = cKDTree(self._tree_points, leafsize=64, balanced_tree=False,
+                             compact_nodes=False)  # half the build time, no slower queries
 
     def distance(self, points, upper_bound: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
         """(N,) distance from each point to the surface, m, and (N, 3) the nearest surface sample.
@@ -115,7 +117,7 @@ class TerrainSurface:
         if self._tree is None:
             self._build_tree()
         d, idx = self._tree.query(np.asarray(points, dtype=float), k=1,
-                                  distance_upper_bound=upper_bound)
+                                  distance_upper_bound=upper_bound, workers=usable_cores())
         found = idx < len(self._tree_points)
         nearest = np.full((len(d), 3), np.nan)
         nearest[found] = self._tree_points[idx[found]]
@@ -178,7 +180,8 @@ class TerrainSurface:
     def safe_elevation_at(self, x, y, omega: float, chunk: int = 8192) -> np.ndarray:
         """(N,) lowest elevation at which a point above (x, y) is at least `omega` from the
         surface: the highest point of the hemispheres of radius omega (plus the sampling
-        margins) standing on the surface samples around it."""
+        margins) standing on the surface samples around it; `chunk` points at a time on the
+        usable cores (`resources.map_chunks`)."""
         z, origin, (cx, cy), block_radius, target = self._clearance_samples(omega)
         reach = target + block_radius + 0.5 * np.hypot(cx, cy)
         ni, nj = int(np.ceil(reach / cy)), int(np.ceil(reach / cx))
@@ -195,9 +198,10 @@ class TerrainSurface:
         y = np.asarray(y, dtype=float)
         out = np.empty(len(x))
         ny, nx = z.shape
-        for k in range(0, len(x), chunk):
-            fj = (x[k:k + chunk] - origin[0]) / cx
-            fi = (y[k:k + chunk] - origin[1]) / cy
+
+        def fill(k: slice) -> None:
+            fj = (x[k] - origin[0]) / cx
+            fi = (y[k] - origin[1]) / cy
             j0 = np.clip(np.rint(fj).astype(int), 0, nx - 1)
             i0 = np.clip(np.rint(fi).astype(int), 0, ny - 1)
             ex = ((fj - j0) * cx).astype(np.float32)[:, None]  # offset from the nearest node
@@ -208,7 +212,9 @@ class TerrainSurface:
             left = t2 - r2
             height = np.where(left >= 0, np.sqrt(np.maximum(left, np.float32(0.0))), -np.inf)
             base = ((i0 + ni) * zpad.shape[1] + (j0 + nj))[:, None]
-            out[k:k + chunk] = (np.take(zpad, base + flat_offsets) + height).max(axis=1)
+            out[k] = (np.take(zpad, base + flat_offsets) + height).max(axis=1)
+
+        map_chunks(fill, len(x), chunk)
         return out + 1e-3  # 1 mm over the float32 rounding
 
     def enforce_clearance(self, points: np.ndarray, omega: float, copy: bool = True) -> np.ndarray:
@@ -221,15 +227,24 @@ class TerrainSurface:
         return points
 
     # -- rays ----------------------------------------------------------------------------------
-    def raycast(self, origins, directions, max_range: float, step: float | None = None):
+    def raycast(self, origins, directions, max_range: float, step: float | None = None,
+                chunk: int = 32768):
         """First intersection of rays with the height field, by marching and linear refinement.
 
         Returns (N,) ranges (NaN where a ray leaves the grid or goes beyond `max_range` without
-        a hit) and (N, 3) hit points. `step` defaults to a third of the smallest cell.
+        a hit) and (N, 3) hit points. `step` defaults to a third of the smallest cell. The rays
+        are marched `chunk` at a time on the usable cores (`resources.map_chunks`).
         """
         o = np.asarray(origins, dtype=float)
         d = np.asarray(directions, dtype=float)
         step = float(min(self.spacing) / 3.0 if step is None else step)
+        ranges = np.concatenate([np.zeros(0)] + map_chunks(
+            lambda s: self._march(o[s], d[s], max_range, step), len(o), chunk))
+        hits = o + np.nan_to_num(ranges)[:, None] * d
+        return ranges, hits
+
+    def _march(self, o: np.ndarray, d: np.ndarray, max_range: float, step: float) -> np.ndarray:
+        """`raycast`'s ranges for one chunk of rays."""
         ts = np.arange(0.0, max_range + step, step)
         ranges = np.full(len(o), np.nan)
         prev_h = o[:, 2] - self.elevation(o[:, 0], o[:, 1])
@@ -251,5 +266,4 @@ class TerrainSurface:
             alive[idx[out & ~hit]] = False
             prev_h[idx] = h
             prev_t[idx] = t
-        hits = o + np.nan_to_num(ranges)[:, None] * d
-        return ranges, hits
+        return ranges
