@@ -3,6 +3,7 @@ ends; the dive's share is the mission's own (the legs flown), not its time budge
 
 import io
 import re
+import sys
 
 import numpy as np
 import pytest
@@ -205,3 +206,53 @@ def test_a_tracked_loop_counts_its_items_and_ends_at_100_only_when_done(capsys):
         if item == 2:
             break
     assert "100 %" not in capsys.readouterr().err
+
+
+class _Terminal(io.StringIO):
+    """Standard error on a terminal."""
+
+    def isatty(self):
+        return True
+
+
+def _fails(*args, **kwargs):
+    raise RuntimeError("a stage failed midway")
+
+
+def test_a_call_that_fails_ends_its_own_displays_line_and_leaves_a_callers(monkeypatch,
+                                                                          tmp_path):
+    """`plan_coverage`, `write_outputs` and `write_figures`, a stage of which fails: given
+    `progress=True`, the terminal's line ends where the work stopped; given a caller's display,
+    it stays the caller's to end."""
+    from drake_auv.formats import outputs
+    from drake_auv.planning import coverage_plan, figures
+    from drake_auv.planning.parameters import CoverageParameters
+    from drake_auv.progress import _SHOWN, PLAN_PHASES
+    from drake_auv.terrain.bathymetry import Bathymetry
+
+    bathy = Bathymetry(np.full((41, 31), -30.0), (0.5, 0.5))
+    params = CoverageParameters(omega=2.0)
+    plan = coverage_plan.plan_coverage(bathy, params)
+    monkeypatch.setattr(coverage_plan, "decompose", _fails)
+    monkeypatch.setattr(outputs, "report_dict", _fails)
+    monkeypatch.setitem(figures.PLAN_VIEWS, "lanes.png", _fails)
+    calls = {
+        "plan": lambda progress: coverage_plan.plan_coverage(bathy, params, progress=progress),
+        "outputs": lambda progress: outputs.write_outputs(plan, tmp_path, figures=False,
+                                                          metrics_3d=False, progress=progress),
+        "figures": lambda progress: figures.write_figures(plan, tmp_path, progress=progress)}
+    for phase, call in calls.items():
+        terminal = _Terminal()
+        monkeypatch.setattr(sys, "stderr", terminal)
+        with pytest.raises(RuntimeError, match="failed midway"):
+            call(True)
+        text = terminal.getvalue()
+        assert text.startswith(f"\r[1/1] {phase}") and text.endswith("\n"), (phase, text)
+        assert "100 %" not in text and terminal not in _SHOWN
+        caller = RunProgress(PLAN_PHASES, stream=terminal, tty=True)
+        caller.start("plan")
+        with pytest.raises(RuntimeError, match="failed midway"):
+            call(caller)
+        assert caller.phase is not None and _SHOWN[terminal] is caller, phase
+        assert not terminal.getvalue().endswith("\n"), phase
+        caller.close(completed=False)

@@ -5,6 +5,7 @@ PNG figures (`planning.figures`).
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from pathlib import Path
 
 from drake_auv.formats import ExportOptions
@@ -59,39 +60,38 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool | RunProgre
     written, extras, missions = [], {}, ()
     display, owned = phase_display(progress, "outputs",
                                    output_stages(exports, figures, metrics_3d), "path.csv")
-    plan.path.to_csv(outdir / "path.csv")
-    written.append(outdir / "path.csv")
-    for fmt in EXPORTS.values():
-        if fmt.name not in exports:
-            continue
-        display.advance(1, fmt.stage)
-        exported = fmt.write(plan, geo, outdir, options, missions)
-        written += exported.files
-        if exported.figures is not None:
-            extras[fmt.name] = exported.figures
-        missions += exported.missions
-    m3d = metrics_3d if isinstance(metrics_3d, dict) else None
-    if metrics_3d is True:
-        from drake_auv.planning.metrics3d import evaluate_plan_3d
+    with display if owned else nullcontext():  # an owned display ends with the work
+        plan.path.to_csv(outdir / "path.csv")
+        written.append(outdir / "path.csv")
+        for fmt in EXPORTS.values():
+            if fmt.name not in exports:
+                continue
+            display.advance(1, fmt.stage)
+            exported = fmt.write(plan, geo, outdir, options, missions)
+            written += exported.files
+            if exported.figures is not None:
+                extras[fmt.name] = exported.figures
+            missions += exported.missions
+        m3d = metrics_3d if isinstance(metrics_3d, dict) else None
+        if metrics_3d is True:
+            from drake_auv.planning.metrics3d import evaluate_plan_3d
 
-        display.advance(1, "3D metrics")
-        m3d = evaluate_plan_3d(plan)
-    display.advance(1, "reports")
-    rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
-    markdown = report_markdown(plan, rep, m3d, export_warnings(rep), export_notes(rep))
-    if current is not None:
-        from drake_auv.vehicle.current_feasibility import current_markdown
+            display.advance(1, "3D metrics")
+            m3d = evaluate_plan_3d(plan)
+        display.advance(1, "reports")
+        rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
+        markdown = report_markdown(plan, rep, m3d, export_warnings(rep), export_notes(rep))
+        if current is not None:
+            from drake_auv.vehicle.current_feasibility import current_markdown
 
-        markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
-        rep["current"] = current
-    write_text(outdir / "report.md", markdown)
-    write_json(outdir / "report.json", rep)
-    written += [outdir / "report.md", outdir / "report.json"]
-    display.advance(1)
-    if figures:
-        from drake_auv.planning.figures import write_figures
+            markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
+            rep["current"] = current
+        write_text(outdir / "report.md", markdown)
+        write_json(outdir / "report.json", rep)
+        written += [outdir / "report.md", outdir / "report.json"]
+        display.advance(1)
+        if figures:
+            from drake_auv.planning.figures import write_figures
 
-        written += write_figures(plan, outdir, progress=display, geo=geo)
-    if owned:
-        display.close()
+            written += write_figures(plan, outdir, progress=display, geo=geo)
     return written

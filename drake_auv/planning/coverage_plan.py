@@ -8,6 +8,7 @@ transits -> the lawnmower baseline -> metrics for both.
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -189,73 +190,72 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
                               params.slice_spacing, params.slice_count)
               for r in range(1, labels.n_regions + 1)}
     display, owned = phase_display(progress, "plan", len(PLAN_STAGES), PLAN_STAGES[0])
-    display.advance(1, PLAN_STAGES[1])  # classified (with the slicing planes)
-    planar = labels.planar
-    if params.sweep_angle_deg is not None:
-        angle = np.radians(float(params.sweep_angle_deg))
-    else:
-        angle = best_sweep_angle(bathy, planar, spacing) if planar.any() else 0.0
-    dec = decompose(bathy, planar, angle)
-    display.advance(1, PLAN_STAGES[2])
-    # Graph over planar cells (0..C-1) and high-slope regions (C..C+R-1).
-    n_cells = len(dec.cells)
-    adjacency = dec.adjacency() + [[] for _ in range(labels.n_regions)]
-    for c, r in _region_adjacency(dec, bathy, labels.regions):
-        adjacency[c].append(n_cells + r - 1)
-        adjacency[n_cells + r - 1].append(c)
-    positions = [c.centroid(dec.frame) for c in dec.cells]
-    if labels.n_regions:
-        rc = np.array(ndimage.center_of_mass(labels.high, labels.regions,
-                                             np.arange(1, labels.n_regions + 1)))
-        positions += list(np.asarray(bathy.origin) + rc[:, ::-1] * np.asarray(bathy.spacing))
-    positions = np.array(positions).reshape(-1, 2)
-    order = exhaustive_walk(adjacency, positions, 0)
-    display.advance(1, PLAN_STAGES[3])
-    route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
-    contours_done: list[Contour] = []
-    visit = []
-    slivers = sliver_cells(dec, 0.5 * spacing ** 2)
-    for node in order:
-        here = route.position
-        if node < n_cells:
-            if node in slivers:
+    with display if owned else nullcontext():  # an owned display ends with the work
+        display.advance(1, PLAN_STAGES[1])  # classified (with the slicing planes)
+        planar = labels.planar
+        if params.sweep_angle_deg is not None:
+            angle = np.radians(float(params.sweep_angle_deg))
+        else:
+            angle = best_sweep_angle(bathy, planar, spacing) if planar.any() else 0.0
+        dec = decompose(bathy, planar, angle)
+        display.advance(1, PLAN_STAGES[2])
+        # Graph over planar cells (0..C-1) and high-slope regions (C..C+R-1).
+        n_cells = len(dec.cells)
+        adjacency = dec.adjacency() + [[] for _ in range(labels.n_regions)]
+        for c, r in _region_adjacency(dec, bathy, labels.regions):
+            adjacency[c].append(n_cells + r - 1)
+            adjacency[n_cells + r - 1].append(c)
+        positions = [c.centroid(dec.frame) for c in dec.cells]
+        if labels.n_regions:
+            rc = np.array(ndimage.center_of_mass(labels.high, labels.regions,
+                                                 np.arange(1, labels.n_regions + 1)))
+            positions += list(np.asarray(bathy.origin) + rc[:, ::-1] * np.asarray(bathy.spacing))
+        positions = np.array(positions).reshape(-1, 2)
+        order = exhaustive_walk(adjacency, positions, 0)
+        display.advance(1, PLAN_STAGES[3])
+        route = RouteBuilder(surface, omega, ds, ceiling=-float(min_depth), nogo=nogo)
+        contours_done: list[Contour] = []
+        visit = []
+        slivers = sliver_cells(dec, 0.5 * spacing ** 2)
+        for node in order:
+            here = route.position
+            if node < n_cells:
+                if node in slivers:
+                    continue
+                visit.append(("cell", node))
+                lanes = cell_lanes(dec.cells[node], dec.frame, spacing)
+                route.add_terrain_following(
+                    boustrophedon_waypoints(lanes, dec.frame, None if here is None else here[:2]),
+                    "planar")
                 continue
-            visit.append(("cell", node))
-            lanes = cell_lanes(dec.cells[node], dec.frame, spacing)
-            route.add_terrain_following(
-                boustrophedon_waypoints(lanes, dec.frame, None if here is None else here[:2]),
-                "planar")
-            continue
-        r = node - n_cells + 1
-        visit.append(("region", r))
-        mask = labels.regions == r
-        depression = (fixed_depression(labels.slope[mask]) if params.slice_sensor == "fixed-tilt"
-                      else None)
-        per_level = slice_region(surface, mask, r, levels[r], omega, ds, min_length=spacing,
-                                 depression=depression)
-        start = here if here is not None else np.append(positions[node], surface.z[mask].min())
-        for c in order_contours(per_level, start):
-            route.add_oriented(c.path, c.sensor_dir, "slice")
-            contours_done.append(c)
-    display.advance(1, PLAN_STAGES[4])
-    path = route.build()
-    lawn = None
-    if baseline:
-        # lanes along the fewest turns whatever the plan's sweep angle, at its sample spacing
-        lawn = plan_lawnmower(bathy, replace(params, sweep_angle_deg=None, sample_spacing=ds),
-                              lane_spacing_m=spacing, surface=surface, nogo=nogo)
-    display.advance(1, PLAN_STAGES[5])
-    used = replace(params, sweep_angle_deg=float(np.degrees(angle)), sample_spacing=ds,
-                   sensor_range=(2.0 * omega if params.sensor_range is None
-                                 else float(params.sensor_range)), min_depth=float(min_depth))
-    plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, used, spacing,
-                        route.unreachable, [] if nogo is None else _exterior_rings(nogo.zones),
-                        surface=surface)
-    if compute_metrics and baseline:
-        from drake_auv.planning.metrics import evaluate_plan
+            r = node - n_cells + 1
+            visit.append(("region", r))
+            mask = labels.regions == r
+            depression = (fixed_depression(labels.slope[mask])
+                          if params.slice_sensor == "fixed-tilt" else None)
+            per_level = slice_region(surface, mask, r, levels[r], omega, ds, min_length=spacing,
+                                     depression=depression)
+            start = here if here is not None else np.append(positions[node], surface.z[mask].min())
+            for c in order_contours(per_level, start):
+                route.add_oriented(c.path, c.sensor_dir, "slice")
+                contours_done.append(c)
+        display.advance(1, PLAN_STAGES[4])
+        path = route.build()
+        lawn = None
+        if baseline:
+            # lanes along the fewest turns whatever the plan's sweep angle, at its sample spacing
+            lawn = plan_lawnmower(bathy, replace(params, sweep_angle_deg=None, sample_spacing=ds),
+                                  lane_spacing_m=spacing, surface=surface, nogo=nogo)
+        display.advance(1, PLAN_STAGES[5])
+        used = replace(params, sweep_angle_deg=float(np.degrees(angle)), sample_spacing=ds,
+                       sensor_range=(2.0 * omega if params.sensor_range is None
+                                     else float(params.sensor_range)), min_depth=float(min_depth))
+        plan = CoveragePlan(bathy, path, lawn, labels, dec, contours_done, visit, used, spacing,
+                            route.unreachable, [] if nogo is None else _exterior_rings(nogo.zones),
+                            surface=surface)
+        if compute_metrics and baseline:
+            from drake_auv.planning.metrics import evaluate_plan
 
-        plan = replace(plan, metrics=evaluate_plan(plan))
-    display.advance(1)
-    if owned:
-        display.close()
+            plan = replace(plan, metrics=evaluate_plan(plan))
+        display.advance(1)
     return plan

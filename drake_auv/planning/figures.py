@@ -9,6 +9,7 @@ backend needed).
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -243,12 +244,11 @@ def write_figures(plan, outdir, dpi: int = 110, progress=False,
     written = []
     makers = {**{k: (lambda plan, f=f: f(plan, geo)) for k, f in PLAN_VIEWS.items()}, **VIEWS_3D}
     display, owned = phase_display(progress, "figures", len(makers))
-    for name, make in makers.items():
-        with display.step(name):
-            fig = make(plan)
-            with replacing(outdir / name) as temporary:
-                fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
-            written.append(outdir / name)
-    if owned:
-        display.close()
+    with display if owned else nullcontext():  # an owned display ends with the work
+        for name, make in makers.items():
+            with display.step(name):
+                fig = make(plan)
+                with replacing(outdir / name) as temporary:
+                    fig.savefig(temporary, dpi=dpi, bbox_inches="tight")
+                written.append(outdir / name)
     return written
