@@ -142,6 +142,7 @@ def run(args) -> int:
     from drake_auv.formats.outputs import write_outputs
     from drake_auv.formats.registry import (check_exports, export_notes, export_warnings,
                                             parse_exports)
+    from drake_auv.planning.metrics import PlanMetrics
     from drake_auv.planning.report import mission_time_line, table3_markdown
     from drake_auv.progress import PLAN_PHASES, RunProgress
     from drake_auv.terrain.roi import parse_roi
@@ -193,7 +194,8 @@ def run(args) -> int:
             no_go = shapely.union_all([read_zones(f, bathy) for f in args.no_go])
     with RunProgress(PLAN_PHASES) as progress:  # one display, to the last file
         params = CoverageParameters(**{field: getattr(args, field) for field in OPTIONS})
-        plan = plan_coverage(bathy, params, roi=roi, no_go=no_go, progress=progress)
+        plan = plan_coverage(bathy, params, roi=roi, no_go=no_go, compute_metrics=False,
+                             progress=progress)  # the grid metrics beside the outputs
         flow = None
         if current is not None:
             from drake_auv.vehicle.current_feasibility import current_report
@@ -203,10 +205,10 @@ def run(args) -> int:
                               exports=exports, origin_lonlat=origin, surge_velocity=args.speed,
                               metrics_3d=not args.no_3d_metrics, max_items=args.max_items,
                               ardusub_frames=args.ardusub_frames, heave_in_3d=args.heave_in_3d,
-                              reference_table=args.reference_table, current=flow)
+                              reference_table=args.reference_table, current=flow,
+                              grid_metrics=True)
     report = json.loads((Path(args.out) / "report.json").read_text())
-    if plan.metrics is not None:
-        print(table3_markdown(plan.metrics))
+    print(table3_markdown(PlanMetrics.from_dict(report["metrics"])))
     print(mission_time_line(report["mission_time"]))
     if flow is not None:
         from drake_auv.vehicle.current_feasibility import summary_lines

@@ -57,6 +57,13 @@ class PlanMetrics:
                                                ("planar", self.planar), ("total", self.total),
                                                ("lawnmower", self.lawnmower))}
 
+    @classmethod
+    def from_dict(cls, record: dict) -> "PlanMetrics":
+        """The metrics of a `to_dict` record as report.json holds it (null for NaN)."""
+        return cls(**{name: SegmentMetrics(**{k: float("nan") if v is None else v
+                                              for k, v in fields.items()})
+                      for name, fields in record.items()})
+
 
 def viewing_angles(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.ndarray,
                    sensor_range: float) -> np.ndarray:

@@ -106,12 +106,11 @@ def slice_region(surface: TerrainSurface, region_mask: np.ndarray, region: int,
     The sensor looks along the inward normal (`depression` None) or is tilted at a fixed
     `depression` (see `sensor_axes`); the path point is Omega back along the axis from the
     contour, which for the normal is the offset Omega along the surface normal."""
-    grown = ndimage.binary_dilation(region_mask, iterations=1)
-    rows = np.flatnonzero(grown.any(axis=1))
-    cols = np.flatnonzero(grown.any(axis=0))
-    box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))  # contour the region's box
+    (box,) = ndimage.find_objects(region_mask.astype(np.int8))
+    box = tuple(slice(max(b.start - 1, 0), b.stop + 1) for b in box)  # contour the region's box
+    grown = ndimage.binary_dilation(region_mask[box], iterations=1)  # one cell on each side
     bathy = surface.bathy
-    zm = np.ma.array(surface.z[box], mask=~grown[box])
+    zm = np.ma.array(surface.z[box], mask=~grown)
     gen = contourpy.contour_generator(bathy.x[box[1]], bathy.y[box[0]], zm,
                                       line_type=contourpy.LineType.Separate)
     out = []

@@ -53,7 +53,8 @@ def bathymetry_to_mesh(bathy: Bathymetry, stride: int = 1) -> trimesh.Trimesh:
     # Interleave so the two triangles of a square are neighbours in the face list.
     faces = faces.reshape(2, -1, 3).transpose(1, 0, 2).reshape(-1, 3)
     mesh = trimesh.Trimesh(vertices=np.nan_to_num(vertices), faces=faces, process=False)
-    mesh.remove_unreferenced_vertices()
+    if not quad_ok.all():  # else every sample is a corner of some square
+        mesh.remove_unreferenced_vertices()
     return mesh
 
 
