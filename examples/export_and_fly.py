@@ -11,8 +11,9 @@ sonars. Three missions on the same site and seed:
 - `cola2`: the plan's `mission.xml` flown as COLA2 executes it (`fly`);
 - `ardusub`: its `mission.plan` flown as ArduSub AUTO executes it (`fly`).
 
-Writes the exports, each mission's report (unless `--no-reports`), `comparison.md` / `comparison.json` (clearance,
-coverage, duration, contact) and `comparison.png` (tracks from above, clearance against time).
+Writes the exports, each mission's report (unless `--no-reports`), `comparison.md` /
+`comparison.json` (clearance, contact, the supervisor's safety responses, coverage, duration)
+and `comparison.png` (tracks from above, clearance against time).
 """
 
 from __future__ import annotations
@@ -99,17 +100,19 @@ def main() -> None:
                           contact=summary["contact"],
                           multibeam_coverage=summary["coverage"]["multibeam"],
                           duration_s=result.log.duration_s, outcomes=result.dive.outcomes,
+                          safety_responses=result.dive.responses,
                           files=files or [],
                           distance_mean_m=summary["distance_to_target"]["mean_m"])
     (out / "comparison.json").write_text(json.dumps(rows, indent=2))
     lines = [f"# Export and fly: {args.size:g} m x {args.size:g} m of {TILE.name}, Omega "
              f"{args.omega:g} m, seed {args.seed}", "",
-             "| mission | min clearance (m) | contact | multibeam coverage | mean distance (m) "
-             "| duration (s) |", "| --- | ---: | --- | ---: | ---: | ---: |"]
+             "| mission | min clearance (m) | contact | safety responses | multibeam coverage "
+             "| mean distance (m) | duration (s) |",
+             "| --- | ---: | --- | ---: | ---: | ---: | ---: |"]
     for name, r in rows.items():
         lines.append(f"| {name} | {r['min_clearance_m']:.2f} | {'yes' if r['contact'] else 'no'} "
-                     f"| {100 * r['multibeam_coverage']:.1f} % | {r['distance_mean_m']:.2f} "
-                     f"| {r['duration_s']:.0f} |")
+                     f"| {len(r['safety_responses'])} | {100 * r['multibeam_coverage']:.1f} % "
+                     f"| {r['distance_mean_m']:.2f} | {r['duration_s']:.0f} |")
     (out / "comparison.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     fig, (top, clear) = plt.subplots(1, 2, figsize=(13, 5.5))
