@@ -172,3 +172,19 @@ def test_a_hold_longer_than_an_hour_in_a_flown_file_is_refused_naming_the_item(t
     (out / "mission.xml").write_text(re.sub(r"<time>[^<]*</time>", "<time>1e9</time>", xml))
     with pytest.raises(ValueError, match=r"park field 'time' must be in \[0, 3600\] s"):
         read_cola2(out / "mission.xml")
+
+
+def test_the_plan_commands_table_reads_back_a_null_figure(tmp_path, capsys):
+    from drake_auv.planning.metrics import PlanMetrics
+
+    z = -20.0 * np.ones((25, 30))  # flat: no high-slope samples, NaN viewing angles there
+    grid = tmp_path / "flat.npz"
+    np.savez(grid, z=z, spacing=[1.0, 1.0])
+    assert main(["plan", str(grid), "--no-figures", "--no-3d-metrics", "--omega", "3",
+                 "-o", str(tmp_path / "o")]) == 0
+    record = _strict((tmp_path / "o" / "report.json").read_text())["metrics"]
+    assert record["high_slope"]["view_mean_deg"] is None
+    metrics = PlanMetrics.from_dict(record)
+    assert math.isnan(metrics.high_slope.view_mean_deg)
+    assert metrics.total.length == record["total"]["length"]
+    assert "| Total (both regions) |" in capsys.readouterr().out

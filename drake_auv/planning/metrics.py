@@ -59,10 +59,12 @@ class PlanMetrics:
 
     @classmethod
     def from_dict(cls, record: dict) -> "PlanMetrics":
-        """The metrics of a `to_dict` record as report.json holds it (null for NaN)."""
-        return cls(**{name: SegmentMetrics(**{k: float("nan") if v is None else v
-                                              for k, v in fields.items()})
-                      for name, fields in record.items()})
+        """The metrics of a `to_dict` record as report.json holds it (null for a figure that
+        is not a number, with its `KEY_null_reason` beside it)."""
+        names = SegmentMetrics.__dataclass_fields__
+        return cls(**{row: SegmentMetrics(**{k: float("nan") if fields[k] is None else fields[k]
+                                             for k in names})
+                      for row, fields in record.items()})
 
 
 def viewing_angles(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.ndarray,
