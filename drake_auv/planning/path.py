@@ -226,7 +226,7 @@ class PlannedPath:
         """Writes one row per sample with the columns x, y, z, heading, sensor_x/y/z, label
         (numbers with 6 decimals; the bytes `csv.writer` writes, formatted `chunk` rows at a
         time in one string operation rather than a call per row)."""
-        values = np.column_stack([self.points, self.heading, self.sensor_dir]).astype(object)
+        values = np.column_stack([self.points, self.heading, self.sensor_dir])
         names, code = self.label_codes()
         quoted = []
         for name in names:  # each label as csv.writer quotes it
@@ -238,7 +238,8 @@ class PlannedPath:
         with open_replacing(filename, "w", newline="") as f:
             csv.writer(f).writerow(_CSV_FIELDS)
             for k in range(0, len(values), chunk):
-                block = np.column_stack([values[k:k + chunk], quoted[code[k:k + chunk]]])
+                block = np.column_stack([values[k:k + chunk].astype(object),
+                                         quoted[code[k:k + chunk]]])  # Python floats per chunk
                 f.write((row * len(block)) % tuple(block.ravel().tolist()))
 
     @classmethod

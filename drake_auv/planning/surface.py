@@ -102,8 +102,11 @@ class TerrainSurface:
         fx = max(1, int(np.ceil(self.spacing[0] / self.distance_resolution)))
         fy = max(1, int(np.ceil(self.spacing[1] / self.distance_resolution)))
         xs, ys, zz = self._dense_grid(fx, fy)
-        xx, yy = np.meshgrid(xs, ys)
-        self._tree_points = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
+        points = np.empty((len(ys), len(xs), 3))  # filled in place: no grid-sized temporaries
+        points[..., 0] = xs
+        points[..., 1] = ys[:, None]
+        points[..., 2] = zz
+        self._tree_points = points.reshape(-1, 3)
         self._tree = cKDTree(self._tree_points, leafsize=64, balanced_tree=False,
                              compact_nodes=False)  # half the build time, no slower queries
 
