@@ -56,7 +56,8 @@ class FaceVisibility:
         self.target_index = np.flatnonzero(target)  # world face index of each target face
         self.centroids, crosses = face_crosses(np.asarray(mesh.vertices, dtype=float),
                                                np.asarray(mesh.faces)[self.target_index])
-        self.normals = caster.face_normals[self.target_index]
+        self.normals = (caster.face_normals if len(self.target_index) == num_faces
+                        else caster.face_normals[self.target_index])  # shared, never written
         self.areas = np.sqrt((crosses ** 2).sum(axis=1)) / 2.0  # trimesh's `area_faces`
         self._tree = None  # of the centroids, built on the first camera query
         # Target slot of each world face (-1: not a target), to map sonar hits.
