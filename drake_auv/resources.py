@@ -10,7 +10,7 @@ scipy's KD-trees, Embree). The results come back in chunk order and each chunk i
 alone, so the outcome does not depend on the number of cores.
 
 `keep_freed_memory()` has glibc's malloc keep the memory a program frees for its next
-allocations (the `drake-auv` program calls it for its own process).
+allocations (`drake-auv plan` run as the program asks for it).
 """
 
 from __future__ import annotations

@@ -48,3 +48,12 @@ def test_pauses_nest_and_overlap_across_threads():
     assert not gc.isenabled()
     inner.__exit__(None, None, None)
     assert gc.isenabled()
+
+
+def test_only_the_plan_command_asks_to_keep_freed_memory():
+    from drake_auv.cli import build_parser
+
+    parser = build_parser()
+    assert parser.parse_args(["plan", "site.tif", "-o", "out"]).keep_freed_memory is True
+    assert not getattr(parser.parse_args(["run", "pool", "-o", "out"]), "keep_freed_memory",
+                       False)
