@@ -14,7 +14,7 @@ from __future__ import annotations
 import shutil
 import sys
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 
 REDRAW_S = 0.1  # s of wall time between two redraws of the terminal's line
 LOG_STEP = 0.1  # share of a phase between two lines of a log
@@ -38,21 +38,22 @@ def print_line(line: str, file=None) -> None:
         shown.write(line, file)
 
 
-def phase_display(progress, phase: str, total: float, note: str = "") -> tuple["RunProgress", bool]:
-    """(display, owned) for work of `total` units called `phase`, begun with `note`: a caller's
-    `RunProgress` that lists `phase` starts it (one display over the caller's phases), one that
-    does not, or runs it already, counts these units in its current phase; anything else gets
-    a display of this one phase, shown when `progress` is true, which the caller owns and
-    closes."""
+def phase_display(progress, phase: str, total: float, note: str = ""):
+    """A context giving the display for work of `total` units called `phase`, begun with
+    `note`: a caller's `RunProgress` that lists `phase` starts it (one display over the
+    caller's phases), one that does not, or runs it already, counts these units in its current
+    phase, and the caller's display is left open; anything else gets a display of this one
+    phase, shown when `progress` is true, which ends with the context (where the work stopped
+    if it failed)."""
     if isinstance(progress, RunProgress):
         if phase in progress.phases and phase != progress.phase:
             progress.start(phase, total, note)
         elif note:
             progress.update(progress.done, note)
-        return progress, False
+        return nullcontext(progress)
     display = RunProgress((phase,), enabled=bool(progress))
     display.start(phase, total, note)
-    return display, True
+    return display
 
 
 def track(items, phase: str, total: int | None = None, enabled: bool = True):

@@ -272,3 +272,25 @@ def test_one_progress_display_ends_when_the_last_file_is_written(tmp_path):
     assert len(stages[-2][2]) == len(files) - 2  # all but report.md and report.json
     progress.close()
     assert progress.share == 1.0
+
+
+def test_grid_metrics_computed_beside_the_outputs_are_the_plans_own(tmp_path):
+    from drake_auv.formats.outputs import output_stages, write_outputs
+    from drake_auv.planning.coverage_plan import PLAN_STAGES, plan_coverage
+    from drake_auv.planning.metrics import PlanMetrics
+    from drake_auv.planning.parameters import CoverageParameters
+
+    yy, xx = np.mgrid[0:40, 0:30] * 1.0
+    bathy = Bathymetry(-40.0 + np.clip(xx - 12.0, 0.0, 8.0) * 0.9 + 0.02 * yy, (1.0, 1.0),
+                       (1000.0, 2000.0), "EPSG:32631")
+    params = CoverageParameters(omega=2.0)
+    out = tmp_path / "out"
+    progress = _RecordingProgress(out)
+    plan = plan_coverage(bathy, params, compute_metrics=False, progress=progress)
+    assert plan.metrics is None
+    write_outputs(plan, out, figures=False, progress=progress, grid_metrics=True)
+    stages = [name for _, name, _ in progress.done_units[len(PLAN_STAGES):]]
+    assert stages == ["path.csv", "GeoJSON", "grid metrics", "3D metrics", "reports"]
+    assert len(stages) == output_stages(("geojson",), figures=False, grid_metrics=True)
+    report = json.loads((out / "report.json").read_text())
+    assert PlanMetrics.from_dict(report["metrics"]) == plan_coverage(bathy, params).metrics

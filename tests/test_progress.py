@@ -171,12 +171,15 @@ def test_a_phase_display_joins_its_callers_or_owns_one():
     from drake_auv.progress import phase_display
 
     caller = RunProgress(("plan", "outputs"), enabled=False)
-    display, owned = phase_display(caller, "outputs", 4, "path.csv")
-    assert display is caller and not owned and (caller.phase, caller.note) == ("outputs", "path.csv")
-    display, owned = phase_display(caller, "figures", 7, "a.png")  # counted in "outputs"
-    assert display is caller and not owned and caller.phase == "outputs" and caller.note == "a.png"
-    own, owned = phase_display(False, "figures", 7)
-    assert owned and own.phases == ("figures",) and own.phase == "figures" and not own.enabled
+    with phase_display(caller, "outputs", 4, "path.csv") as display:
+        assert display is caller and (caller.phase, caller.note) == ("outputs", "path.csv")
+    with phase_display(caller, "figures", 7, "a.png") as display:  # counted in "outputs"
+        assert display is caller and caller.phase == "outputs" and caller.note == "a.png"
+    assert caller.phase == "outputs" and caller.share < 1.0  # the caller's stays open
+    with phase_display(False, "figures", 7) as own:
+        assert own is not caller and own.phases == ("figures",) and own.phase == "figures"
+        assert not own.enabled and own.share < 1.0
+    assert own.share == 1.0  # its own ends with the work
 
 
 def test_a_warning_clears_the_terminal_line_and_the_display_comes_back():

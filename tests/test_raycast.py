@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from drake_auv.geometry import RayCaster
-from drake_auv.geometry.raycast import face_normals
+from drake_auv.geometry.raycast import face_centroids, face_normals_and_areas
 from drake_auv.terrain.bathymetry import Bathymetry
 from drake_auv.terrain.mesh import bathymetry_to_mesh
 
@@ -151,12 +151,18 @@ def test_robust_scene_is_watertight_where_the_fast_traversal_leaks():
     assert np.sum(fast.cast_unit(np.zeros(3), aims, 5.0)[1] < 0) > 10
 
 
-def test_face_normals_are_trimeshs_to_the_bit_and_zero_for_a_degenerate_face():
+def test_face_geometry_is_trimeshs_to_the_bit_and_a_degenerate_face_has_no_normal():
     sphere = trimesh.creation.icosphere(subdivisions=3, radius=2.0)
-    np.testing.assert_array_equal(RayCaster(sphere).face_normals, sphere.face_normals)
+    caster = RayCaster(sphere)
+    np.testing.assert_array_equal(caster.face_normals, sphere.face_normals)
+    np.testing.assert_array_equal(caster.face_areas, sphere.area_faces)
+    np.testing.assert_array_equal(face_centroids(sphere.vertices, sphere.faces),
+                                  sphere.triangles_center)
     v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     sliver = trimesh.Trimesh(v, [[0, 1, 2], [0, 1, 3]], process=False)
-    np.testing.assert_array_equal(face_normals(v, sliver.faces), [[0, 0, 0], [0, 0, 1]])
+    normals, areas = face_normals_and_areas(v, sliver.faces)
+    np.testing.assert_array_equal(normals, [[0, 0, 0], [0, 0, 1]])
+    np.testing.assert_array_equal(areas, [0.0, 0.5])
 
 
 def test_a_large_batch_is_cast_in_chunks_with_the_same_hits():

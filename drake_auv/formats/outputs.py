@@ -6,7 +6,6 @@ PNG figures (`planning.figures`).
 from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
 
@@ -69,56 +68,53 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool | RunProgre
     outdir.mkdir(parents=True, exist_ok=True)
     written, extras, missions = [], {}, ()
     grid_metrics = bool(grid_metrics and plan.metrics is None and plan.lawnmower is not None)
-    display, owned = phase_display(progress, "outputs",
-                                   output_stages(exports, figures, metrics_3d, grid_metrics),
-                                   "path.csv")
-    background = ThreadPoolExecutor(2, thread_name_prefix="drake_auv-metrics")
-    with display if owned else nullcontext(), paused_gc():  # an owned display ends with the work
-        try:
-            m3d = metrics_3d if isinstance(metrics_3d, dict) else None
-            if metrics_3d is True:
-                from drake_auv.planning.metrics3d import evaluate_plan_3d
+    # the metrics on threads beside the writers; the pool waits for them before the GC resumes
+    with (phase_display(progress, "outputs",
+                        output_stages(exports, figures, metrics_3d, grid_metrics),
+                        "path.csv") as display, paused_gc(),
+          ThreadPoolExecutor(2, thread_name_prefix="drake_auv-metrics") as background):
+        m3d = metrics_3d if isinstance(metrics_3d, dict) else None
+        if metrics_3d is True:
+            from drake_auv.planning.metrics3d import evaluate_plan_3d
 
-                m3d = background.submit(evaluate_plan_3d, plan)
-            if grid_metrics:
-                from drake_auv.planning.metrics import evaluate_plan
+            m3d_job = background.submit(evaluate_plan_3d, plan)
+        if grid_metrics:
+            from drake_auv.planning.metrics import evaluate_plan
 
-                grid = background.submit(evaluate_plan, plan)
-            with display.step("path.csv"):
-                plan.path.to_csv(outdir / "path.csv")
-            written.append(outdir / "path.csv")
-            for fmt in EXPORTS.values():
-                if fmt.name not in exports:
-                    continue
-                with display.step(fmt.stage):
-                    exported = fmt.write(plan, geo, outdir, options, missions)
-                written += exported.files
-                if exported.figures is not None:
-                    extras[fmt.name] = exported.figures
-                missions += exported.missions
-            pictures = []
-            if figures:
-                from drake_auv.planning.figures import write_figures
+            grid_job = background.submit(evaluate_plan, plan)
+        with display.step("path.csv"):
+            plan.path.to_csv(outdir / "path.csv")
+        written.append(outdir / "path.csv")
+        for fmt in EXPORTS.values():
+            if fmt.name not in exports:
+                continue
+            with display.step(fmt.stage):
+                exported = fmt.write(plan, geo, outdir, options, missions)
+            written += exported.files
+            if exported.figures is not None:
+                extras[fmt.name] = exported.figures
+            missions += exported.missions
+        pictures = []
+        if figures:
+            from drake_auv.planning.figures import write_figures
 
-                pictures = write_figures(plan, outdir, progress=display, geo=geo)
-            if grid_metrics:
-                with display.step("grid metrics"):
-                    plan = replace(plan, metrics=grid.result())
-            if metrics_3d is True:
-                with display.step("3D metrics"):
-                    m3d = m3d.result()
-            with display.step("reports"):
-                rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
-                markdown = report_markdown(plan, rep, m3d, export_warnings(rep),
-                                           export_notes(rep))
-                if current is not None:
-                    from drake_auv.vehicle.current_feasibility import current_markdown
+            pictures = write_figures(plan, outdir, progress=display, geo=geo)
+        if grid_metrics:
+            with display.step("grid metrics"):
+                plan = replace(plan, metrics=grid_job.result())
+        if metrics_3d is True:
+            with display.step("3D metrics"):
+                m3d = m3d_job.result()
+        with display.step("reports"):
+            rep = report_dict(plan, m3d, surge_velocity, reference_table, extras)
+            markdown = report_markdown(plan, rep, m3d, export_warnings(rep),
+                                       export_notes(rep))
+            if current is not None:
+                from drake_auv.vehicle.current_feasibility import current_markdown
 
-                    markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
-                    rep["current"] = current
-                write_text(outdir / "report.md", markdown)
-                write_json(outdir / "report.json", rep)
-            written += [outdir / "report.md", outdir / "report.json"] + pictures
-        finally:
-            background.shutdown(cancel_futures=True)
+                markdown = markdown.rstrip("\n") + "\n\n" + current_markdown(current)
+                rep["current"] = current
+            write_text(outdir / "report.md", markdown)
+            write_json(outdir / "report.json", rep)
+        written += [outdir / "report.md", outdir / "report.json"] + pictures
     return written

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from drake_auv.geometry.raycast import RayCaster, RayHits, face_crosses
+from drake_auv.geometry.raycast import RayCaster, RayHits, face_centroids
 from drake_auv.resources import map_chunks
 
 
@@ -54,11 +54,11 @@ class FaceVisibility:
         if not target.any():
             raise ValueError("target_faces is empty: select at least one face")
         self.target_index = np.flatnonzero(target)  # world face index of each target face
-        self.centroids, crosses = face_crosses(np.asarray(mesh.vertices, dtype=float),
-                                               np.asarray(mesh.faces)[self.target_index])
-        self.normals = (caster.face_normals if len(self.target_index) == num_faces
-                        else caster.face_normals[self.target_index])  # shared, never written
-        self.areas = np.sqrt((crosses ** 2).sum(axis=1)) / 2.0  # trimesh's `area_faces`
+        self.centroids = face_centroids(np.asarray(mesh.vertices, dtype=float),
+                                        np.asarray(mesh.faces)[self.target_index])
+        every = len(self.target_index) == num_faces  # the caster's arrays shared, never written
+        self.normals = caster.face_normals if every else caster.face_normals[self.target_index]
+        self.areas = caster.face_areas if every else caster.face_areas[self.target_index]
         self._tree = None  # of the centroids, built on the first camera query
         # Target slot of each world face (-1: not a target), to map sonar hits.
         self._slot = np.full(num_faces, -1, dtype=np.int64)

@@ -8,7 +8,6 @@ transits -> the lawnmower baseline -> metrics for both.
 
 from __future__ import annotations
 
-from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -189,8 +188,7 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
     levels = {r: slice_levels(surface, labels.regions == r, labels.slope, spacing,
                               params.slice_spacing, params.slice_count)
               for r in range(1, labels.n_regions + 1)}
-    display, owned = phase_display(progress, "plan", len(PLAN_STAGES), PLAN_STAGES[0])
-    with display if owned else nullcontext():  # an owned display ends with the work
+    with phase_display(progress, "plan", len(PLAN_STAGES), PLAN_STAGES[0]) as display:
         display.advance(1, PLAN_STAGES[1])  # classified (with the slicing planes)
         planar = labels.planar
         if params.sweep_angle_deg is not None:

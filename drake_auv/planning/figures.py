@@ -9,7 +9,6 @@ backend needed).
 
 from __future__ import annotations
 
-from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -243,8 +242,7 @@ def write_figures(plan, outdir, dpi: int = 110, progress=False,
     outdir = Path(outdir)
     written = []
     makers = {**{k: (lambda plan, f=f: f(plan, geo)) for k, f in PLAN_VIEWS.items()}, **VIEWS_3D}
-    display, owned = phase_display(progress, "figures", len(makers))
-    with display if owned else nullcontext():  # an owned display ends with the work
+    with phase_display(progress, "figures", len(makers)) as display:
         for name, make in makers.items():
             with display.step(name):
                 fig = make(plan)

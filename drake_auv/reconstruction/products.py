@@ -18,7 +18,6 @@ cloud, whatever the dive's length.
 
 from __future__ import annotations
 
-from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -91,9 +90,8 @@ def mission_surface(log: ScanLog, site, depth: int = 9, trim: float = 0.05, k: i
     target's box (grown by `CROP_MARGIN`) holds fewer than `MIN_POINTS` returns.
     `progress`: show the progress over the `SURFACE_STAGES`, or a caller's `RunProgress` to
     advance by one per stage (none when nothing is built)."""
-    display, owned = phase_display(progress, "reconstruct", len(SURFACE_STAGES),
-                                   f"reconstruction: {SURFACE_STAGES[0]}")
-    with display if owned else nullcontext():  # an owned display ends with the work
+    with phase_display(progress, "reconstruct", len(SURFACE_STAGES),
+                       f"reconstruction: {SURFACE_STAGES[0]}") as display:
         cloud = dive_cloud(log)
         if not open3d_available() or target_returns(site, cloud) < max(MIN_POINTS, k + 1):
             return None

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import ctypes
 import functools
-from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
@@ -265,9 +264,8 @@ def reconstruct(cloud: PointCloud, depth: int = 9, trim: float = 0.05, k: int = 
     cloud = cloud.subset(np.flatnonzero(outlier_mask(cloud.points, outliers)))
     check_parameters(len(cloud), depth, k, trim, support, outliers)
     check_spread(cloud.points)
-    display, owned = phase_display(progress, "reconstruct", len(STAGES),
-                                   f"normals (k = {k}) of {len(cloud)} points")
-    with display if owned else nullcontext():  # an owned display ends with the work
+    with phase_display(progress, "reconstruct", len(STAGES),
+                       f"normals (k = {k}) of {len(cloud)} points") as display:
         normals = estimate_normals(cloud.points, cloud.origins if cloud.has_origins else None, k)
         display.advance(1, f"screened Poisson, depth {depth}")
         mesh, densities = poisson(cloud.points, normals, depth, trim)
