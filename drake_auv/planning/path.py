@@ -14,8 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
+from drake_auv.fixed_decimal import fixed_decimal_rows
 from drake_auv.output_files import open_replacing
 from drake_auv.planning.polyline import arc_length
+from drake_auv.resources import map_chunks
 
 _CSV_FIELDS = ("x", "y", "z", "heading", "sensor_x", "sensor_y", "sensor_z", "label")
 
@@ -224,23 +226,22 @@ class PlannedPath:
 
     def to_csv(self, filename, chunk: int = 65536) -> None:
         """Writes one row per sample with the columns x, y, z, heading, sensor_x/y/z, label
-        (numbers with 6 decimals; the bytes `csv.writer` writes, formatted `chunk` rows at a
-        time in one string operation rather than a call per row)."""
+        (numbers with 6 decimals; the bytes `csv.writer` writes), `chunk` rows at a time on
+        the usable cores (`fixed_decimal.fixed_decimal_rows`: numpy's digits, not a Python
+        call per number)."""
         values = np.column_stack([self.points, self.heading, self.sensor_dir])
         names, code = self.label_codes()
-        quoted = []
-        for name in names:  # each label as csv.writer quotes it
+        tails = []
+        for name in names:  # ",label\r\n" as csv.writer quotes the label
             buf = io.StringIO()
-            csv.writer(buf).writerow([name])
-            quoted.append(buf.getvalue()[:-2])
-        quoted = np.array(quoted, dtype=object)
-        row = ",".join(["%.6f"] * 7) + ",%s\r\n"
-        with open_replacing(filename, "w", newline="") as f:
-            csv.writer(f).writerow(_CSV_FIELDS)
-            for k in range(0, len(values), chunk):
-                block = np.column_stack([values[k:k + chunk].astype(object),
-                                         quoted[code[k:k + chunk]]])  # Python floats per chunk
-                f.write((row * len(block)) % tuple(block.ravel().tolist()))
+            csv.writer(buf).writerow(["", name])
+            tails.append(buf.getvalue().encode())
+        tails = np.array(tails, dtype=bytes)
+        rows = map_chunks(lambda k: fixed_decimal_rows(values[k], 6, tails[code[k]]),
+                          len(values), chunk)
+        with open_replacing(filename, "wb") as f:
+            f.write((",".join(_CSV_FIELDS) + "\r\n").encode())
+            f.writelines(rows)
 
     @classmethod
     def from_csv(cls, filename) -> "PlannedPath":
