@@ -54,6 +54,26 @@ def test_transits_go_around_a_zone():
     assert closed.detour((20, 20), (70, 20)) is None
 
 
+def test_a_copy_routes_alike_on_a_forbidden_set_of_its_own():
+    from concurrent.futures import ThreadPoolExecutor
+
+    nogo = NoGo(shapely.union_all([shapely.box(40, 0, 45, 50), shapely.box(60, 10, 62, 60)]),
+                2.0, (0, 100, 0, 60))
+    other = nogo.copy()
+    assert other.forbidden is not nogo.forbidden and shapely.equals_exact(
+        other.forbidden, nogo.forbidden, 0.0)
+    ends = np.random.default_rng(0).uniform((0, 0), (100, 60), (200, 2, 2))
+    ends = ends[~nogo.inside(ends.reshape(-1, 2)).reshape(-1, 2).any(axis=1)]
+
+    def routes(n):
+        return [n.detour(a, b) for a, b in ends]
+
+    with ThreadPoolExecutor(2) as pool:  # each thread on its own prepared geometry
+        mine, theirs = pool.map(routes, (nogo, other))
+    for a, b in zip(mine, theirs):
+        assert (a is None and b is None) or np.array_equal(a, b)
+
+
 @pytest.fixture()
 def utm_tif(tmp_path):
     yy, xx = np.mgrid[0:60, 0:80] * 1.0

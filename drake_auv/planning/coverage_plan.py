@@ -8,6 +8,7 @@ transits -> the lawnmower baseline -> metrics for both.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -188,7 +189,16 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
     levels = {r: slice_levels(surface, labels.regions == r, labels.slope, spacing,
                               params.slice_spacing, params.slice_count)
               for r in range(1, labels.n_regions + 1)}
-    with phase_display(progress, "plan", len(PLAN_STAGES), PLAN_STAGES[0]) as display:
+    # the lawnmower is planned on a thread beside the route (neither reads what the other
+    # builds; their numpy work releases the GIL)
+    with (phase_display(progress, "plan", len(PLAN_STAGES), PLAN_STAGES[0]) as display,
+          ThreadPoolExecutor(1, thread_name_prefix="drake_auv-lawnmower") as beside):
+        if baseline:
+            # lanes along the fewest turns whatever the plan's sweep angle, at its sample spacing
+            lawn_job = beside.submit(
+                plan_lawnmower, bathy, replace(params, sweep_angle_deg=None, sample_spacing=ds),
+                lane_spacing_m=spacing, surface=surface,
+                nogo=None if nogo is None else nogo.copy())
         display.advance(1, PLAN_STAGES[1])  # classified (with the slicing planes)
         planar = labels.planar
         if params.sweep_angle_deg is not None:
@@ -239,11 +249,7 @@ def plan_coverage(bathy: Bathymetry, params: CoverageParameters = CoverageParame
                 contours_done.append(c)
         display.advance(1, PLAN_STAGES[4])
         path = route.build()
-        lawn = None
-        if baseline:
-            # lanes along the fewest turns whatever the plan's sweep angle, at its sample spacing
-            lawn = plan_lawnmower(bathy, replace(params, sweep_angle_deg=None, sample_spacing=ds),
-                                  lane_spacing_m=spacing, surface=surface, nogo=nogo)
+        lawn = lawn_job.result() if baseline else None
         display.advance(1, PLAN_STAGES[5])
         used = replace(params, sweep_angle_deg=float(np.degrees(angle)), sample_spacing=ds,
                        sensor_range=(2.0 * omega if params.sensor_range is None

@@ -49,6 +49,18 @@ class NoGo:
         ok = self._clear(nodes[i], nodes[j])
         self._edges = (i[ok], j[ok], np.linalg.norm(nodes[i[ok]] - nodes[j[ok]], axis=1))
 
+    def copy(self) -> "NoGo":
+        """The same zones and routing graph with a forbidden set of its own: a prepared GEOS
+        geometry is for one thread at a time (the planner routes its lawnmower on another)."""
+        import copy
+
+        import shapely
+
+        other = copy.copy(self)
+        other.forbidden = shapely.from_wkb(shapely.to_wkb(self.forbidden))
+        shapely.prepare(other.forbidden)
+        return other
+
     def inside(self, xy) -> np.ndarray:
         """(N,) True where a world point lies in the forbidden set (boundary included)."""
         import shapely

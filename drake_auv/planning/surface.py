@@ -8,12 +8,18 @@ the holes as no-go for coverage.
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from drake_auv.resources import map_chunks, usable_cores
 from drake_auv.terrain.bathymetry import Bathymetry
+
+# built once for all threads (the planner builds the route and the lawnmower side by side); a
+# module lock, as surfaces are pickled and deep-copied
+_BUILDING = threading.Lock()
 
 
 def bilinear(grid: np.ndarray, origin, spacing, x, y) -> np.ndarray:
@@ -117,8 +123,9 @@ class TerrainSurface:
         get the distance to its nearest edge sample. Points farther than `upper_bound` get inf
         and a NaN nearest sample (a much faster query when only close points matter).
         """
-        if self._tree is None:
-            self._build_tree()
+        with _BUILDING:
+            if self._tree is None:
+                self._build_tree()
         d, idx = self._tree.query(np.asarray(points, dtype=float), k=1,
                                   distance_upper_bound=upper_bound, workers=usable_cores())
         found = idx < len(self._tree_points)
@@ -160,9 +167,13 @@ class TerrainSurface:
         grid or block maxima (at block centres) of a fine one. Returns (z, origin, spacing,
         block_radius, target): `block_radius` bounds how far a block's own samples lie from
         its centre, `target` adds the sampled-versus-true surface margin to omega. Cached."""
-        key = float(omega)
-        if key in self._safe:
+        with _BUILDING:
+            key = float(omega)
+            if key not in self._safe:
+                self._safe[key] = self._build_clearance_samples(key)
             return self._safe[key]
+
+    def _build_clearance_samples(self, omega: float):
         h = omega / 4.0
         dx, dy = self.spacing
         ux, uy = max(1, int(np.ceil(dx / h))), max(1, int(np.ceil(dy / h)))
@@ -177,8 +188,7 @@ class TerrainSurface:
         target = float(np.hypot(omega, 0.5 * np.hypot(sx, sy) * stretch))
         origin = self.origin + 0.5 * (f - 1) * np.array([sx, sy])
         block_radius = 0.5 * np.hypot((f - 1) * sx, (f - 1) * sy)
-        self._safe[key] = (z, origin, np.array([f * sx, f * sy]), block_radius, target)
-        return self._safe[key]
+        return z, origin, np.array([f * sx, f * sy]), block_radius, target
 
     def safe_elevation_at(self, x, y, omega: float, chunk: int = 8192) -> np.ndarray:
         """(N,) lowest elevation at which a point above (x, y) is at least `omega` from the
