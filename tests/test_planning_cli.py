@@ -216,13 +216,32 @@ def test_label_runs_draw_every_segment_once_in_its_label():
 
     labels = np.array(list("aabbbaabba"), dtype=object)
     points = np.column_stack([np.arange(10.0), np.arange(10.0) ** 2, np.zeros(10)])
-    runs = label_runs(PlannedPath(points, 0.0, (0.0, 0.0, -1.0), labels))
+    runs = label_runs(points, labels)
     assert set(runs) == {"a", "b"}
     for name, line in runs.items():
         drawn = {(line[k, 0], line[k + 1, 0]) for k in range(len(line) - 1)
                  if np.isfinite(line[k:k + 2]).all()}
         assert drawn == {(k, k + 1.0) for k in range(9) if labels[k + 1] == name}, name
         assert np.isfinite(line[[0, -1]]).all() and line.shape[1] == 2
+
+
+def test_label_runs_thin_a_long_path_keeping_each_runs_ends():
+    from drake_auv.planning.figures import label_runs
+
+    n = 10_000
+    labels = np.where((np.arange(n) // 700) % 3 == 0, "transit", "planar").astype(object)
+    points = np.column_stack([np.arange(n, dtype=float), np.sin(np.arange(n) / 50.0),
+                              np.zeros(n)])
+    full, thin = label_runs(points, labels), label_runs(points, labels, max_vertices=1000)
+    for name in full:
+        ends = lambda line: line[np.isfinite(line[:, 0])][[0, -1]]  # noqa: E731
+        pieces = lambda line: np.split(line, np.flatnonzero(np.isnan(line[:, 0])))  # noqa: E731
+        assert len(pieces(thin[name])) == len(pieces(full[name]))
+        for a, b in zip(pieces(full[name]), pieces(thin[name])):
+            assert np.array_equal(ends(a), ends(b))  # every run from its first to its last
+        kept = thin[name][np.isfinite(thin[name][:, 0])]
+        assert np.array_equal(kept[:, 1], np.sin(kept[:, 0] / 50.0))  # vertices of the path
+    assert sum(len(v) for v in thin.values()) < 0.2 * sum(len(v) for v in full.values())
 
 
 class _RecordingProgress(RunProgress):

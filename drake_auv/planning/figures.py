@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 
 from drake_auv.output_files import replacing
 
+DRAWN_VERTICES = 250_000  # a path line's most vertices on a figure (`label_runs`)
 LABEL_COLOURS = {"planar": "tab:blue", "slice": "tab:red", "transit": "0.6", "lawnmower": "tab:green"}
 
 
@@ -113,12 +114,17 @@ def _classification_image(ax, plan, alpha=1.0):
               interpolation="nearest", alpha=alpha)
 
 
-def label_runs(path, dims: int = 2) -> dict[str, np.ndarray]:
+def label_runs(points, labels, dims: int = 2,
+               max_vertices: int | None = None) -> dict[str, np.ndarray]:
     """Per label, its segments (a segment takes its end sample's label) as one polyline of the
-    first `dims` coordinates, a NaN row between runs: one artist per label, which Agg
-    simplifies and mplot3d projects in one pass (not an artist or a masked array per segment)."""
-    pts = path.points[:, :dims]
-    lab = path.labels[1:]
+    first `dims` coordinates of `points` (N, 3), a NaN row between runs: one artist per label,
+    which Agg simplifies and mplot3d projects in one pass (not an artist or a masked array per
+    segment). With `max_vertices`, a path of more samples is drawn through every k-th sample
+    of each run (k the fewest that keeps the whole path within it) and the run's last: at
+    `DRAWN_VERTICES`, several vertices a pixel apart on a figure of a 4 M-sample site."""
+    pts = points[:, :dims]
+    lab = labels[1:]
+    stride = 1 if max_vertices is None else max(1, -(-len(pts) // max_vertices))
     out = {}
     for name in dict.fromkeys(lab.tolist()):
         edge = np.diff(np.concatenate([[0], (lab == name).astype(np.int8), [0]]))
@@ -126,14 +132,17 @@ def label_runs(path, dims: int = 2) -> dict[str, np.ndarray]:
         count = end - start + 2  # the run's samples s..e and the NaN row after them
         run = np.repeat(np.arange(len(start)), count)
         pos = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        if stride > 1:  # every stride-th sample, the run's last and its NaN row
+            keep = (pos % stride == 0) | (pos >= count[run] - 2)
+            run, pos = run[keep], pos[keep]
         line = pts[np.minimum(start[run] + pos, len(pts) - 1)]
         line[pos == count[run] - 1] = np.nan
         out[name] = line[:-1]
     return out
 
 
-def _path_lines(ax, path, colours=LABEL_COLOURS, widths=None):
-    for name, line in label_runs(path).items():
+def _path_lines(ax, points, labels, colours=LABEL_COLOURS, widths=None):
+    for name, line in label_runs(points, labels, 2, DRAWN_VERTICES).items():
         ax.plot(line[:, 0], line[:, 1], color=colours.get(name, "k"),
                 lw=(widths or {}).get(name, 0.6), label=name, scalex=False, scaley=False)
 
@@ -178,7 +187,8 @@ def fig_lanes(plan, geo=None) -> Figure:
     ax = _plan_axes(fig, plan.bathy, f"Lanes in each cell, spacing "
                     f"{plan.lane_spacing:.2f} m", geo)
     _classification_image(ax, plan, alpha=0.5)
-    _path_lines(ax, plan.path.select(plan.path.labels != "slice"),
+    keep = plan.path.labels != "slice"
+    _path_lines(ax, plan.path.points[keep], plan.path.labels[keep],
                 colours={"planar": "tab:blue", "transit": "0.6"})
     ax.legend(loc="upper right", fontsize=7)
     return fig
@@ -207,7 +217,7 @@ def fig_path3d(plan, which: str = "path") -> Figure:
     xx, yy = np.meshgrid(b.x[::step], b.y[::step])
     ax.plot_surface(xx, yy, plan.surface.z[::step, ::step], cmap="gist_earth", alpha=0.5,
                     linewidth=0, antialiased=False)
-    for name, line in label_runs(path, 3).items():
+    for name, line in label_runs(path.points, path.labels, 3, DRAWN_VERTICES).items():
         ax.plot(line[:, 0], line[:, 1], line[:, 2], color=LABEL_COLOURS.get(name, "k"),
                 lw=1.6 if name == "slice" else 0.6, label=name)
     ax.set_xlabel("x (m)")
