@@ -163,6 +163,32 @@ def test_face_geometry_is_trimeshs_to_the_bit_and_a_degenerate_face_has_no_norma
     normals, areas = face_normals_and_areas(v, sliver.faces)
     np.testing.assert_array_equal(normals, [[0, 0, 0], [0, 0, 1]])
     np.testing.assert_array_equal(areas, [0.0, 0.5])
+    # a chunk at a time (the sliver in the second chunk): the same bits
+    faces = np.vstack([sphere.faces, sliver.faces + len(sphere.vertices)])
+    vertices = np.vstack([sphere.vertices, v])
+    normals, areas = face_normals_and_areas(vertices, faces, chunk=len(faces) - 1)
+    np.testing.assert_array_equal(normals, np.vstack([sphere.face_normals, [[0, 0, 0], [0, 0, 1]]]))
+    np.testing.assert_array_equal(areas, np.append(sphere.area_faces, [0.0, 0.5]))
+    np.testing.assert_array_equal(face_centroids(sphere.vertices, sphere.faces, chunk=7),
+                                  sphere.triangles_center)
+
+
+def test_grid_mesh_is_two_triangles_per_whole_square_in_row_order():
+    z = np.arange(30.0).reshape(5, 6) - 40.0
+    z[2, 3] = np.nan
+    mesh = bathymetry_to_mesh(Bathymetry(z, (1.0, 2.0), (5.0, -3.0)))
+    gx, gy = np.meshgrid(5.0 + np.arange(6), -3.0 + 2.0 * np.arange(5))
+    keep = np.isfinite(z.ravel())
+    np.testing.assert_array_equal(mesh.vertices, np.column_stack(
+        [gx.ravel(), gy.ravel(), z.ravel()])[keep])
+    new = np.cumsum(keep) - 1  # vertex index after the unreferenced one is dropped
+    expected = []
+    for i in range(4):
+        for j in range(5):
+            a, b, c, d = i * 6 + j, i * 6 + j + 1, (i + 1) * 6 + j, (i + 1) * 6 + j + 1
+            if keep[[a, b, c, d]].all():
+                expected += [new[[a, b, d]], new[[a, d, c]]]
+    np.testing.assert_array_equal(mesh.faces, expected)
 
 
 def test_a_large_batch_is_cast_in_chunks_with_the_same_hits():

@@ -54,9 +54,10 @@ class FaceVisibility:
         if not target.any():
             raise ValueError("target_faces is empty: select at least one face")
         self.target_index = np.flatnonzero(target)  # world face index of each target face
-        self.centroids = face_centroids(np.asarray(mesh.vertices, dtype=float),
-                                        np.asarray(mesh.faces)[self.target_index])
         every = len(self.target_index) == num_faces  # the caster's arrays shared, never written
+        faces = np.asarray(mesh.faces)
+        self.centroids = face_centroids(np.asarray(mesh.vertices, dtype=float),
+                                        faces if every else faces[self.target_index])
         self.normals = caster.face_normals if every else caster.face_normals[self.target_index]
         self.areas = caster.face_areas if every else caster.face_areas[self.target_index]
         self._tree = None  # of the centroids, built on the first camera query

@@ -36,23 +36,27 @@ def bathymetry_to_mesh(bathy: Bathymetry, stride: int = 1) -> trimesh.Trimesh:
     ny, nx = z.shape
     if ny < 2 or nx < 2:
         raise ValueError(f"bathymetry_to_mesh: stride {stride} leaves fewer than 2 x 2 samples")
-    gx, gy = np.meshgrid(xs, ys)
-    vertices = np.column_stack([gx.ravel(), gy.ravel(), z.ravel()])
-    idx = np.arange(ny * nx).reshape(ny, nx)
-    v00 = idx[:-1, :-1].ravel()  # (i, j)
-    v01 = idx[:-1, 1:].ravel()   # (i, j + 1): +x
-    v10 = idx[1:, :-1].ravel()   # (i + 1, j): +y
-    v11 = idx[1:, 1:].ravel()
+    vertices = np.empty((ny * nx, 3))
+    vertices[:, 0] = np.tile(xs, ny)
+    vertices[:, 1] = np.repeat(ys, nx)
+    vertices[:, 2] = np.nan_to_num(z.ravel())
     valid = np.isfinite(z)
     quad_ok = (valid[:-1, :-1] & valid[:-1, 1:] & valid[1:, :-1] & valid[1:, 1:]).ravel()
     if not quad_ok.any():
         raise ValueError("bathymetry_to_mesh: no grid square has four valid corners")
-    v00, v01, v10, v11 = (v[quad_ok] for v in (v00, v01, v10, v11))
-    # Counter-clockwise from above (+x then +y): normals point up.
-    faces = np.vstack([np.column_stack([v00, v01, v11]), np.column_stack([v00, v11, v10])])
-    # Interleave so the two triangles of a square are neighbours in the face list.
-    faces = faces.reshape(2, -1, 3).transpose(1, 0, 2).reshape(-1, 3)
-    mesh = trimesh.Trimesh(vertices=np.nan_to_num(vertices), faces=faces, process=False)
+    v00 = (np.arange(ny - 1)[:, None] * nx + np.arange(nx - 1)).ravel()  # sample (i, j)
+    if not quad_ok.all():
+        v00 = v00[quad_ok]
+    # Counter-clockwise from above (+x then +y): normals point up. The two triangles of a
+    # square are neighbours in the face list: (i, j), (i, j + 1), (i + 1, j + 1) and
+    # (i, j), (i + 1, j + 1), (i + 1, j).
+    faces = np.empty((len(v00), 2, 3), dtype=np.int64)
+    faces[:, :, 0] = v00[:, None]
+    faces[:, 0, 1] = v00 + 1
+    faces[:, 0, 2] = faces[:, 1, 1] = v00 + nx + 1
+    faces[:, 1, 2] = v00 + nx
+    faces = faces.reshape(-1, 3)
+    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     if not quad_ok.all():  # else every sample is a corner of some square
         mesh.remove_unreferenced_vertices()
     return mesh
