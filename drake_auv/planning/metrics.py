@@ -77,7 +77,7 @@ def viewing_angles(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.n
 
 
 def coverage_mask(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.ndarray,
-                  aperture_deg: float, sensor_range: float, chunk: int = 4096) -> np.ndarray:
+                  aperture_deg: float, sensor_range: float, chunk: int = 16384) -> np.ndarray:
     """(ny, nx) bool: grid cells seen by at least one sample (cone and range test), `chunk`
     samples at a time on the usable cores (`resources.map_chunks`)."""
     bathy = surface.bathy
@@ -170,10 +170,12 @@ def evaluate_path(path: PlannedPath, surface: TerrainSurface, aperture_deg: floa
     """
     weights = surface_area_weights(surface) if weights is None else weights
     imaging = path.labels != "transit"
+    # the clearance first: its KD-tree is built and queried outside the GIL, which a thread
+    # beside it may hold for seconds (Embree's mesh set-up in the 3D metrics)
+    dist = clearance(surface, path.points, omega)
     angles = np.full(len(path), np.nan)
     angles[imaging] = viewing_angles(surface, path.points[imaging], path.sensor_dir[imaging],
                                      sensor_range)
-    dist = clearance(surface, path.points, omega)
     seen_by_label = {}
     for lab in dict.fromkeys(path.labels[imaging].tolist()):
         m = path.labels == lab

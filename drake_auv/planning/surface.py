@@ -241,7 +241,7 @@ class TerrainSurface:
 
     # -- rays ----------------------------------------------------------------------------------
     def raycast(self, origins, directions, max_range: float, step: float | None = None,
-                chunk: int = 32768):
+                chunk: int = 262144):
         """First intersection of rays with the height field, by marching and linear refinement.
 
         Returns (N,) ranges (NaN where a ray leaves the grid or goes beyond `max_range` without
