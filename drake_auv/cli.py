@@ -37,13 +37,14 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Runs one subcommand. Bad input (ValueError) and every OSError end it with one line on
     stderr and exit 2; warnings (e.g. a repaired ROI) are one line each. Run as the program
-    (`argv` None: the command line), a command that asks for it (`plan`: its many large
-    temporaries) keeps the memory it frees (`resources.keep_freed_memory`)."""
+    (`argv` None: the command line), a batch command (`plan`: its many large temporaries,
+    its threads) keeps the memory it frees and hands the GIL over quickly
+    (`resources.tune_batch_process`)."""
     args = build_parser().parse_args(argv)
-    if argv is None and getattr(args, "keep_freed_memory", False):
-        from drake_auv.resources import keep_freed_memory
+    if argv is None and getattr(args, "batch_process", False):
+        from drake_auv.resources import tune_batch_process
 
-        keep_freed_memory()
+        tune_batch_process()
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning(args.command)
         try:

@@ -1,9 +1,11 @@
-"""The machine's cores: chunked inner loops on worker threads, in order, the GC kept off them."""
+"""The machine's cores: chunked inner loops on worker threads, in order, the GC kept off them;
+a batch program's tuning."""
 
 import gc
 import threading
 
 import numpy as np
+import pytest
 
 from drake_auv import resources
 from drake_auv.resources import map_chunks
@@ -50,10 +52,23 @@ def test_pauses_nest_and_overlap_across_threads():
     assert gc.isenabled()
 
 
-def test_only_the_plan_command_asks_to_keep_freed_memory():
+def test_only_the_plan_command_asks_for_the_batch_process_tuning():
     from drake_auv.cli import build_parser
 
     parser = build_parser()
-    assert parser.parse_args(["plan", "site.tif", "-o", "out"]).keep_freed_memory is True
-    assert not getattr(parser.parse_args(["run", "pool", "-o", "out"]), "keep_freed_memory",
+    assert parser.parse_args(["plan", "site.tif", "-o", "out"]).batch_process is True
+    assert not getattr(parser.parse_args(["run", "pool", "-o", "out"]), "batch_process",
                        False)
+
+
+def test_quick_gil_handoff_shortens_the_switch_interval():
+    import sys
+
+    from drake_auv.resources import quick_gil_handoff
+
+    before = sys.getswitchinterval()
+    try:
+        quick_gil_handoff(0.0007)
+        assert sys.getswitchinterval() == pytest.approx(0.0007)
+    finally:
+        sys.setswitchinterval(before)

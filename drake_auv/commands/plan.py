@@ -126,7 +126,7 @@ def add_parser(subparsers) -> None:
                              "grids)")
     parser.add_argument("-o", "--out", "--outdir", dest="out", required=True,
                         help="output folder (--outdir is its older spelling)")
-    parser.set_defaults(func=run, keep_freed_memory=True)  # when run as the program
+    parser.set_defaults(func=run, batch_process=True)  # when run as the program
 
 
 def run(args) -> int:
