@@ -68,12 +68,17 @@ class PlanMetrics:
 
 
 def viewing_angles(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.ndarray,
-                   sensor_range: float) -> np.ndarray:
-    """(N,) viewing angle of each sample, rad (NaN where the axis hits nothing in range)."""
-    ranges, hits = surface.raycast(points, sensor_dir, sensor_range)
-    n = surface.normal(hits[:, 0], hits[:, 1])
-    cos = np.clip(-np.einsum("ij,ij->i", sensor_dir, n), -1.0, 1.0)
-    return np.where(np.isfinite(ranges), np.arccos(cos), np.nan)
+                   sensor_range: float, chunk: int = 262144) -> np.ndarray:
+    """(N,) viewing angle of each sample, rad (NaN where the axis hits nothing in range);
+    `chunk` samples at a time on the usable cores (`resources.map_chunks`: each chunk's hits
+    and normals are its own temporaries)."""
+    def part(k: slice) -> np.ndarray:
+        ranges, hits = surface.raycast(points[k], sensor_dir[k], sensor_range)
+        n = surface.normal(hits[:, 0], hits[:, 1])
+        cos = np.clip(-np.einsum("ij,ij->i", sensor_dir[k], n), -1.0, 1.0)
+        return np.where(np.isfinite(ranges), np.arccos(cos), np.nan)
+
+    return np.concatenate([np.zeros(0)] + map_chunks(part, len(points), chunk))
 
 
 def coverage_mask(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.ndarray,

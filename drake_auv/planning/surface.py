@@ -123,25 +123,30 @@ class TerrainSurface:
         get the distance to its nearest edge sample. Points farther than `upper_bound` get inf
         and a NaN nearest sample (a much faster query when only close points matter).
         """
-        with _BUILDING:
-            if self._tree is None:
-                self._build_tree()
-        d, idx = self._tree.query(np.asarray(points, dtype=float), k=1,
-                                  distance_upper_bound=upper_bound, workers=usable_cores())
+        d, idx = self._query(points, upper_bound)
         found = idx < len(self._tree_points)
         nearest = np.full((len(d), 3), np.nan)
         nearest[found] = self._tree_points[idx[found]]
         return d, nearest
+
+    def _query(self, points, upper_bound: float) -> tuple[np.ndarray, np.ndarray]:
+        """`distance`'s distances and the indices of the nearest samples (the tree's size
+        where none is within `upper_bound`), on the usable cores."""
+        with _BUILDING:
+            if self._tree is None:
+                self._build_tree()
+        return self._tree.query(np.asarray(points, dtype=float), k=1,
+                                distance_upper_bound=upper_bound, workers=usable_cores())
 
     def signed_distance(self, points, upper_bound: float = np.inf) -> np.ndarray:
         """(N,) `distance` signed: negative below the surface (on the grid's extent: inside the
         ground) and above the sea surface (z > 0) at most -z, m. Points farther than
         `upper_bound` above it get inf; those below it their exact distance."""
         p = np.asarray(points, dtype=float).reshape(-1, 3)
-        d, _ = self.distance(p, upper_bound=upper_bound)
+        d, _ = self._query(p, upper_bound)
         below = self.inside(p[:, 0], p[:, 1]) & (p[:, 2] < self.elevation(p[:, 0], p[:, 1]))
         if below.any():
-            d[below] = -self.distance(p[below])[0]
+            d[below] = -self._query(p[below], np.inf)[0]
         return np.minimum(d, np.where(p[:, 2] > 0.0, -p[:, 2], np.inf))
 
     def clamp_to_grid(self, points: np.ndarray, copy: bool = True) -> np.ndarray:
