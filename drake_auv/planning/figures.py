@@ -121,7 +121,7 @@ def label_runs(points, labels, dims: int = 2,
     which Agg simplifies and mplot3d projects in one pass (not an artist or a masked array per
     segment). With `max_vertices`, a path of more samples is drawn through every k-th sample
     of each run (k the fewest that keeps the whole path within it) and the run's last: at
-    `DRAWN_VERTICES`, several vertices a pixel apart on a figure of a 4 M-sample site."""
+    `DRAWN_VERTICES`, vertices a few pixels apart on a figure of a 4 M-sample site."""
     pts = points[:, :dims]
     lab = labels[1:]
     stride = 1 if max_vertices is None else max(1, -(-len(pts) // max_vertices))
