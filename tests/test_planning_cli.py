@@ -244,6 +244,23 @@ def test_label_runs_thin_a_long_path_keeping_each_runs_ends():
     assert sum(len(v) for v in thin.values()) < 0.2 * sum(len(v) for v in full.values())
 
 
+def test_the_lanes_figure_draws_no_segment_across_the_slices():
+    from matplotlib.figure import Figure
+
+    from drake_auv.planning.figures import _path_lines
+
+    labels = np.array(["transit", "slice", "slice", "transit", "planar"], dtype=object)
+    points = np.column_stack([np.arange(5.0), [0.0, 5.0, 5.0, 0.0, 0.0], np.zeros(5)])
+    ax = Figure().add_subplot(1, 1, 1)
+    _path_lines(ax, PlannedPath(points, 0.0, (0.0, 0.0, -1.0), labels), skip=("slice",))
+    drawn = {line.get_label(): np.column_stack(line.get_data()) for line in ax.get_lines()}
+    assert set(drawn) == {"transit", "planar"}
+    transit = drawn["transit"]
+    pairs = {(a[0], b[0]) for a, b in zip(transit, transit[1:])
+             if np.isfinite(a).all() and np.isfinite(b).all()}
+    assert pairs == {(2.0, 3.0)}  # flown from the last slice sample; no chord from 0 to 3
+
+
 class _RecordingProgress(RunProgress):
     """The plan command's display (silent) recording, at each unit done, its phase, the name
     of the unit done and the files written by then."""

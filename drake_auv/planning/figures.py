@@ -141,8 +141,11 @@ def label_runs(points, labels, dims: int = 2,
     return out
 
 
-def _path_lines(ax, points, labels, colours=LABEL_COLOURS, widths=None):
-    for name, line in label_runs(points, labels, 2, DRAWN_VERTICES).items():
+def _path_lines(ax, path, colours=LABEL_COLOURS, widths=None, skip=()):
+    """The path's segments in plan view, one line per label but those of `skip`."""
+    for name, line in label_runs(path.points, path.labels, 2, DRAWN_VERTICES).items():
+        if name in skip:
+            continue
         ax.plot(line[:, 0], line[:, 1], color=colours.get(name, "k"),
                 lw=(widths or {}).get(name, 0.6), label=name, scalex=False, scaley=False)
 
@@ -187,9 +190,8 @@ def fig_lanes(plan, geo=None) -> Figure:
     ax = _plan_axes(fig, plan.bathy, f"Lanes in each cell, spacing "
                     f"{plan.lane_spacing:.2f} m", geo)
     _classification_image(ax, plan, alpha=0.5)
-    keep = plan.path.labels != "slice"
-    _path_lines(ax, plan.path.points[keep], plan.path.labels[keep],
-                colours={"planar": "tab:blue", "transit": "0.6"})
+    _path_lines(ax, plan.path, colours={"planar": "tab:blue", "transit": "0.6"},
+                skip=("slice",))  # the segments flown, without the slices' (contours.png)
     ax.legend(loc="upper right", fontsize=7)
     return fig
 
