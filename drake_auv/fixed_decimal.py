@@ -1,11 +1,11 @@
 """Fixed-point decimal text of float arrays, byte for byte what C's `"%.{d}f"` writes, with
 the digits of many numbers made at once by numpy integer arithmetic.
 
-A number's scaled magnitude p = |x| 10^d is rounded to the nearest integer; where p lies
-within two of its ulps of a half (the float product can fall on either side of the exact
-one) or is not a finite number below 2^52, that number alone is formatted by Python's
-`%` (C's correctly rounded printf). Negative numbers, zero included, keep their sign, as
-printf does ("-0.000000").
+A number's scaled magnitude p = |x| 10^d is rounded to the nearest integer in floating
+point; where p lies within p 2^-51 of a half (the float product, within half an ulp of the
+exact one, could fall on either side of it) or is not a finite number below 2^49, that
+number alone is formatted by Python's `%` (C's correctly rounded printf). Negative numbers,
+zero included, keep their sign, as printf does ("-0.000000").
 """
 
 from __future__ import annotations

@@ -127,9 +127,8 @@ def quick_gil_handoff(interval: float = 0.0005) -> None:
     """Has a thread that waits for the GIL get it after `interval` seconds rather than
     CPython's 5 ms: threads that make many short numpy calls (the plan's metrics, each call
     releasing and taking the GIL back) would otherwise wait up to 5 ms before each one while
-    another thread runs Python (the figures, the GeoJSON). Measured: a million grid rays
-    marched beside a pure-Python thread, 4.3 s with 5 ms and 0.9 s with 0.2 ms
-    (docs/benchmarks.md). For a program's own process: it sets the interpreter's
+    another thread runs Python (the figures, the GeoJSON): `benchmarks/bench_gil_handoff.py`,
+    figures in docs/benchmarks.md. For a program's own process: it sets the interpreter's
     `sys.setswitchinterval`."""
     import sys
 
