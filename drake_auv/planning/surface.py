@@ -1,7 +1,7 @@
 """The terrain as the planners query it: elevation, normals, distance and ray hits on a grid.
 
-Built once per bathymetry (the KD-tree lazily, on first distance query) and shared by the
-planners and the metrics. No-data cells are filled with the nearest valid elevation for these
+Built once per bathymetry (the distance samples lazily, on first distance query) and shared by
+the planners and the metrics. No-data cells are filled with the nearest valid elevation for these
 geometric queries only, so a path may pass over a hole without NaN; the planners still treat
 the holes as no-go for coverage.
 """
@@ -14,12 +14,17 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from drake_auv.jit import kernel
+from drake_auv.planning.nearest_sample import NONE, UNRESOLVED, nearest_samples
 from drake_auv.resources import map_chunks, usable_cores
 from drake_auv.terrain.bathymetry import Bathymetry
 
 # built once for all threads (the planner builds the route and the lawnmower side by side); a
 # module lock, as surfaces are pickled and deep-copied
 _BUILDING = threading.Lock()
+# the distance queries' ring search gives the points farther than this many rings of samples
+# to the KD-tree (a ring search of at most (2 * 24 + 1)^2 samples a point)
+MAX_RINGS = 24
 
 
 def bilinear(grid: np.ndarray, origin, spacing, x, y) -> np.ndarray:
@@ -54,9 +59,9 @@ class TerrainSurface:
 
     Args:
         bathy: the grid.
-        distance_resolution: largest spacing of the surface samples in the KD-tree used for
-            distances, m (default: the cell size). A sampled surface overestimates the distance
-            to the true surface by at most delta^2 / (2 d), delta being half the diagonal of a
+        distance_resolution: largest spacing of the surface samples used for distances, m
+            (default: the cell size). A sampled surface overestimates the distance to the
+            true surface by at most delta^2 / (2 d), delta being half the diagonal of a
             sample cell measured on the surface (plan-view diagonal times sqrt(1 + S_max^2)).
     """
 
@@ -78,8 +83,8 @@ class TerrainSurface:
                                     else float(distance_resolution))
         if not self.distance_resolution > 0:
             raise ValueError(f"distance_resolution must be > 0 m, got {distance_resolution}")
+        self._samples = None
         self._tree = None
-        self._tree_points = None
         self._safe = {}
 
     # -- pointwise queries -------------------------------------------------------------------
@@ -104,17 +109,29 @@ class TerrainSurface:
         return (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)
 
     # -- distance ------------------------------------------------------------------------------
-    def _build_tree(self):
-        fx = max(1, int(np.ceil(self.spacing[0] / self.distance_resolution)))
-        fy = max(1, int(np.ceil(self.spacing[1] / self.distance_resolution)))
-        xs, ys, zz = self._dense_grid(fx, fy)
-        points = np.empty((len(ys), len(xs), 3))  # filled in place: no grid-sized temporaries
-        points[..., 0] = xs
-        points[..., 1] = ys[:, None]
-        points[..., 2] = zz
-        self._tree_points = points.reshape(-1, 3)
-        self._tree = cKDTree(self._tree_points, leafsize=64, balanced_tree=False,
-                             compact_nodes=False)  # half the build time, no slower queries
+    def _distance_samples(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(xs, ys, z): the bilinear surface every `distance_resolution` at most, built once."""
+        with _BUILDING:
+            if self._samples is None:
+                fx = max(1, int(np.ceil(self.spacing[0] / self.distance_resolution)))
+                fy = max(1, int(np.ceil(self.spacing[1] / self.distance_resolution)))
+                xs, ys, z = self._dense_grid(fx, fy)
+                self._samples = xs, ys, np.ascontiguousarray(z)
+            return self._samples
+
+    def _kd_tree(self) -> cKDTree:
+        """A KD-tree of the distance samples (flat index i * nx + j), built on first need:
+        for the points the ring search leaves to it, far from every sample."""
+        xs, ys, z = self._distance_samples()
+        with _BUILDING:
+            if self._tree is None:
+                points = np.empty((len(ys), len(xs), 3))  # filled in place
+                points[..., 0] = xs
+                points[..., 1] = ys[:, None]
+                points[..., 2] = z
+                self._tree = cKDTree(points.reshape(-1, 3), leafsize=64, balanced_tree=False,
+                                     compact_nodes=False)  # half the build time, no slower queries
+            return self._tree
 
     def distance(self, points, upper_bound: float = np.inf) -> tuple[np.ndarray, np.ndarray]:
         """(N,) distance from each point to the surface, m, and (N, 3) the nearest surface sample.
@@ -124,19 +141,30 @@ class TerrainSurface:
         and a NaN nearest sample (a much faster query when only close points matter).
         """
         d, idx = self._query(points, upper_bound)
-        found = idx < len(self._tree_points)
+        xs, ys, z = self._distance_samples()
+        found = idx >= 0
+        i, j = np.divmod(idx[found], len(xs))
         nearest = np.full((len(d), 3), np.nan)
-        nearest[found] = self._tree_points[idx[found]]
+        nearest[found] = np.column_stack([xs[j], ys[i], z[i, j]])
         return d, nearest
 
-    def _query(self, points, upper_bound: float) -> tuple[np.ndarray, np.ndarray]:
-        """`distance`'s distances and the indices of the nearest samples (the tree's size
-        where none is within `upper_bound`), on the usable cores."""
-        with _BUILDING:
-            if self._tree is None:
-                self._build_tree()
-        return self._tree.query(np.asarray(points, dtype=float), k=1,
-                                distance_upper_bound=upper_bound, workers=usable_cores())
+    def _query(self, points, upper_bound: float,
+               chunk: int = 65536) -> tuple[np.ndarray, np.ndarray]:
+        """`distance`'s distances and the flat indices of the nearest samples (`NONE` where
+        none is within `upper_bound`): the ring search of `nearest_sample`, `chunk` points at
+        a time on the usable cores, and the KD-tree for the points it leaves."""
+        p = np.ascontiguousarray(points, dtype=float).reshape(-1, 3)
+        xs, ys, z = self._distance_samples()
+        d, idx = np.empty(len(p)), np.empty(len(p), dtype=np.int64)
+        map_chunks(lambda s: nearest_samples(xs, ys, z, p[s], float(upper_bound), MAX_RINGS,
+                                             d[s], idx[s]), len(p), chunk)
+        far = np.flatnonzero(idx == UNRESOLVED)
+        if len(far):
+            tree = self._kd_tree()
+            d[far], i = tree.query(p[far], k=1, distance_upper_bound=upper_bound,
+                                   workers=usable_cores())
+            idx[far] = np.where(i < tree.n, i, NONE)
+        return d, idx
 
     def signed_distance(self, points, upper_bound: float = np.inf) -> np.ndarray:
         """(N,) `distance` signed: negative below the surface (on the grid's extent: inside the
@@ -195,44 +223,34 @@ class TerrainSurface:
         block_radius = 0.5 * np.hypot((f - 1) * sx, (f - 1) * sy)
         return z, origin, np.array([f * sx, f * sy]), block_radius, target
 
-    def safe_elevation_at(self, x, y, omega: float, chunk: int = 8192) -> np.ndarray:
-        """(N,) lowest elevation at which a point above (x, y) is at least `omega` from the
-        surface: the highest point of the hemispheres of radius omega (plus the sampling
-        margins) standing on the surface samples around it; `chunk` points at a time on the
-        usable cores (`resources.map_chunks`)."""
+    def clearance_stencil(self, omega: float):
+        """`safe_elevation_at`'s stencil for `omega`: (zpad, ni, nj, origin, spacing, oi, oj,
+        target, block_radius): the clearance samples padded by ni rows and nj columns (float32:
+        elevations keep ~0.1 mm, the lift's 1 mm margin covers the rounding), their origin and
+        spacing (cx, cy), and the offsets (oi, oj) of the samples within reach of a point."""
         z, origin, (cx, cy), block_radius, target = self._clearance_samples(omega)
         reach = target + block_radius + 0.5 * np.hypot(cx, cy)
         ni, nj = int(np.ceil(reach / cy)), int(np.ceil(reach / cx))
         oi, oj = np.mgrid[-ni:ni + 1, -nj:nj + 1]
         keep = np.hypot(oi * cy, oj * cx) <= reach
-        oi, oj = oi[keep], oj[keep]
-        # float32 inside the stencil (halves the memory traffic; elevations keep ~0.1 mm), with
-        # the margin below covering its rounding.
         zpad = np.pad(z, ((ni, ni), (nj, nj)), mode="edge").astype(np.float32)
-        flat_offsets = (oi * zpad.shape[1] + oj)[None, :]
-        off_x, off_y = (oj * cx).astype(np.float32)[None, :], (oi * cy).astype(np.float32)[None, :]
-        t2 = np.float32(target ** 2)
-        x = np.asarray(x, dtype=float)
-        y = np.asarray(y, dtype=float)
+        return (zpad, ni, nj, origin, (float(cx), float(cy)), oi[keep], oj[keep], target,
+                block_radius)
+
+    def safe_elevation_at(self, x, y, omega: float, chunk: int = 65536) -> np.ndarray:
+        """(N,) lowest elevation at which a point above (x, y) is at least `omega` from the
+        surface: the highest point of the hemispheres of radius omega (plus the sampling
+        margins) standing on the surface samples around it (`clearance_stencil`,
+        `_safe_elevations`); `chunk` points at a time on the usable cores
+        (`resources.map_chunks`)."""
+        zpad, ni, nj, origin, (cx, cy), oi, oj, target, block_radius = self.clearance_stencil(omega)
+        off_x, off_y = (oj * cx).astype(np.float32), (oi * cy).astype(np.float32)
+        x = np.ascontiguousarray(x, dtype=float)
+        y = np.ascontiguousarray(y, dtype=float)
         out = np.empty(len(x))
-        ny, nx = z.shape
-
-        def fill(k: slice) -> None:
-            fj = (x[k] - origin[0]) / cx
-            fi = (y[k] - origin[1]) / cy
-            j0 = np.clip(np.rint(fj).astype(int), 0, nx - 1)
-            i0 = np.clip(np.rint(fi).astype(int), 0, ny - 1)
-            ex = ((fj - j0) * cx).astype(np.float32)[:, None]  # offset from the nearest node
-            ey = ((fi - i0) * cy).astype(np.float32)[:, None]
-            r2 = (ex - off_x) ** 2 + (ey - off_y) ** 2
-            if block_radius > 0:
-                r2 = np.maximum(np.sqrt(r2) - np.float32(block_radius), np.float32(0.0)) ** 2
-            left = t2 - r2
-            height = np.where(left >= 0, np.sqrt(np.maximum(left, np.float32(0.0))), -np.inf)
-            base = ((i0 + ni) * zpad.shape[1] + (j0 + nj))[:, None]
-            out[k] = (np.take(zpad, base + flat_offsets) + height).max(axis=1)
-
-        map_chunks(fill, len(x), chunk)
+        map_chunks(lambda k: _safe_elevations(zpad, ni, nj, origin, cx, cy, oi, oj, off_x, off_y,
+                                              np.float32(target ** 2), np.float32(block_radius),
+                                              x[k], y[k], out[k]), len(x), chunk)
         return out + 1e-3  # 1 mm over the float32 rounding
 
     def enforce_clearance(self, points: np.ndarray, omega: float, copy: bool = True) -> np.ndarray:
@@ -251,37 +269,84 @@ class TerrainSurface:
 
         Returns (N,) ranges (NaN where a ray leaves the grid or goes beyond `max_range` without
         a hit) and (N, 3) hit points. `step` defaults to a third of the smallest cell. The rays
-        are marched `chunk` at a time on the usable cores (`resources.map_chunks`).
+        are marched `chunk` at a time on the usable cores (`resources.map_chunks`), each ray
+        stopping at its hit.
         """
-        o = np.asarray(origins, dtype=float)
-        d = np.asarray(directions, dtype=float)
+        o = np.ascontiguousarray(origins, dtype=float)
+        d = np.ascontiguousarray(directions, dtype=float)
         step = float(min(self.spacing) / 3.0 if step is None else step)
-        ranges = np.concatenate([np.zeros(0)] + map_chunks(
-            lambda s: self._march(o[s], d[s], max_range, step), len(o), chunk))
+        ts = np.arange(0.0, max_range + step, step)
+        z = np.ascontiguousarray(self.z, dtype=float)
+        xmin, xmax, ymin, ymax = (float(v) for v in self.bathy.extent)
+        ranges = np.empty(len(o))
+        map_chunks(lambda s: _march(z, self.origin, self.spacing, (xmin, xmax, ymin, ymax), o[s],
+                                    d[s], ts, ranges[s]), len(o), chunk)
         hits = o + np.nan_to_num(ranges)[:, None] * d
         return ranges, hits
 
-    def _march(self, o: np.ndarray, d: np.ndarray, max_range: float, step: float) -> np.ndarray:
-        """`raycast`'s ranges for one chunk of rays."""
-        ts = np.arange(0.0, max_range + step, step)
-        ranges = np.full(len(o), np.nan)
-        prev_h = o[:, 2] - self.elevation(o[:, 0], o[:, 1])
-        prev_t = np.zeros(len(o))
-        alive = prev_h > 0
-        for t in ts[1:]:
-            idx = np.flatnonzero(alive)
-            if idx.size == 0:
+
+@kernel
+def _bilinear_at(grid, origin, spacing, x, y):
+    """`bilinear` at one point."""
+    ny, nx = grid.shape
+    fj = min(max((x - origin[0]) / spacing[0], 0.0), nx - 1.0)
+    fi = min(max((y - origin[1]) / spacing[1], 0.0), ny - 1.0)
+    j0 = min(int(fj), nx - 2)
+    i0 = min(int(fi), ny - 2)
+    tj, ti = fj - j0, fi - i0
+    return ((1 - ti) * ((1 - tj) * grid[i0, j0] + tj * grid[i0, j0 + 1])
+            + ti * ((1 - tj) * grid[i0 + 1, j0] + tj * grid[i0 + 1, j0 + 1]))
+
+
+@kernel
+def _march(z, origin, spacing, extent, o, d, ts, ranges):
+    """`TerrainSurface.raycast`'s ranges: each ray (origin o[n], direction d[n]) stepped
+    through the ranges `ts` until its height over the surface is no longer positive (the range
+    then interpolated linearly between the last two steps), it leaves the grid's extent or the
+    steps end (NaN). A ray starting on or below the surface gets NaN."""
+    xmin, xmax, ymin, ymax = extent
+    for n in range(o.shape[0]):
+        ranges[n] = np.nan
+        ox, oy, oz = o[n, 0], o[n, 1], o[n, 2]
+        prev_h = oz - _bilinear_at(z, origin, spacing, ox, oy)
+        if not prev_h > 0:
+            continue
+        prev_t = 0.0
+        for k in range(1, len(ts)):
+            t = ts[k]
+            px, py, pz = ox + t * d[n, 0], oy + t * d[n, 1], oz + t * d[n, 2]
+            if not (xmin <= px <= xmax and ymin <= py <= ymax):
                 break
-            p = o[idx] + t * d[idx]
-            h = p[:, 2] - self.elevation(p[:, 0], p[:, 1])
-            out = ~self.inside(p[:, 0], p[:, 1])
-            hit = (h <= 0) & ~out
-            if hit.any():
-                hi = idx[hit]
-                h0, h1 = prev_h[hi], h[hit]
-                ranges[hi] = prev_t[hi] + (t - prev_t[hi]) * h0 / (h0 - h1)
-                alive[hi] = False
-            alive[idx[out & ~hit]] = False
-            prev_h[idx] = h
-            prev_t[idx] = t
-        return ranges
+            h = pz - _bilinear_at(z, origin, spacing, px, py)
+            if h <= 0:
+                ranges[n] = prev_t + (t - prev_t) * prev_h / (prev_h - h)
+                break
+            prev_h, prev_t = h, t
+
+
+@kernel
+def _safe_elevations(zpad, ni, nj, origin, cx, cy, oi, oj, off_x, off_y, target2, block_radius,
+                     x, y, out):
+    """`TerrainSurface.safe_elevation_at` for each (x[n], y[n]): over the stencil (oi, oj)
+    around the nearest clearance sample (`zpad`: the samples padded by ni rows and nj
+    columns), the highest of each sample's elevation plus the height of its hemisphere of
+    squared radius `target2` (its horizontal distance less `block_radius`), in float32."""
+    ny, nx = zpad.shape[0] - 2 * ni, zpad.shape[1] - 2 * nj
+    zero = np.float32(0.0)
+    for n in range(len(x)):
+        fj = (x[n] - origin[0]) / cx
+        fi = (y[n] - origin[1]) / cy
+        j0 = min(max(int(np.rint(fj)), 0), nx - 1)
+        i0 = min(max(int(np.rint(fi)), 0), ny - 1)
+        ex = np.float32((fj - j0) * cx)  # the offset from that sample
+        ey = np.float32((fi - i0) * cy)
+        top = np.float32(-np.inf)
+        for m in range(len(oi)):
+            r2 = (ex - off_x[m]) * (ex - off_x[m]) + (ey - off_y[m]) * (ey - off_y[m])
+            if block_radius > 0:
+                r = max(np.sqrt(r2) - block_radius, zero)
+                r2 = r * r
+            left = target2 - r2
+            if left >= 0:
+                top = max(top, zpad[i0 + ni + oi[m], j0 + nj + oj[m]] + np.sqrt(left))
+        out[n] = top
