@@ -21,6 +21,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from drake_auv.jit import kernel
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.surface import TerrainSurface
 from drake_auv.resources import map_chunks
@@ -82,9 +83,9 @@ def viewing_angles(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.n
 
 
 def coverage_mask(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.ndarray,
-                  aperture_deg: float, sensor_range: float, chunk: int = 16384) -> np.ndarray:
+                  aperture_deg: float, sensor_range: float, chunk: int = 65536) -> np.ndarray:
     """(ny, nx) bool: grid cells seen by at least one sample (cone and range test), `chunk`
-    samples at a time on the usable cores (`resources.map_chunks`)."""
+    samples at a time on the usable cores (`resources.map_chunks`; `_mark_seen`)."""
     bathy = surface.bathy
     ny, nx = bathy.shape
     dx, dy = bathy.spacing
@@ -101,28 +102,40 @@ def coverage_mask(surface: TerrainSurface, points: np.ndarray, sensor_dir: np.nd
     keep = (oi * dy) ** 2 + (oj * dx) ** 2 <= (rho + 0.5 * np.hypot(dx, dy)) ** 2
     oi, oj = oi[keep], oj[keep]
     seen = np.zeros(ny * nx, dtype=bool)
-    z = surface.z
-
-    def mark(k: slice) -> None:  # the chunks only ever store True: their order is free
-        p = points[k]
-        d = sensor_dir[k]
-        c = p[:, :2] + centre_offset * d[:, :2]
-        ci = np.rint((c[:, 1] - bathy.origin[1]) / dy).astype(int)
-        cj = np.rint((c[:, 0] - bathy.origin[0]) / dx).astype(int)
-        ii = ci[:, None] + oi[None, :]
-        jj = cj[:, None] + oj[None, :]
-        ok = (ii >= 0) & (ii < ny) & (jj >= 0) & (jj < nx)
-        ii, jj = np.clip(ii, 0, ny - 1), np.clip(jj, 0, nx - 1)
-        vx = bathy.origin[0] + jj * dx - p[:, 0:1]
-        vy = bathy.origin[1] + ii * dy - p[:, 1:2]
-        vz = z[ii, jj] - p[:, 2:3]
-        dist2 = vx * vx + vy * vy + vz * vz
-        along = vx * d[:, 0:1] + vy * d[:, 1:2] + vz * d[:, 2:3]
-        inside = ok & (dist2 <= sensor_range ** 2) & (along > 0) & (along * along >= cos_half ** 2 * dist2)
-        seen[(ii * nx + jj)[inside]] = True
-
-    map_chunks(mark, len(points), chunk)
+    z = np.ascontiguousarray(surface.z, dtype=float)
+    origin = np.asarray(bathy.origin, dtype=float)
+    p = np.ascontiguousarray(points, dtype=float)
+    d = np.ascontiguousarray(sensor_dir, dtype=float)
+    range2, cos_half2 = float(sensor_range ** 2), float(cos_half ** 2)
+    # the chunks only ever store True: their order is free
+    map_chunks(lambda k: _mark_seen(z, origin, float(dx), float(dy), p[k], d[k],
+                                    float(centre_offset), oi, oj, range2, cos_half2, seen),
+               len(points), chunk)
     return seen.reshape(ny, nx)
+
+
+@kernel
+def _mark_seen(z, origin, dx, dy, points, axes, centre_offset, oi, oj, range2, cos_half2, seen):
+    """`coverage_mask`'s test of each sample against the cells of the stencil (oi, oj) around
+    the cell nearest to the centre of its bounding sphere: marks in `seen` (flat) the cells in
+    its range and aperture cone."""
+    ny, nx = z.shape
+    for n in range(points.shape[0]):
+        px, py, pz = points[n, 0], points[n, 1], points[n, 2]
+        ax, ay, az = axes[n, 0], axes[n, 1], axes[n, 2]
+        ci = int(np.rint((py + centre_offset * ay - origin[1]) / dy))
+        cj = int(np.rint((px + centre_offset * ax - origin[0]) / dx))
+        for m in range(len(oi)):
+            i, j = ci + oi[m], cj + oj[m]
+            if not (0 <= i < ny and 0 <= j < nx) or seen[i * nx + j]:
+                continue
+            vx = origin[0] + j * dx - px
+            vy = origin[1] + i * dy - py
+            vz = z[i, j] - pz
+            dist2 = vx * vx + vy * vy + vz * vz
+            along = vx * ax + vy * ay + vz * az
+            if dist2 <= range2 and along > 0 and along * along >= cos_half2 * dist2:
+                seen[i * nx + j] = True
 
 
 def surface_area_weights(surface: TerrainSurface) -> np.ndarray:

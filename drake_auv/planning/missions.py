@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from drake_auv.jit import kernel
 from drake_auv.planning.path import PlannedPath
 from drake_auv.planning.surface import TerrainSurface
 
@@ -31,39 +32,61 @@ def douglas_peucker(points: np.ndarray, tolerance: float, piece: int | None = No
     ends kept too): the same guarantee, a few more vertices, and time about linear in the
     length, where one pass over a long zigzag of lanes splits off a lane per level (time the
     length times the lanes)."""
-    points = np.asarray(points, float)
+    points = np.ascontiguousarray(points, dtype=float)
     n = len(points)
-    if piece is not None and n > piece:
-        ends = np.append(np.arange(0, n - 1, piece - 1), n - 1)
-        return np.unique(np.concatenate([a + douglas_peucker(points[a:b + 1], tolerance)
-                                         for a, b in zip(ends[:-1], ends[1:])]))
     keep = np.zeros(n, dtype=bool)
-    keep[[0, n - 1]] = True
-    cols = [np.ascontiguousarray(points[:, k]) for k in range(points.shape[1])]
-    tol2 = tolerance * tolerance
-    stack = [(0, n - 1)]
-    while stack:  # column arithmetic, no matrix product: no BLAS threads on a shared machine
-        a, b = stack.pop()
-        if b <= a + 1:
-            continue
-        v = [c[a + 1:b] - c[a] for c in cols]
-        seg = [c[b] - c[a] for c in cols]
-        seg2 = sum(s * s for s in seg)
-        t = np.zeros(b - a - 1)
-        if seg2 > 1e-18:
-            for vk, sk in zip(v, seg):
-                t += vk * (sk / seg2)
-            np.clip(t, 0.0, 1.0, out=t)
-        d2 = np.zeros(b - a - 1)
-        for vk, sk in zip(v, seg):
-            e = vk - t * sk
-            d2 += e * e
-        k = int(np.argmax(d2))
-        if d2[k] > tol2:
-            i = a + 1 + k
-            keep[i] = True
-            stack += [(a, i), (i, b)]
+    if n:
+        ends = (np.append(np.arange(0, n - 1, piece - 1), n - 1)
+                if piece is not None and n > piece else np.array([0, n - 1]))
+        _thin(points, ends, tolerance * tolerance, keep)
     return np.flatnonzero(keep)
+
+
+@kernel
+def _thin(points, ends, tolerance2, keep):
+    """Marks in `keep` the samples Douglas-Peucker keeps in each piece ends[k]..ends[k + 1]
+    (their ends included): a sample splits its piece where its distance to the chord is the
+    largest (the first such) and over the tolerance."""
+    dims = points.shape[1]
+    stack = np.empty((64, 2), dtype=np.int64)
+    chord, unit = np.empty(dims), np.empty(dims)  # a piece's chord, and over its square
+    for piece in range(len(ends) - 1):
+        keep[ends[piece]] = True
+        keep[ends[piece + 1]] = True
+        stack[0, 0], stack[0, 1] = ends[piece], ends[piece + 1]
+        top = 1
+        while top:
+            top -= 1
+            a, b = stack[top, 0], stack[top, 1]
+            if b <= a + 1:
+                continue
+            seg2 = 0.0
+            for k in range(dims):
+                chord[k] = points[b, k] - points[a, k]
+                seg2 += chord[k] * chord[k]
+            project = seg2 > 1e-18
+            for k in range(dims):
+                unit[k] = chord[k] / seg2 if project else 0.0
+            worst, split = -1.0, -1
+            for i in range(a + 1, b):
+                t = 0.0
+                if project:
+                    for k in range(dims):
+                        t += (points[i, k] - points[a, k]) * unit[k]
+                    t = min(max(t, 0.0), 1.0)
+                d2 = 0.0
+                for k in range(dims):
+                    e = (points[i, k] - points[a, k]) - t * chord[k]
+                    d2 += e * e
+                if d2 > worst:
+                    worst, split = d2, i
+            if worst > tolerance2:
+                keep[split] = True
+                if top + 2 > len(stack):
+                    stack = np.concatenate((stack, np.empty_like(stack)))
+                stack[top, 0], stack[top, 1] = a, split
+                stack[top + 1, 0], stack[top + 1, 1] = split, b
+                top += 2
 
 
 @dataclass(frozen=True)
