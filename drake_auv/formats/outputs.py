@@ -54,8 +54,9 @@ def write_outputs(plan, outdir, figures: bool = True, progress: bool | RunProgre
         grid_metrics: compute the grid metrics (`planning.metrics.evaluate_plan`) of a plan
             made without them (`compute_metrics=False`) for the report. The metrics computed
             here run on threads beside path.csv, the exports and the figures (their time is
-            mostly Embree's, the KD-trees' and numpy's, outside the GIL): the plan command
-            plans without the grid metrics and has them computed here.
+            mostly Embree's, the KD-trees', the compiled kernels' and numpy's, outside the
+            GIL): the plan command plans without the grid metrics and has them computed
+            here.
         reference_table: add the reference's Table 3 (the Santorini caldera) to the reports.
         current: `vehicle.current_feasibility.current_report` of the path, added to report.json
             (`current`) and report.md.

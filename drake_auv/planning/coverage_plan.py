@@ -120,9 +120,9 @@ def _exterior_rings(geom) -> list[list[list[float]]]:
 
 
 PLAN_STAGES = ("classify", "decompose", "visit order", "route", "lawnmower", "grid metrics")
-# Bytes a terrain distance sample holds while its KD-tree is built (the x, y, z grids, their
-# (n, 3) stack, the tree's index), and about what a path sample holds (position, sensor axis,
-# heading, label, and their resampled copies).
+# Bytes a terrain distance sample may hold (its elevation grids and, once a point far from
+# the surface needs the KD-tree, their (n, 3) stack and the tree's index), and about what a
+# path sample holds (position, sensor axis, heading, label, and their resampled copies).
 SAMPLE_BYTES = 64
 
 

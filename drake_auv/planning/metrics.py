@@ -188,8 +188,6 @@ def evaluate_path(path: PlannedPath, surface: TerrainSurface, aperture_deg: floa
     """
     weights = surface_area_weights(surface) if weights is None else weights
     imaging = path.labels != "transit"
-    # the clearance first: its KD-tree is built and queried outside the GIL, which a thread
-    # beside it may hold for seconds (Embree's mesh set-up in the 3D metrics)
     dist = clearance(surface, path.points, omega)
     angles = np.full(len(path), np.nan)
     angles[imaging] = viewing_angles(surface, path.points[imaging], path.sensor_dir[imaging],
