@@ -68,6 +68,26 @@ def _rough(seed=2):
     return TerrainSurface(Bathymetry(z, (1.0, 1.0), origin=(5.0, -3.0)))
 
 
+def test_elevation_is_bilinear_clamped_and_nan_off_the_numbers():
+    """`bilinear` (compiled, one point at a time) against the interpolation written out."""
+    surface = _rough(4)
+    rng = np.random.default_rng(9)
+    x, y = rng.uniform(-5, 50, (20, 7)), rng.uniform(-8, 35, (20, 7))
+    z = surface.elevation(x, y)
+    fx = np.clip((x - surface.origin[0]) / surface.spacing[0], 0, surface.z.shape[1] - 1)
+    fy = np.clip((y - surface.origin[1]) / surface.spacing[1], 0, surface.z.shape[0] - 1)
+    j, i = np.minimum(fx.astype(int), surface.z.shape[1] - 2), np.minimum(
+        fy.astype(int), surface.z.shape[0] - 2)
+    tx, ty = fx - j, fy - i
+    g = surface.z
+    want = ((1 - ty) * ((1 - tx) * g[i, j] + tx * g[i, j + 1])
+            + ty * ((1 - tx) * g[i + 1, j] + tx * g[i + 1, j + 1]))
+    assert z.shape == (20, 7)
+    np.testing.assert_array_equal(z, want)
+    assert isinstance(surface.elevation(10.0, 5.0), float)
+    assert np.isnan(surface.elevation(np.nan, 5.0)) and np.isnan(surface.elevation(10.0, np.inf))
+
+
 def test_raycast_marches_each_ray_to_its_first_crossing():
     """The compiled march against the algorithm written out ray by ray: step by step along
     the ray until the height over the bilinear surface is no longer positive (the range

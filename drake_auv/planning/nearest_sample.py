@@ -6,8 +6,9 @@ Every node of ring k lies at least (k - 1/2) s from the point in plan (s the sma
 so the search stops at the first ring whose bound is past the best distance found or past the
 upper bound. Near a surface the answer is found within a few rings (a point 2 m above a
 seabed sampled every 0.5 m: 81 nodes), faster than a KD-tree query on the same samples and
-with no tree to build (`benchmarks/bench_jit.py`); the distances are the same numbers. A point farther than `max_rings` rings from every sample (and within the upper
-bound) is left `UNRESOLVED` for the caller's KD-tree, so the work per point is bounded.
+with no tree to build (`benchmarks/bench_jit.py`); the distances are the same numbers. A
+point farther than `max_rings` rings from every sample (and within the upper bound) is left
+`UNRESOLVED` for the caller's KD-tree, so the work per point is bounded.
 """
 
 from __future__ import annotations

@@ -28,16 +28,13 @@ MAX_RINGS = 24
 
 
 def bilinear(grid: np.ndarray, origin, spacing, x, y) -> np.ndarray:
-    """Bilinear interpolation of a cell-centred grid at world points (clamped to the grid)."""
-    ny, nx = grid.shape
-    fj = np.clip((np.asarray(x, dtype=float) - origin[0]) / spacing[0], 0, nx - 1)
-    fi = np.clip((np.asarray(y, dtype=float) - origin[1]) / spacing[1], 0, ny - 1)
-    j0 = np.minimum(fj.astype(int), nx - 2)
-    i0 = np.minimum(fi.astype(int), ny - 2)
-    tj, ti = fj - j0, fi - i0
-    g00, g01 = grid[i0, j0], grid[i0, j0 + 1]
-    g10, g11 = grid[i0 + 1, j0], grid[i0 + 1, j0 + 1]
-    return (1 - ti) * ((1 - tj) * g00 + tj * g01) + ti * ((1 - tj) * g10 + tj * g11)
+    """Bilinear interpolation of a cell-centred grid at world points (clamped to the grid;
+    NaN at a non-finite point), the shape of x and y broadcast (`_bilinear_at` at each)."""
+    x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    out = np.empty(x.shape)
+    _bilinear_points(np.asarray(grid, dtype=float), np.asarray(origin, dtype=float),
+                     np.asarray(spacing, dtype=float), x.ravel(), y.ravel(), out.reshape(-1))
+    return out[()]  # a number for a point, as numpy's arithmetic gives
 
 
 def _upsample(a: np.ndarray, factor: int, axis: int) -> np.ndarray:
@@ -288,6 +285,8 @@ class TerrainSurface:
 @kernel
 def _bilinear_at(grid, origin, spacing, x, y):
     """`bilinear` at one point."""
+    if not (np.isfinite(x) and np.isfinite(y)):
+        return np.nan
     ny, nx = grid.shape
     fj = min(max((x - origin[0]) / spacing[0], 0.0), nx - 1.0)
     fi = min(max((y - origin[1]) / spacing[1], 0.0), ny - 1.0)
@@ -297,6 +296,13 @@ def _bilinear_at(grid, origin, spacing, x, y):
     return ((1 - ti) * ((1 - tj) * grid[i0, j0] + tj * grid[i0, j0 + 1])
             + ti * ((1 - tj) * grid[i0 + 1, j0] + tj * grid[i0 + 1, j0 + 1]))
 
+
+
+@kernel
+def _bilinear_points(grid, origin, spacing, x, y, out):
+    """`bilinear` at each (x[n], y[n]) into out[n]."""
+    for n in range(len(x)):
+        out[n] = _bilinear_at(grid, origin, spacing, x[n], y[n])
 
 @kernel
 def _march(z, origin, spacing, extent, o, d, ts, ranges):
